@@ -1,0 +1,95 @@
+"""Geometry of the triangular netting element (book eqs 4.1-4.29).
+
+Every vertex of a triangle carries fixed *twine coordinates* (U, V): real numbers counting twines along
+the two twine directions of the netting. Because the twines are assumed parallel inside an element, the
+triangle's sides are linear combinations of the two *twine vectors* U and V (4.1-4.2), which therefore
+follow from the vertex positions (4.3-4.7). Every force on the netting derives from U and V, so this is
+the only place that computes them.
+
+Sign convention: ``d`` (4.7) is the *signed* twice-area of the triangle in twine coordinates. The book
+assumes d > 0 (vertices counter-clockwise in twine coordinates); here every count (meshes, twines,
+knots) uses |d|, so clockwise triangles (d < 0) are handled exactly. The formulas for U and V (4.3-4.4)
+hold for either sign.
+
+Units: positions in metres, twine coordinates in number of twines, U and V in metres (one twine each).
+This module imports nothing from jaxnet.
+"""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+
+
+def twine_determinant(uv):
+    """Signed determinant d of eq. 4.7 (dimensionless, twines²).
+
+    Args:
+      uv: (..., 3, 2) twine coordinates (U_i, V_i) of the three vertices.
+    Returns:
+      (...,) d = (U2-U1)(V3-V1) - (U3-U1)(V2-V1). |d|/2 is the number of U (and of V) twines.
+    """
+    du2, dv2 = uv[..., 1, 0] - uv[..., 0, 0], uv[..., 1, 1] - uv[..., 0, 1]
+    du3, dv3 = uv[..., 2, 0] - uv[..., 0, 0], uv[..., 2, 1] - uv[..., 0, 1]
+    return du2 * dv3 - du3 * dv2
+
+
+def twine_vectors(x, uv):
+    """Twine vectors U and V of one triangle (eqs 4.3-4.4), in metres.
+
+    Args:
+      x: (3, 3) vertex positions (m), one row per vertex.
+      uv: (3, 2) twine coordinates of the vertices.
+    Returns:
+      (U, V, d): the two twine vectors (3,) and the signed determinant d (4.7).
+    """
+    d = twine_determinant(uv)
+    s12, s13 = x[1] - x[0], x[2] - x[0]
+    du2, dv2 = uv[1, 0] - uv[0, 0], uv[1, 1] - uv[0, 1]
+    du3, dv3 = uv[2, 0] - uv[0, 0], uv[2, 1] - uv[0, 1]
+    U = (dv3 * s12 - dv2 * s13) / d
+    V = (du2 * s13 - du3 * s12) / d
+    return U, V, d
+
+
+def safe_norm(v, eps=1e-300):
+    """Euclidean norm with a finite derivative at v = 0 (the derivative there is taken as 0).
+
+    A twine vector of zero length is a collapsed element; its tension is then whatever the constitutive
+    law gives at length 0, and the solver must not see NaN from d|v|/dv.
+    """
+    sq = jnp.sum(v * v, axis=-1)
+    positive = sq > eps
+    return jnp.where(positive, jnp.sqrt(jnp.where(positive, sq, 1.0)), 0.0)
+
+
+def mesh_count(d):
+    """Number of meshes in a triangle, |d|/4 (eq. 4.24)."""
+    return jnp.abs(d) / 4.0
+
+
+def twine_count(d):
+    """Number of U twines, equal to the number of V twines, |d|/2 (eqs 4.25-4.26)."""
+    return jnp.abs(d) / 2.0
+
+
+def knot_count(d):
+    """Number of knots in a triangle, |d|/2 (eq. 4.27)."""
+    return jnp.abs(d) / 2.0
+
+
+def surface(x):
+    """Cartesian surface of a triangle, |12 ^ 13| / 2 in m² (eq. 4.18)."""
+    return 0.5 * safe_norm(jnp.cross(x[1] - x[0], x[2] - x[0]))
+
+
+def mesh_surface(U, V):
+    """Surface of one mesh, 2 |U ^ V| in m² (eq. 4.28)."""
+    return 2.0 * safe_norm(jnp.cross(U, V))
+
+
+def half_opening_angle(U, V):
+    """Half angle between the twine vectors, in radians (eq. 4.211): pi/4 for square meshes.
+
+    Computed with atan2 so that it is accurate for nearly closed and nearly square meshes alike.
+    """
+    return 0.5 * jnp.arctan2(safe_norm(jnp.cross(U, V)), jnp.dot(U, V))

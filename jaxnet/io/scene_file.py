@@ -1,0 +1,150 @@
+"""Scene files: a net described in JSON (``.json``) or TOML (``.toml``), read into a :class:`~jaxnet.net.Net`.
+
+The format mirrors the Python API (see README, "Scene files"). Top-level keys::
+
+    environment  {gravity, water_density, up}
+    twines       {NAME: {l0, ea, diameter, ea_compression?, density?}}       netting materials
+    ropes        {NAME: {ea, diameter, ea_compression?, density?}}           cable materials
+    panels       [{name, corners: [[x, y, z, U, V], ...], twine: NAME | {...}, step}]
+    cables       [{name, rope: NAME | {...}, start?: REF, end?: REF, along?: SIDE, n_bars?, length?}]
+    seams        [[SIDE, SIDE], ...]
+    fix          [{at: REF, axes?: "xyz"}]
+    attach       [{at: REF, mass?, volume?, force?: [fx, fy, fz]}]
+    sinkers      [{at: REF, mass, density?}]
+    floats       [{at: REF, buoyancy_N, mass?}]
+    solver       {tol, max_iter, max_step, ...}                               Newton options
+
+A REF is ``{"panel": P, "corner": k}``, ``{"panel": P, "side": k}`` (SIDE), ``{"panel": P}`` (all its
+nodes), ``{"cable": C, "end": 0 | 1}``, ``{"cable": C}`` (all its nodes) or a point ``[x, y, z]``.
+Every unknown key is an error naming where it is, so a misspelt parameter is never silently ignored.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import pathlib
+
+import numpy as np
+
+from jaxnet.net import CableEnd, CableNodes, Corner, Net, PanelRef, Rope, Side, Twine
+from jaxnet.scene import Environment, SceneError
+from jaxnet.solve.statics import Newton
+
+_TOP = {"environment", "twines", "ropes", "panels", "cables", "seams", "fix", "attach", "sinkers", "floats", "solver", "description"}
+
+
+def _keys(obj, allowed, where, required=()):
+    if not isinstance(obj, dict):
+        raise SceneError(f"{where}: expected a table/object, got {type(obj).__name__}")
+    unknown = sorted(set(obj) - set(allowed))
+    if unknown:
+        raise SceneError(f"{where}: unknown key(s) {unknown} (allowed: {sorted(allowed)})")
+    missing = [k for k in required if k not in obj]
+    if missing:
+        raise SceneError(f"{where}: missing key(s) {missing}")
+    return obj
+
+
+def _material(spec, table, cls, where):
+    if isinstance(spec, str):
+        if spec not in table:
+            raise SceneError(f"{where}: no material named '{spec}' (defined: {sorted(table)})")
+        return table[spec]
+    fields = [f.name for f in dataclasses.fields(cls)]
+    required = [f.name for f in dataclasses.fields(cls) if f.default is dataclasses.MISSING]
+    return cls(**{k: float(v) for k, v in _keys(spec, fields, where, required).items()})
+
+
+def _ref(spec, where):
+    if isinstance(spec, (list, tuple)):
+        if len(spec) != 3:
+            raise SceneError(f"{where}: a point must be [x, y, z], got {spec!r}")
+        return tuple(float(v) for v in spec)
+    _keys(spec, {"panel", "corner", "side", "cable", "end"}, where)
+    if "panel" in spec:
+        if "corner" in spec and "side" in spec:
+            raise SceneError(f"{where}: give a corner or a side, not both")
+        if "corner" in spec:
+            return Corner(spec["panel"], int(spec["corner"]))
+        if "side" in spec:
+            return Side(spec["panel"], int(spec["side"]))
+        return PanelRef(spec["panel"])
+    if "cable" in spec:
+        if "end" in spec:
+            if spec["end"] not in (0, 1):
+                raise SceneError(f"{where}: cable end must be 0 (start) or 1 (end), got {spec['end']!r}")
+            return CableEnd(spec["cable"], int(spec["end"]))
+        return CableNodes(spec["cable"])
+    raise SceneError(f"{where}: a reference needs 'panel' or 'cable' (or is a point [x, y, z])")
+
+
+def net_from_dict(doc: dict) -> tuple[Net, Newton]:
+    """Build a :class:`Net` and solver options from a parsed scene document."""
+    _keys(doc, _TOP, "scene")
+    env_fields = {"gravity", "water_density", "up"}
+    env_spec = dict(_keys(doc.get("environment", {}), env_fields, "environment"))
+    if "up" in env_spec:
+        env_spec["up"] = np.asarray(env_spec["up"], dtype=float)
+    env = Environment(**env_spec)
+    net = Net(environment=env)
+    twines = {k: _material(v, {}, Twine, f"twines.{k}") for k, v in doc.get("twines", {}).items()}
+    ropes = {k: _material(v, {}, Rope, f"ropes.{k}") for k, v in doc.get("ropes", {}).items()}
+    for i, p in enumerate(doc.get("panels", [])):
+        where = f"panels[{i}]"
+        _keys(p, {"name", "corners", "twine", "step"}, where, ("corners", "twine", "step"))
+        net.panel(p.get("name", f"panel{i}"), p["corners"], _material(p["twine"], twines, Twine, f"{where}.twine"), float(p["step"]))
+    for i, c in enumerate(doc.get("cables", [])):
+        where = f"cables[{i}]"
+        _keys(c, {"name", "rope", "start", "end", "along", "n_bars", "length"}, where, ("rope",))
+        along = _ref(c["along"], f"{where}.along") if "along" in c else None
+        net.cable(
+            c.get("name", f"cable{i}"),
+            start=_ref(c["start"], f"{where}.start") if "start" in c else None,
+            end=_ref(c["end"], f"{where}.end") if "end" in c else None,
+            rope=_material(c["rope"], ropes, Rope, f"{where}.rope"),
+            n_bars=c.get("n_bars"),
+            length=c.get("length"),
+            along=along,
+        )
+    for i, pair in enumerate(doc.get("seams", [])):
+        if not isinstance(pair, (list, tuple)) or len(pair) != 2:
+            raise SceneError(f"seams[{i}]: a seam is a pair of panel sides")
+        net.seam(_ref(pair[0], f"seams[{i}][0]"), _ref(pair[1], f"seams[{i}][1]"))
+    for i, f in enumerate(doc.get("fix", [])):
+        _keys(f, {"at", "axes"}, f"fix[{i}]", ("at",))
+        net.fix(_ref(f["at"], f"fix[{i}].at"), f.get("axes", "xyz"))
+    for i, a in enumerate(doc.get("attach", [])):
+        _keys(a, {"at", "mass", "volume", "force"}, f"attach[{i}]", ("at",))
+        net.attach(_ref(a["at"], f"attach[{i}].at"), a.get("mass", 0.0), a.get("volume", 0.0), a.get("force", (0.0, 0.0, 0.0)))
+    for i, s in enumerate(doc.get("sinkers", [])):
+        _keys(s, {"at", "mass", "density"}, f"sinkers[{i}]", ("at", "mass"))
+        net.sinker(_ref(s["at"], f"sinkers[{i}].at"), s["mass"], s.get("density", 11340.0))
+    for i, s in enumerate(doc.get("floats", [])):
+        _keys(s, {"at", "buoyancy_N", "mass"}, f"floats[{i}]", ("at", "buoyancy_N"))
+        net.float_(_ref(s["at"], f"floats[{i}].at"), s["buoyancy_N"], s.get("mass", 0.0))
+    solver_fields = {f.name for f in dataclasses.fields(Newton)}
+    solver = Newton(**_keys(doc.get("solver", {}), solver_fields, "solver"))
+    return net, solver
+
+
+def read(path) -> tuple[Net, Newton]:
+    """Read a scene file (.json or .toml)."""
+    path = pathlib.Path(path)
+    if not path.exists():
+        raise SceneError(f"scene file {path} does not exist")
+    text = path.read_text()
+    try:
+        if path.suffix == ".toml":
+            import tomllib
+
+            doc = tomllib.loads(text)
+        elif path.suffix == ".json":
+            doc = json.loads(text)
+        else:
+            raise SceneError(f"{path}: unknown scene file type '{path.suffix}' (use .json or .toml)")
+    except (json.JSONDecodeError, ValueError) as err:
+        if isinstance(err, SceneError):
+            raise
+        raise SceneError(f"{path}: cannot parse: {err}") from err
+    return net_from_dict(doc)

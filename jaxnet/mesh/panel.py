@@ -1,0 +1,736 @@
+"""Triangle meshing of netting panels in twine-coordinate space.
+
+A netting panel (diamond mesh) is a simple polygon given by its corners.  Each
+corner has twine coordinates ``(U, V)`` -- the material coordinates of the
+netting, counted in twines along the two twine directions -- and a Cartesian
+start position ``(x, y, z)`` in metres.  The panel is meshed in ``(U, V)``
+space, where it is a fixed polygon; ``U`` and ``V`` are treated as orthonormal
+there and one twine is ``l0`` metres long, so a meshing step ``step`` (m) is
+``h = step / l0`` twines.
+
+Node ordering of a :class:`PanelMesh`: the ``C`` corner nodes come first (node
+``k`` is corner ``k``), then the nodes strictly inside each side, side 0 first
+(in the direction corner 0 -> corner 1), then side 1, ..., then the interior
+nodes (row by row of the lattice).  Start positions of all nodes are
+``weights @ corners_xyz``: linear along the sides, mean value coordinates
+(Floater) inside, so an affine map of the corners is reproduced exactly.
+
+This module depends on numpy and scipy only.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+from scipy.spatial import Delaunay, cKDTree
+
+__all__ = ["PanelMesh", "PanelError", "side_divisions", "mesh_panel"]
+
+#: Refuse to mesh a panel whose estimated node count exceeds this.
+MAX_NODES = 20_000_000
+
+# Lattice points closer than this fraction of h to the boundary are dropped.
+_CLEARANCE = 0.5
+# Relative tolerance of the geometric predicates (times the squared scale).
+_REL_EPS = 1e-12
+# Points processed per chunk in the vectorised (points x corners) kernels.
+_CHUNK = 100_000
+
+
+class PanelError(ValueError):
+    """Invalid panel description (or a panel that could not be meshed).
+
+    The message names the panel and the culprit (corner, side or parameter).
+    """
+
+
+@dataclasses.dataclass(frozen=True)
+class PanelMesh:
+    """Triangle mesh of one netting panel.
+
+    Attributes
+    ----------
+    uv : np.ndarray, shape (n, 2), float64
+        Twine coordinates ``(U, V)`` of the nodes (twines).  Exactly
+        ``weights @ corners_uv``.
+    xyz : np.ndarray, shape (n, 3), float64
+        Cartesian start positions of the nodes (m).  Exactly
+        ``weights @ corners_xyz``.
+    triangles : np.ndarray, shape (t, 3), int64
+        Local node indices of each triangle.  Every triangle has the
+        orientation of the polygon in ``(U, V)``: with
+        ``d = (U2-U1)(V3-V1) - (U3-U1)(V2-V1)``, ``d > 0`` for all triangles
+        of a counter-clockwise panel, ``d < 0`` for all triangles of a
+        clockwise one.
+    corner_nodes : np.ndarray, shape (C,), int64
+        Local index of each corner node, in corner order (always
+        ``arange(C)``: corners are the first ``C`` nodes).
+    side_nodes : tuple of C np.ndarray (int64)
+        ``side_nodes[k]`` lists, in order, the local indices of the nodes on
+        side ``k`` (from corner ``k`` to corner ``(k + 1) % C``), both corner
+        nodes included; ``len(side_nodes[k]) == divisions[k] + 1``.
+    weights : np.ndarray, shape (n, C), float64
+        Interpolation weights of the nodes with respect to the corners
+        (dimensionless); rows sum to 1.  Corner rows are unit rows, side
+        nodes interpolate linearly between the two corners of their side,
+        interior nodes carry mean value coordinates (which may be negative
+        for a non-convex panel).
+    """
+
+    uv: np.ndarray
+    xyz: np.ndarray
+    triangles: np.ndarray
+    corner_nodes: np.ndarray
+    side_nodes: tuple
+    weights: np.ndarray
+
+
+# --------------------------------------------------------------------------
+# validation
+# --------------------------------------------------------------------------
+
+def _err(name, msg):
+    return PanelError(f"panel {name!r}: {msg}")
+
+
+def _positive_scalar(value, what, name):
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise _err(name, f"{what} must be a positive number, got {value!r}") from None
+    if isinstance(value, (bool, np.bool_)) or not math.isfinite(v) or v <= 0.0:
+        raise _err(name, f"{what} must be a positive finite number, got {what}={value!r}")
+    return v
+
+
+def _corner_array(corners, ncols, labels, what, name, ncorners=None):
+    try:
+        arr = np.asarray(corners, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise _err(name, f"{what} must be a numeric array of shape (C, {ncols})") from None
+    if arr.ndim != 2 or arr.shape[1] != ncols:
+        raise _err(name, f"{what} must have shape (C, {ncols}), got shape {arr.shape}")
+    if ncorners is None and arr.shape[0] < 3:
+        raise _err(name, f"a panel needs at least 3 corners, got {arr.shape[0]}")
+    if ncorners is not None and arr.shape[0] != ncorners:
+        raise _err(name, f"{what} has {arr.shape[0]} corners but corners_uv has {ncorners}")
+    bad = np.argwhere(~np.isfinite(arr))
+    if bad.size:
+        k, c = bad[0]
+        raise _err(name, f"corner {k} has a non-finite {labels[c]} coordinate "
+                         f"({what}[{k}, {c}] = {arr[k, c]})")
+    return arr
+
+
+def _orient_sign(a, b, c, eps):
+    """Sign (-1, 0, 1) of the orientation of (a, b, c), arrays (..., 2)."""
+    cr = (b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1]) - (b[..., 1] - a[..., 1]) * (c[..., 0] - a[..., 0])
+    return np.where(np.abs(cr) <= eps, 0, np.sign(cr)).astype(np.int64)
+
+
+def _on_segment(p, q, r):
+    """For collinear p, q, r: is r within the bounding box of segment pq."""
+    return ((np.minimum(p[..., 0], q[..., 0]) <= r[..., 0]) & (r[..., 0] <= np.maximum(p[..., 0], q[..., 0]))
+            & (np.minimum(p[..., 1], q[..., 1]) <= r[..., 1]) & (r[..., 1] <= np.maximum(p[..., 1], q[..., 1])))
+
+
+def _check_simple(uv, eps, name):
+    """Raise if two sides of the closed polygon ``uv`` intersect illegally."""
+    C = len(uv)
+    a, b = uv, np.roll(uv, -1, axis=0)
+    # adjacent sides k, k+1 share corner k+1; they may not fold back on each other
+    e0 = b - a
+    e1 = np.roll(e0, -1, axis=0)
+    cr = e0[:, 0] * e1[:, 1] - e0[:, 1] * e1[:, 0]
+    dt = (e0 * e1).sum(axis=1)
+    fold = np.nonzero((np.abs(cr) <= eps) & (dt < 0))[0]
+    if fold.size:
+        k = int(fold[0])
+        raise _err(name, f"sides {k} and {(k + 1) % C} overlap (the polygon folds back at "
+                         f"corner {(k + 1) % C}; self-intersecting polygon)")
+    if C < 4:
+        return
+    i, j = np.triu_indices(C, k=2)
+    keep = ~((i == 0) & (j == C - 1))          # sides 0 and C-1 are adjacent
+    i, j = i[keep], j[keep]
+    p1, p2, q1, q2 = a[i], b[i], a[j], b[j]
+    o1 = _orient_sign(p1, p2, q1, eps)
+    o2 = _orient_sign(p1, p2, q2, eps)
+    o3 = _orient_sign(q1, q2, p1, eps)
+    o4 = _orient_sign(q1, q2, p2, eps)
+    hit = (o1 * o2 < 0) & (o3 * o4 < 0)
+    hit |= (o1 == 0) & _on_segment(p1, p2, q1)
+    hit |= (o2 == 0) & _on_segment(p1, p2, q2)
+    hit |= (o3 == 0) & _on_segment(q1, q2, p1)
+    hit |= (o4 == 0) & _on_segment(q1, q2, p2)
+    if hit.any():
+        m = int(np.nonzero(hit)[0][0])
+        raise _err(name, f"sides {i[m]} and {j[m]} cross (self-intersecting polygon; side k "
+                         f"runs from corner k to corner k+1)")
+
+
+def _validate(corners_uv, corners_xyz, step, l0, divisions, name):
+    uv = _corner_array(corners_uv, 2, ("U", "V"), "corners_uv", name)
+    C = uv.shape[0]
+    xyz = None
+    if corners_xyz is not None:
+        xyz = _corner_array(corners_xyz, 3, ("x", "y", "z"), "corners_xyz", name, ncorners=C)
+    step = _positive_scalar(step, "step", name)
+    l0 = _positive_scalar(l0, "l0", name)
+    h = step / l0
+    if not math.isfinite(h) or h <= 0.0:
+        raise _err(name, f"step/l0 = {step}/{l0} is not a usable mesh size")
+
+    nxt = np.roll(uv, -1, axis=0)
+    seg = np.hypot(*(nxt - uv).T)
+    scale = float(np.max(np.abs(uv - uv.mean(axis=0)))) or 1.0
+    dup = np.nonzero(seg <= 1e-12 * scale)[0]
+    if dup.size:
+        k = int(dup[0])
+        raise _err(name, f"corners {k} and {(k + 1) % C} have the same twine coordinates "
+                         f"{tuple(uv[k])} (side {k} has zero length)")
+    eps = _REL_EPS * scale * scale
+    # all corners on one line -> zero area
+    c0 = uv - uv[0]
+    rel = c0 / scale
+    if np.linalg.matrix_rank(rel, tol=1e-9) < 2:
+        raise _err(name, "the polygon has zero area in twine space (all corners are collinear, d = 0)")
+    _check_simple(uv, eps, name)
+    area = 0.5 * float(np.sum(uv[:, 0] * nxt[:, 1] - nxt[:, 0] * uv[:, 1]))
+    if abs(area) <= 1e-9 * scale * scale:
+        raise _err(name, f"the polygon has zero area in twine space (signed area {area:g}, d = 0)")
+
+    if divisions is None:
+        div = _default_divisions(seg, h)
+    else:
+        div = _check_divisions(divisions, C, name)
+    return uv, xyz, h, seg, area, scale, div
+
+
+def _check_divisions(divisions, C, name):
+    try:
+        raw = np.asarray(divisions)
+    except Exception:                      # pragma: no cover - exotic input
+        raise _err(name, f"divisions must be a sequence of {C} positive integers") from None
+    if raw.ndim != 1 or raw.shape[0] != C:
+        raise _err(name, f"divisions must have one entry per side ({C}), got shape {raw.shape}")
+    if raw.dtype == np.bool_ or not (np.issubdtype(raw.dtype, np.integer)
+                                     or np.issubdtype(raw.dtype, np.floating)):
+        raise _err(name, f"divisions must be positive integers, got dtype {raw.dtype}")
+    for k, v in enumerate(raw.tolist()):
+        if isinstance(v, float) and (not math.isfinite(v) or v != int(v)):
+            raise _err(name, f"divisions[{k}] (side {k}) must be a positive integer, got {v!r}")
+        if int(v) < 1:
+            raise _err(name, f"divisions[{k}] (side {k}) must be a positive integer, got {v!r}")
+    return np.asarray([int(v) for v in raw.tolist()], dtype=np.int64)
+
+
+def _default_divisions(seg_len, h):
+    # the small relative slack keeps e.g. a 10-twine side with h = 1 at 10 segments
+    n = np.ceil(seg_len / h * (1.0 - 1e-12))
+    return np.maximum(n, 1).astype(np.int64)
+
+
+def side_divisions(corners_uv, step, l0) -> np.ndarray:
+    """Default number of segments of each side of a panel.
+
+    Parameters
+    ----------
+    corners_uv : array_like, shape (C, 2)
+        Twine coordinates of the corners (twines).
+    step : float
+        Meshing step (m).
+    l0 : float
+        Unstretched twine length (m per twine).
+
+    Returns
+    -------
+    np.ndarray, shape (C,), int64
+        ``ceil(|side| / h)`` (at least 1) for each side ``k`` (from corner
+        ``k`` to corner ``(k + 1) % C``), where ``|side|`` is the side length
+        in twines and ``h = step / l0`` (twines).
+    """
+    uv = _corner_array(corners_uv, 2, ("U", "V"), "corners_uv", "side_divisions")
+    step = _positive_scalar(step, "step", "side_divisions")
+    l0 = _positive_scalar(l0, "l0", "side_divisions")
+    seg = np.hypot(*(np.roll(uv, -1, axis=0) - uv).T)
+    return _default_divisions(seg, step / l0)
+
+
+# --------------------------------------------------------------------------
+# geometry kernels (vectorised)
+# --------------------------------------------------------------------------
+
+def _inside(points, poly):
+    """Crossing-number point-in-polygon test, points (m, 2) -> bool (m,)."""
+    out = np.zeros(len(points), dtype=bool)
+    x0, y0 = poly[:, 0], poly[:, 1]
+    x1, y1 = np.roll(x0, -1), np.roll(y0, -1)
+    dy = y1 - y0
+    safe_dy = np.where(dy == 0.0, 1.0, dy)
+    for s in range(0, len(points), _CHUNK):
+        x = points[s:s + _CHUNK, 0:1]
+        y = points[s:s + _CHUNK, 1:2]
+        straddle = (y0 > y) != (y1 > y)
+        xint = x0 + (y - y0) * (x1 - x0) / safe_dy
+        out[s:s + _CHUNK] = (np.count_nonzero(straddle & (x < xint), axis=1) % 2) == 1
+    return out
+
+
+def _dist_to_boundary(points, poly):
+    """Distance of points (m, 2) to the closed polygon boundary (m,)."""
+    a = poly
+    e = np.roll(poly, -1, axis=0) - poly
+    ee = (e * e).sum(axis=1)
+    out = np.empty(len(points))
+    for s in range(0, len(points), _CHUNK):
+        p = points[s:s + _CHUNK]
+        ap = p[:, None, :] - a[None, :, :]
+        t = np.clip((ap * e[None]).sum(axis=2) / ee[None], 0.0, 1.0)
+        q = ap - t[:, :, None] * e[None]
+        out[s:s + _CHUNK] = np.sqrt(np.min((q * q).sum(axis=2), axis=1))
+    return out
+
+
+def _mean_value_coordinates(points, poly):
+    """Mean value coordinates (Floater) of points (m, 2) w.r.t. polygon (C, 2).
+
+    Valid for points strictly inside a simple polygon (convex or not, either
+    orientation); points must not lie on the boundary.  Returns (m, C), rows
+    summing to 1, with ``w @ poly == points`` up to rounding.
+    """
+    C = len(poly)
+    out = np.empty((len(points), C))
+    for s in range(0, len(points), _CHUNK):
+        p = points[s:s + _CHUNK]
+        d = poly[None, :, :] - p[:, None, :]            # (m, C, 2)
+        r = np.hypot(d[..., 0], d[..., 1])
+        d1 = np.roll(d, -1, axis=1)
+        r1 = np.roll(r, -1, axis=1)
+        cross = d[..., 0] * d1[..., 1] - d[..., 1] * d1[..., 0]
+        dot = (d * d1).sum(axis=2)
+        tan_half = cross / (r * r1 + dot)                # tan(alpha_k / 2), signed
+        w = (np.roll(tan_half, 1, axis=1) + tan_half) / r
+        out[s:s + _CHUNK] = w / w.sum(axis=1, keepdims=True)
+    return out
+
+
+def _signed_d(uv, tri):
+    a, b, c = uv[tri[:, 0]], uv[tri[:, 1]], uv[tri[:, 2]]
+    return (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (c[:, 0] - a[:, 0]) * (b[:, 1] - a[:, 1])
+
+
+def _triangle_angles(uv, tri):
+    """Interior angles (degrees) of each triangle in twine space, shape (t, 3)."""
+    p = uv[tri]                                         # (t, 3, 2)
+    ang = np.empty(tri.shape)
+    for k in range(3):
+        u = p[:, (k + 1) % 3] - p[:, k]
+        v = p[:, (k + 2) % 3] - p[:, k]
+        cr = np.abs(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0])
+        ang[:, k] = np.degrees(np.arctan2(cr, (u * v).sum(axis=1)))
+    return ang
+
+
+# --------------------------------------------------------------------------
+# meshing
+# --------------------------------------------------------------------------
+
+def _boundary(uv, div):
+    """Corner + side nodes: weights (nb, C), side node lists, segments (ns, 2)."""
+    C = len(uv)
+    rows = [np.eye(C)]
+    sides = []
+    nxt = C
+    for k in range(C):
+        n = int(div[k])
+        t = np.arange(1, n) / n
+        w = np.zeros((n - 1, C))
+        w[:, k] = 1.0 - t
+        w[:, (k + 1) % C] = t
+        rows.append(w)
+        idx = np.concatenate(([k], np.arange(nxt, nxt + n - 1), [(k + 1) % C])).astype(np.int64)
+        sides.append(idx)
+        nxt += n - 1
+    weights = np.concatenate(rows, axis=0)
+    segs = np.concatenate([np.stack([s[:-1], s[1:]], axis=1) for s in sides], axis=0)
+    return weights, tuple(sides), segs
+
+
+def _lattice(uv, area, h, seg, div):
+    """Equilateral lattice points of spacing ~h covering the polygon's bounding box.
+
+    The lattice is aligned with the longest side (rows parallel to it, the
+    row spacing adjusted so that a parallel opposite side falls on a row).
+    """
+    C = len(uv)
+    k = int(np.argmax(seg))
+    L = float(seg[k])
+    e1 = (uv[(k + 1) % C] - uv[k]) / L
+    e2 = np.array([-e1[1], e1[0]]) * (1.0 if area > 0 else -1.0)   # into the polygon
+    rel = uv - uv[k]
+    lx, ly = rel @ e1, rel @ e2
+    hx = L / int(div[k])
+    if not (0.8 * h <= hx <= 1.25 * h):
+        hx = h
+    hy = hx * math.sqrt(3.0) / 2.0
+    ext = float(ly.max())
+    m = round(ext / hy)
+    if m >= 2 and 0.8 <= (ext / m) / hy <= 1.25:
+        hy = ext / m
+    j0, j1 = math.floor(ly.min() / hy), math.ceil(ly.max() / hy)
+    i0, i1 = math.floor(lx.min() / hx) - 1, math.ceil(lx.max() / hx) + 1
+    jj = np.arange(j0, j1 + 1)
+    ii = np.arange(i0, i1 + 1)
+    J, I = np.meshgrid(jj, ii, indexing="ij")
+    X = (I + 0.5 * (J % 2)) * hx
+    Y = J * hy
+    pts = uv[k] + X.reshape(-1, 1) * e1 + Y.reshape(-1, 1) * e2
+    # cheap pre-filter on the local bounding box
+    xl, yl = X.reshape(-1), Y.reshape(-1)
+    keep = (xl > lx.min()) & (xl < lx.max()) & (yl > ly.min()) & (yl < ly.max())
+    return pts[keep]
+
+
+def _interior_points(uv, area, h, seg, div, convex, bpts, segs):
+    pts = _lattice(uv, area, h, seg, div)
+    if len(pts) == 0:
+        return pts
+    pts = pts[_inside(pts, uv)]
+    if len(pts) == 0:
+        return pts
+    pts = pts[_dist_to_boundary(pts, uv) >= _CLEARANCE * h]
+    if not convex and len(pts):
+        # keep every boundary segment Gabriel with respect to the interior points
+        a, b = bpts[segs[:, 0]], bpts[segs[:, 1]]
+        half = 0.5 * np.hypot(*(b - a).T)
+        long = np.nonzero(half > _CLEARANCE * h * (1.0 - 1e-9))[0]
+        if long.size:
+            tree = cKDTree(pts)
+            mid = 0.5 * (a[long] + b[long])
+            drop = tree.query_ball_point(mid, half[long] * (1.0 + 1e-9))
+            bad = np.unique(np.concatenate([np.asarray(x, dtype=np.int64) for x in drop]))
+            pts = np.delete(pts, bad, axis=0)
+    return pts
+
+
+_SMOOTH_ITERS = 1
+_SMOOTH_BAND = 3.0
+
+
+def _smooth(nodes, tri, nb, uv_c, h, iters):
+    """Laplacian smoothing of the interior nodes near the boundary.
+
+    Returns the new positions of the interior nodes (``nodes[nb:]``).  Nodes
+    farther than ``_SMOOTH_BAND * h`` from the boundary (the regular lattice)
+    are left alone; a moved node that would leave the polygon or come closer
+    than ``0.25 h`` to the boundary keeps its lattice position.
+    """
+    n = len(nodes)
+    orig = nodes[nb:]
+    dist = _dist_to_boundary(orig, uv_c)
+    movable = np.zeros(n, dtype=bool)
+    movable[nb:] = dist < _SMOOTH_BAND * h
+    if not movable.any():
+        return orig
+    e = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]], axis=0)
+    e = np.concatenate([e, e[:, ::-1]], axis=0)
+    e = e[movable[e[:, 0]]]
+    deg = np.bincount(e[:, 0], minlength=n).astype(np.float64)
+    pts = nodes.copy()
+    idx = np.nonzero(movable)[0]
+    for _ in range(iters):
+        acc = np.zeros_like(pts)
+        np.add.at(acc, e[:, 0], pts[e[:, 1]])
+        pts[idx] = acc[idx] / deg[idx, None]
+    new = pts[nb:]
+    ok = _inside(new, uv_c) & (_dist_to_boundary(new, uv_c) >= 0.25 * h)
+    return np.where(ok[:, None], new, orig)
+
+
+def _edge_keys(a, b, n):
+    lo, hi = np.minimum(a, b), np.maximum(a, b)
+    return lo.astype(np.int64) * n + hi
+
+
+def mesh_panel(corners_uv, corners_xyz, step, l0, divisions=None, name="panel") -> PanelMesh:
+    """Mesh a netting panel into triangles in twine-coordinate space.
+
+    Parameters
+    ----------
+    corners_uv : array_like, shape (C, 2)
+        Twine coordinates ``(U, V)`` of the corners (twines), ``C >= 3``, in
+        order along the boundary of a simple polygon (either orientation).
+    corners_xyz : array_like, shape (C, 3)
+        Cartesian start positions of the corners (m).
+    step : float
+        Target triangle size (m); the size in twine space is
+        ``h = step / l0`` twines.
+    l0 : float
+        Unstretched twine length (m per twine).
+    divisions : array_like of int, shape (C,), optional
+        Number of equal segments on each side ``k`` (from corner ``k`` to
+        corner ``(k + 1) % C``); default :func:`side_divisions`.  Side nodes
+        are equally spaced in ``(U, V)``: node ``i`` of side ``k`` sits at
+        fraction ``i / divisions[k]``.  Two panels given the same divisions
+        on a seam get matching border nodes.
+    name : str
+        Panel name used in error messages.
+
+    Returns
+    -------
+    PanelMesh
+        Nodes ordered as: corners (node ``k`` is corner ``k``), then side
+        nodes side by side (excluding corners), then interior nodes.
+
+    Raises
+    ------
+    PanelError
+        On invalid input (fewer than 3 corners, non-finite coordinates,
+        repeated consecutive corners, zero-area or self-intersecting polygon,
+        non-positive ``step`` or ``l0``, bad ``divisions``), or if the panel
+        could not be meshed.
+    """
+    uv_c, xyz_c, h, seg, area, scale, div = _validate(corners_uv, corners_xyz, step, l0, divisions, name)
+    C = len(uv_c)
+    if xyz_c is None:
+        raise _err(name, "corners_xyz is required")
+
+    perim = float(seg.sum())
+    estimate = abs(area) / (h * h * math.sqrt(3.0) / 2.0) + float(div.sum()) + perim / h
+    if estimate > MAX_NODES:
+        raise _err(name, f"step={step} m with l0={l0} m gives h={h:g} twines and about "
+                         f"{estimate:.3g} nodes (limit {MAX_NODES}); use a larger step")
+
+    e = np.roll(uv_c, -1, axis=0) - uv_c
+    turn = e[:, 0] * np.roll(e[:, 1], -1) - e[:, 1] * np.roll(e[:, 0], -1)
+    convex = bool(np.all(turn * np.sign(area) >= -_REL_EPS * scale * scale))
+
+    w_b, sides, segs = _boundary(uv_c, div)
+    b_pts = w_b @ uv_c
+    i_pts = _interior_points(uv_c, area, h, seg, div, convex, b_pts, segs)
+    w_i = _mean_value_coordinates(i_pts, uv_c) if len(i_pts) else np.zeros((0, C))
+    weights = np.concatenate([w_b, w_i], axis=0)
+    nodes = weights @ uv_c
+    n = len(nodes)
+
+    tri = _triangulate(nodes, uv_c, area, segs, scale, name)
+    nb = len(b_pts)
+    if _SMOOTH_ITERS and n > nb:
+        moved = _smooth(nodes, tri, nb, uv_c, h, _SMOOTH_ITERS)
+        w_i = _mean_value_coordinates(moved, uv_c)
+        weights = np.concatenate([w_b, w_i], axis=0)
+        nodes = weights @ uv_c
+        tri = _triangulate(nodes, uv_c, area, segs, scale, name)
+
+    xyz = weights @ xyz_c
+    arrays = dict(uv=nodes, xyz=xyz, triangles=tri, corner_nodes=np.arange(C, dtype=np.int64),
+                  weights=weights)
+    for a in arrays.values():
+        a.setflags(write=False)
+    for s in sides:
+        s.setflags(write=False)
+    assert n == len(xyz)
+    return PanelMesh(side_nodes=sides, **arrays)
+
+
+def _orient(p, a, b, c):
+    """Twice the signed area of the triangle of node indices a, b, c."""
+    return ((p[b, 0] - p[a, 0]) * (p[c, 1] - p[a, 1])
+            - (p[b, 1] - p[a, 1]) * (p[c, 0] - p[a, 0]))
+
+
+def _crosses(p, a, b, u, v):
+    """Does segment (u, v) cross segment (a, b) at a point interior to both?"""
+    if u in (a, b) or v in (a, b):
+        return False
+    o1, o2 = _orient(p, a, b, u), _orient(p, a, b, v)
+    o3, o4 = _orient(p, u, v, a), _orient(p, u, v, b)
+    return (o1 * o2 < 0.0) and (o3 * o4 < 0.0)
+
+
+def _in_circle(p, a, b, c, d):
+    """True if node d lies strictly inside the circumcircle of CCW triangle (a, b, c)."""
+    rows = p[[a, b, c]] - p[d]
+    m = np.column_stack([rows, (rows * rows).sum(axis=1)])
+    det = float(np.linalg.det(m))
+    size = float((rows * rows).sum(axis=1).max())
+    return det > 1e-10 * size * size
+
+
+class _LocalMesh:
+    """Edge-flip bookkeeping on a subset of the (counter-clockwise) triangles."""
+
+    def __init__(self, tri, ids):
+        self.tri = tri
+        self.edges = {}
+        for t in ids:
+            self._add(int(t))
+
+    @staticmethod
+    def _key(u, v):
+        return (u, v) if u < v else (v, u)
+
+    def _add(self, t):
+        a, b, c = (int(x) for x in self.tri[t])
+        for u, v in ((a, b), (b, c), (c, a)):
+            self.edges.setdefault(self._key(u, v), []).append(t)
+
+    def _remove(self, t):
+        a, b, c = (int(x) for x in self.tri[t])
+        for u, v in ((a, b), (b, c), (c, a)):
+            lst = self.edges[self._key(u, v)]
+            lst.remove(t)
+            if not lst:
+                del self.edges[self._key(u, v)]
+
+    def quad(self, u, v):
+        """For interior edge (u, v) return (t1, t2, p, q, r, s): t1 = (p, q, r), t2 = (q, p, s)."""
+        ts = self.edges.get(self._key(u, v), [])
+        if len(ts) != 2:
+            return None
+        t1, t2 = ts
+        a, b, c = (int(x) for x in self.tri[t1])
+        # rotate t1 so that it reads (p, q, r) with {p, q} == {u, v}
+        for p, q, r in ((a, b, c), (b, c, a), (c, a, b)):
+            if {p, q} == {u, v}:
+                break
+        s = next(int(x) for x in self.tri[t2] if int(x) not in (p, q))
+        return t1, t2, p, q, r, s
+
+    def flip(self, t1, t2, p, q, r, s):
+        self._remove(t1)
+        self._remove(t2)
+        self.tri[t1] = (p, s, r)
+        self.tri[t2] = (s, q, r)
+        self._add(t1)
+        self._add(t2)
+
+
+def _recover_segments(nodes, tri, missing, constraint, name):
+    """Insert the missing boundary segments into a CCW triangulation by edge flips.
+
+    Sloan's algorithm (flip crossing edges whose quadrilateral is convex until
+    none cross), followed by a local Lawson pass restoring the constrained
+    Delaunay property of the new edges.  ``tri`` is modified in place.
+    """
+    n = len(nodes)
+    e_all = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]], axis=0)
+    t_all = np.tile(np.arange(len(tri)), 3)
+    touched = set()
+    for a, b in missing:
+        # triangles with an edge crossing (a, b), found vectorised
+        pa, pb = nodes[a], nodes[b]
+        pu, pv = nodes[e_all[:, 0]], nodes[e_all[:, 1]]
+
+        def orient(x, y, z):
+            return (y[..., 0] - x[..., 0]) * (z[..., 1] - x[..., 1]) - (y[..., 1] - x[..., 1]) * (z[..., 0] - x[..., 0])
+
+        cr = ((orient(pa, pb, pu) * orient(pa, pb, pv) < 0)
+              & (orient(pu, pv, pa) * orient(pu, pv, pb) < 0))
+        ids = np.unique(t_all[cr])
+        lm = _LocalMesh(tri, ids)
+        queue = [k for k in lm.edges if len(lm.edges[k]) == 2 and _crosses(nodes, a, b, *k)]
+        budget = 50 * (len(queue) + 10) ** 2
+        while queue:
+            budget -= 1
+            if budget < 0:
+                raise _err(name, f"could not recover boundary segment between nodes {a} and {b} "
+                                 f"(edge flipping did not converge)")
+            u, v = queue.pop(0)
+            qd = lm.quad(u, v)
+            if qd is None:
+                continue
+            t1, t2, p, q, r, s = qd
+            # the quadrilateral p, s, q, r is strictly convex iff p and q are on
+            # opposite sides of r-s (r and s are on opposite sides of p-q already)
+            if _orient(nodes, r, s, p) * _orient(nodes, r, s, q) < 0.0:
+                lm.flip(t1, t2, p, q, r, s)
+                touched.update((t1, t2))
+                if _crosses(nodes, a, b, r, s):
+                    queue.append((min(r, s), max(r, s)))
+            else:
+                queue.append((u, v))
+        # refresh the edge lists for the next segment
+        e_all = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]], axis=0)
+
+    # local Lawson pass: make the flipped region constrained-Delaunay again
+    if touched:
+        lm = _LocalMesh(tri, sorted(touched))
+        stack = sorted(k for k in lm.edges if len(lm.edges[k]) == 2)
+        budget = 100 * (len(stack) + 10) ** 2
+        while stack and budget > 0:
+            budget -= 1
+            u, v = stack.pop()
+            if u * n + v in constraint:
+                continue
+            qd = lm.quad(u, v)
+            if qd is None:
+                continue
+            t1, t2, p, q, r, s = qd
+            if _in_circle(nodes, p, q, r, s) and _orient(nodes, r, s, p) * _orient(nodes, r, s, q) < 0.0:
+                lm.flip(t1, t2, p, q, r, s)
+                for x, y in ((p, s), (s, q), (q, r), (r, p)):
+                    stack.append((min(x, y), max(x, y)))
+    return tri
+
+
+def _triangulate(nodes, uv_c, area, segs, scale, name):
+    n = len(nodes)
+    # Delaunay is translation/scale invariant; centre and normalise for robustness
+    centre = uv_c.mean(axis=0)
+    try:
+        dl = Delaunay((nodes - centre) / scale)
+    except Exception as exc:  # qhull failure
+        raise _err(name, f"Delaunay triangulation failed ({exc})") from exc
+    tri = np.array(dl.simplices, dtype=np.int64)
+    d = _signed_d(nodes, tri)
+    good = np.abs(d) > 1e-13 * scale * scale
+    tri, d = tri[good], d[good]
+    tri[d < 0] = tri[d < 0][:, [0, 2, 1]]              # all counter-clockwise
+
+    sk = np.unique(_edge_keys(segs[:, 0], segs[:, 1], n))
+    ek = np.unique(np.concatenate([_edge_keys(tri[:, a], tri[:, b], n)
+                                   for a, b in ((0, 1), (1, 2), (2, 0))]))
+    missing = sk[~np.isin(sk, ek)]
+    if missing.size:
+        pairs = [(int(k // n), int(k % n)) for k in missing]
+        tri = _recover_segments(nodes, tri, pairs, set(sk.tolist()), name)
+
+    d = _signed_d(nodes, tri)
+    cen = nodes[tri].mean(axis=1)
+    inside = _inside(cen, uv_c)
+    tri, d = tri[inside], d[inside]
+
+    # orientation: same sign as the polygon
+    if area < 0:
+        tri = tri[:, [0, 2, 1]]
+        d = -d
+
+    # every boundary segment is an edge of exactly one triangle, and no other
+    # edge is used by only one triangle
+    ek = np.concatenate([_edge_keys(tri[:, a], tri[:, b], n) for a, b in ((0, 1), (1, 2), (2, 0))])
+    uk, cnt = np.unique(ek, return_counts=True)
+    sk = np.unique(_edge_keys(segs[:, 0], segs[:, 1], n))
+    pos = np.searchsorted(uk, sk)
+    pos = np.minimum(pos, len(uk) - 1)
+    present = (uk[pos] == sk) & (cnt[pos] == 1)
+    if not present.all():
+        miss = sk[~present][0]
+        a, b = int(miss // n), int(miss % n)
+        raise _err(name, f"boundary segment between nodes {a} at UV ({nodes[a, 0]:.6g}, "
+                         f"{nodes[a, 1]:.6g}) and {b} at UV ({nodes[b, 0]:.6g}, {nodes[b, 1]:.6g}) "
+                         f"is missing from the triangulation")
+    once = uk[cnt == 1]
+    if len(once) != len(sk) or np.any(cnt > 2):
+        raise _err(name, "triangulation is not a manifold covering of the polygon")
+    if np.any(d * np.sign(area) <= 0.0):
+        raise _err(name, "triangulation produced an inverted or degenerate triangle")
+    tot = 0.5 * float(np.abs(d).sum())
+    if abs(tot - abs(area)) > 1e-9 * abs(area):
+        raise _err(name, f"triangles cover area {tot!r} but the polygon has area {abs(area)!r} (twines^2)")
+    if len(np.unique(tri)) != n:
+        raise _err(name, "some nodes are not used by any triangle")
+    return tri

@@ -1,0 +1,246 @@
+"""A scene: the data of one net problem (nodes, element families, parameters, boundary conditions).
+
+A scene is plain data (an equinox pytree of arrays), so it can be passed through ``jax.jit``, ``vmap``
+and ``grad`` as an argument: parameters (stiffness, lengths, twine coordinates, loads) are leaves that
+design gradients can flow into. What the scene *contains* — which element families, which terms have
+non-zero parameters — is read from its concrete values once, before tracing, by :mod:`jaxnet.model`.
+
+Units are SI throughout: m, N, kg, kg/m³, s.
+
+Element families:
+  * :class:`Netting` — diamond-mesh triangles (book section 4.2), one row per triangle, every per-element
+    parameter an array so that panels of different netting share one vmapped family.
+  * :class:`Bars` — straight cable bars (ropes), one row per bar.
+Nodes carry fixity per axis, lumped mass and displaced volume (sinkers, floats) and an external force.
+
+:func:`validate` checks a scene and raises :class:`SceneError` naming the culprit (node, element, cable,
+parameter) — always before anything is compiled.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import equinox as eqx
+import numpy as np
+import scipy.sparse as sp
+
+
+class SceneError(ValueError):
+    """A scene (or its description) is malformed; the message names the culprit."""
+
+
+class Nodes(eqx.Module):
+    """Nodes of the net.
+
+    position: (N, 3) start positions (m); fixed nodes stay there.
+    fixed: (N, 3) bool, True where the coordinate is held (per axis).
+    mass: (N,) lumped mass (kg): sinkers, floats, anything attached to the node.
+    volume: (N,) displaced volume (m³) of what is attached (buoyancy rho_water g volume).
+    force: (N, 3) external force applied to the node (N).
+    """
+
+    position: np.ndarray
+    fixed: np.ndarray
+    mass: np.ndarray
+    volume: np.ndarray
+    force: np.ndarray
+
+
+class Netting(eqx.Module):
+    """Diamond-mesh netting triangles (one row per triangle).
+
+    vertices: (E, 3) node indices.
+    uv: (E, 3, 2) twine coordinates (U, V) of each vertex, in number of twines (eqs 4.1-4.7).
+    l0: (E,) unstretched twine length = mesh side (m).
+    ea_traction, ea_compression: (E,) twine stiffness in traction and in compression (N).
+    diameter: (E,) twine diameter (m), for weight and drag.
+    density: (E,) volumic mass of the twine material (kg/m³).
+    panel: (E,) index of the panel each triangle belongs to (for reports).
+    """
+
+    vertices: np.ndarray
+    uv: np.ndarray
+    l0: np.ndarray
+    ea_traction: np.ndarray
+    ea_compression: np.ndarray
+    diameter: np.ndarray
+    density: np.ndarray
+    panel: np.ndarray
+
+
+class Bars(eqx.Module):
+    """Cable bars (one row per bar): a cable of length L in n bars gives n rows of rest length L/n.
+
+    ends: (B, 2) node indices.
+    rest_length: (B,) unstretched length (m).
+    ea_traction, ea_compression: (B,) stiffness (N).
+    diameter: (B,) (m); density: (B,) volumic mass (kg/m³); cable: (B,) index of the cable.
+    """
+
+    ends: np.ndarray
+    rest_length: np.ndarray
+    ea_traction: np.ndarray
+    ea_compression: np.ndarray
+    diameter: np.ndarray
+    density: np.ndarray
+    cable: np.ndarray
+
+
+class Environment(eqx.Module):
+    """Surroundings: gravity g (m/s²), water density (kg/m³), unit vertical ``up`` (weight acts along -up)."""
+
+    gravity: float = 9.81
+    water_density: float = 1025.0
+    up: np.ndarray = dataclasses.field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))
+
+
+class Scene(eqx.Module):
+    """One net problem. ``netting`` or ``bars`` may be None; names are for messages and reports."""
+
+    nodes: Nodes
+    netting: Netting | None = None
+    bars: Bars | None = None
+    environment: Environment = dataclasses.field(default_factory=Environment)
+    panel_names: tuple = eqx.field(static=True, default=())
+    cable_names: tuple = eqx.field(static=True, default=())
+
+    @property
+    def n_nodes(self):
+        return int(self.nodes.position.shape[0])
+
+    @property
+    def n_elements(self):
+        return (0 if self.netting is None else int(self.netting.vertices.shape[0])) + (
+            0 if self.bars is None else int(self.bars.ends.shape[0])
+        )
+
+    @property
+    def n_dof(self):
+        """Number of free coordinates (the unknowns of the equilibrium)."""
+        return int(np.size(self.nodes.fixed) - np.count_nonzero(self.nodes.fixed))
+
+
+# --------------------------------------------------------------------------------------------------
+# Validation
+# --------------------------------------------------------------------------------------------------
+
+
+def _panel_name(scene, e):
+    p = int(np.asarray(scene.netting.panel)[e])
+    return scene.panel_names[p] if p < len(scene.panel_names) else f"panel {p}"
+
+
+def _cable_name(scene, b):
+    c = int(np.asarray(scene.bars.cable)[b])
+    return scene.cable_names[c] if c < len(scene.cable_names) else f"cable {c}"
+
+
+def _check_finite(values, what):
+    values = np.asarray(values, dtype=float)
+    bad = np.argwhere(~np.isfinite(values))
+    if bad.size:
+        raise SceneError(f"{what}: non-finite value at index {tuple(int(i) for i in bad[0])}")
+
+
+def _check_positive(values, what, culprit, strict=True):
+    values = np.asarray(values, dtype=float)
+    bad = np.flatnonzero(~(values > 0) if strict else ~(values >= 0))
+    if bad.size:
+        i = int(bad[0])
+        sign = "> 0" if strict else ">= 0"
+        raise SceneError(f"{culprit(i)}: {what} must be {sign}, got {values[i]!r}")
+
+
+def validate(scene: Scene) -> None:
+    """Raise :class:`SceneError` if the scene cannot be solved; the message names the culprit."""
+    nodes = scene.nodes
+    n = scene.n_nodes
+    pos = np.asarray(nodes.position, dtype=float)
+    if pos.ndim != 2 or pos.shape[1] != 3:
+        raise SceneError(f"node positions must have shape (N, 3), got {pos.shape}")
+    for name in ("position", "force", "mass", "volume"):
+        arr = np.asarray(getattr(nodes, name), dtype=float)
+        bad = np.argwhere(~np.isfinite(arr))
+        if bad.size:
+            raise SceneError(f"node {int(bad[0][0])}: {name} is not finite ({arr[tuple(bad[0])]!r})")
+    _check_positive(nodes.mass, "mass", lambda i: f"node {i}", strict=False)
+    _check_positive(nodes.volume, "displaced volume", lambda i: f"node {i}", strict=False)
+    env = scene.environment
+    if not np.isfinite(env.gravity) or env.gravity < 0:
+        raise SceneError(f"environment: gravity must be finite and >= 0, got {env.gravity!r}")
+    if not env.water_density > 0:
+        raise SceneError(f"environment: water density must be > 0, got {env.water_density!r}")
+    if abs(np.linalg.norm(env.up) - 1.0) > 1e-9:
+        raise SceneError(f"environment: 'up' must be a unit vector, got {env.up!r}")
+
+    used = np.zeros(n, dtype=bool)
+    edges = []
+    if scene.netting is not None:
+        net = scene.netting
+        tri = np.asarray(net.vertices)
+        if tri.size and (tri.min() < 0 or tri.max() >= n):
+            e = int(np.argwhere((tri < 0) | (tri >= n))[0][0])
+            raise SceneError(f"triangle {e} ({_panel_name(scene, e)}): vertex index outside 0..{n - 1}")
+        uv = np.asarray(net.uv, dtype=float)
+        _check_finite(uv, "netting twine coordinates")
+        d = (uv[:, 1, 0] - uv[:, 0, 0]) * (uv[:, 2, 1] - uv[:, 0, 1]) - (uv[:, 2, 0] - uv[:, 0, 0]) * (
+            uv[:, 1, 1] - uv[:, 0, 1]
+        )
+        flat = np.flatnonzero(np.abs(d) < 1e-12)
+        if flat.size:
+            e = int(flat[0])
+            raise SceneError(
+                f"triangle {e} ({_panel_name(scene, e)}): collinear twine coordinates (d = {d[e]:.3g}), "
+                f"vertices {tri[e].tolist()} with (U, V) = {uv[e].tolist()}"
+            )
+        culprit = lambda e: f"triangle {e} ({_panel_name(scene, e)})"  # noqa: E731
+        _check_positive(net.l0, "unstretched twine length l0", culprit)
+        _check_positive(net.ea_traction, "traction stiffness EA", culprit, strict=False)
+        _check_positive(net.ea_compression, "compression stiffness EA", culprit, strict=False)
+        _check_positive(net.diameter, "twine diameter", culprit, strict=False)
+        _check_positive(net.density, "volumic mass", culprit, strict=False)
+        used[tri.ravel()] = True
+        edges += [tri[:, [0, 1]], tri[:, [1, 2]]]
+    if scene.bars is not None:
+        bars = scene.bars
+        ends = np.asarray(bars.ends)
+        if ends.size and (ends.min() < 0 or ends.max() >= n):
+            b = int(np.argwhere((ends < 0) | (ends >= n))[0][0])
+            raise SceneError(f"bar {b} ({_cable_name(scene, b)}): end node index outside 0..{n - 1}")
+        culprit = lambda b: f"bar {b} ({_cable_name(scene, b)})"  # noqa: E731
+        _check_positive(bars.rest_length, "unstretched length", culprit)
+        _check_positive(bars.ea_traction, "traction stiffness EA", culprit, strict=False)
+        _check_positive(bars.ea_compression, "compression stiffness EA", culprit, strict=False)
+        _check_positive(bars.diameter, "diameter", culprit, strict=False)
+        _check_positive(bars.density, "volumic mass", culprit, strict=False)
+        same = np.flatnonzero(ends[:, 0] == ends[:, 1])
+        if same.size:
+            raise SceneError(f"{culprit(int(same[0]))}: both ends on node {ends[same[0], 0]}")
+        used[ends.ravel()] = True
+        edges.append(ends)
+
+    fixed = np.asarray(nodes.fixed, dtype=bool)
+    free_unused = np.flatnonzero(~used & ~fixed.all(axis=1))
+    if free_unused.size:
+        raise SceneError(f"node {int(free_unused[0])} belongs to no element and is not fixed: nothing holds it")
+    if not fixed.any():
+        raise SceneError("no node is fixed: the net is free to drift as a rigid body (fix at least one node)")
+    for axis, label in enumerate("xyz"):
+        if not fixed[:, axis].any():
+            raise SceneError(f"no node is fixed along {label}: the net is free to translate along {label}")
+    # Every connected piece of the net must be held somewhere, or it drifts as a rigid body.
+    if edges:
+        e = np.concatenate(edges)
+        graph = sp.coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n))
+        n_comp, label = sp.csgraph.connected_components(graph, directed=False)
+        if n_comp > 1:
+            held = np.zeros(n_comp, dtype=bool)
+            held[label[fixed.any(axis=1)]] = True
+            loose = np.flatnonzero(~held)
+            if loose.size:
+                members = np.flatnonzero(label == loose[0])
+                raise SceneError(
+                    f"nodes {members[:5].tolist()}{'...' if members.size > 5 else ''} ({members.size} nodes) "
+                    "form a piece of net connected to no fixed node: it is free to drift as a rigid body"
+                )

@@ -1,0 +1,285 @@
+"""Static equilibrium by a damped (Levenberg-Marquardt) Newton method with an energy line search, jitted.
+
+Why this globalisation. A net starts flat and stress-free: its tangent is singular there (a slack membrane
+has no out-of-plane stiffness, twines with zero compression stiffness none in compression, and the mesh
+opening is a mechanism until the twines are loaded). FEMNET keeps a large added diagonal stiffness for
+all iterations and needs thousands of them. Here the added diagonal mu * s (s the mean diagonal stiffness)
+is *adaptive*: it is raised when the quadratic model of the energy predicts its decrease badly and lowered
+geometrically when it predicts it well, so it vanishes near the solution and the last iterations are pure
+Newton steps (quadratic convergence). Every step is then checked by a backtracking line search on the
+total potential energy, which costs energy evaluations only (no factorisation): each iteration is one
+assembly and one sparse factorisation. An optional per-iteration displacement limit (FEMNET's) caps the
+largest nodal move.
+
+Convergence is judged as in FEMNET on forces: the largest nodal out-of-balance force over the free
+coordinates, in newtons (FEMNET's default threshold is 1e-3 N). A solve stops with a named reason;
+:func:`solve` raises :class:`SolveError` (reason, iteration, worst node) unless asked not to, and never
+returns NaN silently.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxnet import assemble, linalg, model as model_lib, scene as scene_lib
+
+#: stop reasons (``Equilibrium.status``)
+RUNNING, CONVERGED, MAX_ITERATIONS, NON_FINITE, STALLED = 0, 1, 2, 3, 4
+REASONS = {
+    CONVERGED: "converged",
+    MAX_ITERATIONS: "maximum number of iterations reached",
+    NON_FINITE: "non-finite force or energy (NaN/inf)",
+    STALLED: "no step decreases the energy even with maximal damping (singular or inconsistent problem)",
+    RUNNING: "running",
+}
+
+
+class SolveError(RuntimeError):
+    """A static solve failed; ``.equilibrium`` holds the last state reached."""
+
+    def __init__(self, message, equilibrium):
+        super().__init__(message)
+        self.equilibrium = equilibrium
+
+
+@dataclasses.dataclass(frozen=True)
+class Newton:
+    """Options of the static Newton solver (hashable: part of the compiled program's identity).
+
+    tol: convergence threshold on the largest nodal out-of-balance force (N).
+    max_iter: maximum number of Newton iterations (factorisations).
+    max_step: largest displacement of any node in one iteration (m); inf for none.
+    damping: initial added diagonal, relative to the mean diagonal stiffness.
+    min_damping, max_damping: bounds of the relative added diagonal.
+    line_search: maximum number of step halvings per iteration.
+    verbose: print one line per iteration.
+    """
+
+    tol: float = 1e-3
+    max_iter: int = 100
+    max_step: float = float("inf")
+    damping: float = 1e-3
+    min_damping: float = 1e-12
+    max_damping: float = 1e8
+    line_search: int = 30
+    smoothing: float = 1.0
+    armijo: float = 1e-4
+    curvature: float = 0.3
+    verbose: bool = False
+
+
+class Equilibrium(eqx.Module):
+    """Result of a static solve.
+
+    x: (N, 3) node positions (m). force: (N, 3) out-of-balance force (N); at fixed coordinates it is
+    minus the reaction. residual_N: largest nodal out-of-balance force on free coordinates (N).
+    history: (max_iter + 1,) residual at each iteration (NaN after the last). worst_node: node with the
+    largest residual. status: stop reason code (see REASONS).
+    """
+
+    x: jax.Array
+    force: jax.Array
+    residual_N: jax.Array
+    iterations: jax.Array
+    status: jax.Array
+    worst_node: jax.Array
+    history: jax.Array
+    energy: jax.Array
+    factorisations: jax.Array
+    energy_evaluations: jax.Array
+
+    @property
+    def converged(self):
+        return bool(self.status == CONVERGED)
+
+    @property
+    def reason(self):
+        return REASONS[int(self.status)]
+
+    def reaction(self, scene):
+        """(N, 3) reaction forces (N) at the fixed coordinates, zero elsewhere."""
+        fixed = np.asarray(scene.nodes.fixed)
+        return np.where(fixed, -np.asarray(self.force), 0.0)
+
+
+def _nodal_norm(f_free, pattern, n_nodes):
+    full = jnp.zeros(3 * n_nodes).at[pattern.free].set(f_free).reshape(-1, 3)
+    return jnp.sqrt(jnp.sum(full * full, axis=1))
+
+
+def _progress(it, res, damping, step, evals, smoothing):
+    print(f"  newton {int(it):4d}  residual {float(res):11.4e} N  damping {float(damping):8.1e}  step {float(step):9.3e}"
+          f"  evals {int(evals):2d}  smoothing {float(smoothing):8.1e} N")
+
+
+def newton_loop(x0, scene, pattern, model, opts: Newton):
+    """Jittable Newton iteration from free coordinates ``x0``; returns an :class:`Equilibrium`.
+
+    ``model`` (active terms) and ``opts`` are static; ``scene`` and ``pattern`` are array arguments.
+    """
+    n_nodes = scene.nodes.position.shape[0]
+    load = assemble.loads(scene, model)
+
+    def full(x):
+        return assemble.positions(x, scene, pattern)
+
+    def merit(x):
+        return assemble.potential(full(x), scene, model, load)
+
+    def force(x):
+        return assemble.nodal_force(full(x), scene, model, load).ravel()[pattern.free]
+
+    def status_of(it, f, e):
+        res = jnp.max(_nodal_norm(f, pattern, n_nodes))
+        finite = jnp.isfinite(res) & jnp.isfinite(e)
+        return res, jnp.where(
+            ~finite, NON_FINITE, jnp.where(res <= opts.tol, CONVERGED, jnp.where(it >= opts.max_iter, MAX_ITERATIONS, RUNNING))
+        )
+
+    f0 = force(x0)
+    e0 = merit(x0)
+    res0, st0 = status_of(0, f0, e0)
+    hist0 = jnp.full(opts.max_iter + 1, jnp.nan).at[0].set(res0)
+    zero = jnp.asarray(0)
+    state0 = (x0, f0, e0, jnp.asarray(opts.damping), zero, st0, hist0, opts.smoothing * res0, zero, zero)
+
+    def cond(state):
+        return state[5] == RUNNING
+
+    def line_search(x, dx, e, f, slope, roundoff, usable):
+        """Energy minimisation along x + a dx to the strong Wolfe conditions; returns (a, e, f, evals, ok)."""
+        d0 = -slope  # d(energy)/da at a = 0, < 0
+
+        def probe(a):
+            ea, g = jax.value_and_grad(merit)(x + a * dx)
+            return ea, jnp.dot(g, dx), -g
+
+        def ls_cond(s):
+            return usable & ~s[-1]
+
+        def ls_body(s):
+            lo, e_lo, d_lo, f_lo, hi, e_hi, d_hi, a, k, _ = s
+            ea, da, fa = probe(a)
+            finite = jnp.isfinite(ea) & jnp.isfinite(da)
+            armijo = finite & (ea <= e + opts.armijo * a * d0 + roundoff)
+            wolfe = armijo & (jnp.abs(da) <= opts.curvature * jnp.abs(d0))
+            right = armijo & (da < 0)  # the minimiser along the line lies beyond a
+            take = right | wolfe
+            lo, e_lo, d_lo, f_lo = (jnp.where(take, a, lo), jnp.where(take, ea, e_lo), jnp.where(take, da, d_lo),
+                                    jnp.where(take, fa, f_lo))
+            hi, e_hi, d_hi = (jnp.where(take, hi, a), jnp.where(take, e_hi, jnp.where(finite, ea, jnp.inf)),
+                              jnp.where(take, d_hi, jnp.where(finite, da, jnp.nan)))
+            h = hi - lo
+            # not bracketed yet: extrapolate by the secant of the derivative, 1.5 to 8 times further
+            d_prev = jnp.where(k == 0, d0, s[2])
+            a_prev = jnp.where(k == 0, 0.0, s[0])
+            grow = jnp.where(da > d_prev, a - da * (a - a_prev) / (da - d_prev), 8.0 * a)
+            a_out = jnp.clip(grow, 1.5 * a, 8.0 * a)
+            # bracketed: secant of the derivative if it changes sign, else minimum of the quadratic through
+            # (e_lo, d_lo, e_hi), else bisection; kept inside the bracket's middle 80 %.
+            secant = lo - d_lo * h / (d_hi - d_lo)
+            quad = lo - d_lo * h * h / (2.0 * (e_hi - e_lo - d_lo * h))
+            a_in = jnp.where(jnp.isfinite(d_hi) & (d_hi > 0), secant,
+                             jnp.where(jnp.isfinite(e_hi) & (e_hi - e_lo - d_lo * h > 0), quad, lo + 0.5 * h))
+            a_in = jnp.clip(jnp.nan_to_num(a_in, nan=lo + 0.5 * h), lo + 0.1 * h, hi - 0.1 * h)
+            a_next = jnp.where(jnp.isfinite(hi), a_in, a_out)
+            done = wolfe | (k + 1 >= opts.line_search) | (h <= 1e-14 * hi)
+            return lo, e_lo, d_lo, f_lo, hi, e_hi, d_hi, a_next, k + 1, done
+
+        init = (jnp.asarray(0.0), e, d0, f, jnp.asarray(jnp.inf), jnp.asarray(jnp.inf), jnp.asarray(jnp.nan),
+                jnp.asarray(1.0), zero, jnp.asarray(False))
+        lo, e_lo, _, f_lo, _, _, _, _, k, _ = jax.lax.while_loop(ls_cond, ls_body, init)
+        return lo, e_lo, f_lo, k, usable & (lo > 0)
+
+    def body(state):
+        x, f, e, mu, it, _, hist, w, n_fact, n_eval = state
+        data = assemble.tangent(full(x), scene, model, pattern, smoothing=w if opts.smoothing > 0 else None)
+        scale = jnp.maximum(jnp.mean(jnp.abs(data[pattern.diagonal])), 1e-300)
+        damped = data.at[pattern.diagonal].add(mu * scale)
+        dx, ok = linalg.solve(damped, f, pattern.indptr, pattern.indices)
+        # FEMNET's displacement limit: scale the step so that no node moves more than max_step.
+        biggest = jnp.max(_nodal_norm(dx, pattern, n_nodes))
+        dx = dx * jnp.minimum(1.0, opts.max_step / jnp.maximum(biggest, 1e-300))
+        slope = jnp.dot(f, dx)  # -d(energy)/d(alpha) at alpha = 0: > 0 for a descent direction
+        usable = ok & (slope > 0)
+        # Near the solution the energy decrease falls below the roundoff of the energy itself: there the
+        # derivative condition alone decides.
+        roundoff = 1e-12 * (jnp.abs(e) + jnp.abs(jnp.dot(load.ravel(), full(x).ravel())))
+        alpha, e_new, f_new, k, accepted = line_search(x, dx, e, f, slope, roundoff, usable)
+        mu_next = mu * jnp.where(accepted, jnp.where(alpha >= 0.5, 1.0 / 3.0, 2.0), 10.0)
+        mu_next = jnp.clip(mu_next, opts.min_damping, opts.max_damping)
+        x_new = jnp.where(accepted, x + alpha * dx, x)
+        f_new = jnp.where(accepted, f_new, f)
+        e_new = jnp.where(accepted, e_new, e)
+        res, st = status_of(it + 1, f_new, e_new)
+        st = jnp.where((st == RUNNING) & ~accepted & (mu >= opts.max_damping), STALLED, st)
+        hist = hist.at[it + 1].set(res)
+        if opts.verbose:
+            jax.debug.callback(_progress, it + 1, res, mu, jnp.where(accepted, alpha, 0.0), k, w, ordered=True)
+        w_new = jnp.minimum(w, opts.smoothing * res)
+        return x_new, f_new, e_new, mu_next, it + 1, st, hist, w_new, n_fact + ok.astype(int) * 0 + 1, n_eval + k
+
+    x, f, e, mu, it, st, hist, _, n_fact, n_eval = jax.lax.while_loop(cond, body, state0)
+    nodal = _nodal_norm(f, pattern, n_nodes)
+    force_full = assemble.nodal_force(full(x), scene, model, load)
+    return Equilibrium(
+        x=full(x),
+        force=force_full,
+        residual_N=jnp.max(nodal),
+        iterations=it,
+        status=st,
+        worst_node=jnp.argmax(nodal),
+        history=hist,
+        energy=e,
+        factorisations=n_fact,
+        energy_evaluations=n_eval + 1,
+    )
+
+
+_newton_jit = jax.jit(newton_loop, static_argnames=("model", "opts"))
+
+
+@dataclasses.dataclass
+class Timing:
+    compile_s: float
+    wall_s: float
+
+
+def solve(scene, solver: Newton | None = None, x0=None, raise_on_failure=True, **options):
+    """Static equilibrium of ``scene``.
+
+    Args:
+      scene: a :class:`jaxnet.scene.Scene` (validated here, before anything is compiled).
+      solver: a :class:`Newton` options object; keyword ``options`` override its fields.
+      x0: optional (N, 3) start positions (default: the scene's node positions); fixed nodes keep the
+        scene's positions.
+      raise_on_failure: raise :class:`SolveError` if the solve does not converge.
+    Returns:
+      (equilibrium, timing): an :class:`Equilibrium` and the compile and run wall times (s).
+    """
+    solver = dataclasses.replace(solver or Newton(), **options)
+    scene_lib.validate(scene)
+    model = model_lib.active_terms(scene)
+    pattern = assemble.build_pattern(scene, model)
+    start = np.asarray(scene.nodes.position if x0 is None else x0, dtype=float).ravel()[np.asarray(pattern.free)]
+    t0 = time.perf_counter()
+    compiled = _newton_jit.lower(jnp.asarray(start), scene, pattern, model=model, opts=solver).compile()
+    t1 = time.perf_counter()
+    eq = compiled(jnp.asarray(start), scene, pattern)
+    eq = jax.block_until_ready(eq)
+    t2 = time.perf_counter()
+    timing = Timing(compile_s=t1 - t0, wall_s=t2 - t0)
+    if raise_on_failure and not eq.converged:
+        node = int(eq.worst_node)
+        raise SolveError(
+            f"static solve failed after {int(eq.iterations)} iterations: {eq.reason}; largest residual "
+            f"{float(eq.residual_N):.4g} N at node {node} (position {np.asarray(eq.x)[node].round(4).tolist()})",
+            eq,
+        )
+    return eq, timing

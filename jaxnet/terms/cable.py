@@ -1,0 +1,20 @@
+"""Cables (ropes, bars): straight elastic bars between two nodes.
+
+A cable of unstretched length L is discretised into n bars of rest length L/n. Each bar stores the elastic
+energy of :func:`jaxnet.terms.tension.elastic_energy` (separate traction and compression stiffness, N).
+"""
+
+from __future__ import annotations
+
+from jaxnet import geometry
+from jaxnet.terms.tension import elastic_energy, tension
+
+
+def bar_energy(x, rest_length, ea_traction, ea_compression=None):
+    """Elastic energy (J) of one bar. x: (2, 3) end positions (m); rest_length (m); EA (N)."""
+    return elastic_energy(geometry.safe_norm(x[1] - x[0]), rest_length, ea_traction, ea_compression)
+
+
+def bar_tension(x, rest_length, ea_traction, ea_compression=None):
+    """Tension (N, positive in traction) of one bar, for output."""
+    return tension(geometry.safe_norm(x[1] - x[0]), rest_length, ea_traction, ea_compression)

@@ -1,0 +1,49 @@
+"""A scene compiles only the terms it uses: the ones left out are absent from the lowered program."""
+
+import dataclasses
+
+import numpy as np
+
+import jaxnet as jn
+from jaxnet import assemble, model
+from jaxnet.net import Rope
+from jaxnet.scenes.panel import hanging_panel
+from jaxnet.solve import statics
+
+
+def lowered_text(scene):
+    m = model.active_terms(scene)
+    p = assemble.build_pattern(scene, m)
+    x0 = np.asarray(scene.nodes.position).ravel()[np.asarray(p.free)]
+    return statics._newton_jit.lower(x0, scene, p, model=m, opts=jn.Newton()).as_text(debug_info=True)
+
+
+def test_weightless_net_compiles_no_weight():
+    net = hanging_panel(meshes=6, step=0.1)
+    heavy = lowered_text(net.build())
+    assert "netting_weight" in heavy and "bar_weight" in heavy
+    net.environment = jn.Environment(gravity=0.0)
+    net.attach(jn.net.Corner("netting", 0), force=(0.0, 0.0, -1.0))
+    light = lowered_text(net.build())
+    for term in ("netting_weight", "bar_weight", "node_weight"):
+        assert term not in light
+    assert "netting_tension" in light and "bar_tension" in light and "node_force" in light
+
+
+def test_compression_branch_only_with_compression_stiffness():
+    scene = hanging_panel(meshes=6, step=0.1).build()
+    assert "compression" not in lowered_text(scene)
+    net = dataclasses.replace(scene.netting, ea_compression=np.full_like(np.asarray(scene.netting.ea_compression), 5.0))
+    assert "compression" in lowered_text(dataclasses.replace(scene, netting=net))
+
+
+def test_nodes_only_scene_without_netting_compiles_no_netting():
+    from jaxnet.net import Net
+
+    net = Net()
+    net.cable("rope", start=(0, 0, 0), end=(1, 0, 0), rope=Rope(ea=1e4, diameter=0.01, density=2000.0), n_bars=4)
+    net.fix((0, 0, 0))
+    net.fix((1, 0, 0))
+    text = lowered_text(net.build())
+    assert "bar_tension" in text and "bar_weight" in text
+    assert "netting_tension" not in text and "netting_weight" not in text
