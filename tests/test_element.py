@@ -112,3 +112,17 @@ def test_slack_twine_carries_nothing_without_compression_stiffness():
     assert float(tension.tension(0.015, 0.02, 1000.0, None)) == 0.0
     np.testing.assert_allclose(tension.tension(0.015, 0.02, 1000.0, 400.0), 400.0 * (-0.25))
     np.testing.assert_allclose(tension.tension(0.025, 0.02, 1000.0, 400.0), 1000.0 * 0.25)
+
+
+def test_book_458_misses_a_division_by_the_twine_length():
+    # eq. 4.58 prints d|U|/dx1 = (V2-V3)/d² [(x2-x1)(V3-V1) - (x3-x1)(V2-V1)]; the bracket over d is U_x, so
+    # the derivative of |U| needs a further 1/|U| (as 4.178 has it). Same for 4.59-4.75. docs/errata.md
+    for _ in range(10):
+        x, uv = random_element(clockwise=bool(RNG.integers(2)))
+        U, V, d = geometry.twine_vectors(x, uv)
+        V1, V2, V3 = uv[:, 1]
+        bracket = (x[1, 0] - x[0, 0]) * (V3 - V1) - (x[2, 0] - x[0, 0]) * (V2 - V1)
+        printed = (V2 - V3) / d**2 * bracket
+        exact = jax.grad(lambda y: jnp.linalg.norm(geometry.twine_vectors(y, uv)[0]))(x)[0, 0]
+        np.testing.assert_allclose(printed / jnp.linalg.norm(U), exact, rtol=1e-10)
+        assert abs(printed - exact) > 1e-3 * abs(exact)
