@@ -106,15 +106,14 @@ def positions(x_free, scene, pattern):
     return x0.at[pattern.free].set(x_free).reshape(-1, 3)
 
 
-def _family_energy(model, family, smoothing=None):
+def _family_energy(model, family):
     terms = [t for t in model if t.term.family == family and t.term.kind == "energy"]
-    extra = {} if smoothing is None else {"smoothing": smoothing}
 
     def energy(x, p, env):
         total = 0.0
         for t in terms:
             with jax.named_scope(t.name):
-                total = total + t.term.element(x, p, env, **t.kwargs(), **extra)
+                total = total + t.term.element(x, p, env, **t.kwargs())
         return total
 
     return energy
@@ -157,18 +156,13 @@ def nodal_force(x, scene, model, load):
     return load - jax.grad(energy)(x, scene, model)
 
 
-def tangent(x, scene, model, pattern, smoothing=None):
-    """CSR entries (nnz,) of the tangent K = -d force / dx over the free coordinates.
-
-    ``smoothing`` (None, or a tension in N, may be traced): if given, the Hessian of the energy whose
-    slack kink is smoothed over that tension (see :func:`jaxnet.terms.tension.elastic_energy`), a
-    regularised tangent for the static solver; None gives the exact tangent.
-    """
+def tangent(x, scene, model, pattern):
+    """CSR entries (nnz,) of the tangent K = -d force / dx over the free coordinates."""
     data = jnp.zeros(pattern.nnz + 1)
     for family in stiff_families(model):
         conn = connectivity(scene, family)
         fam = getattr(scene, family)
-        element = _family_energy(model, family, smoothing)
+        element = _family_energy(model, family)
         k = conn.shape[1]
 
         def hess(xe, p, element=element, k=k):

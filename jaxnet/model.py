@@ -9,9 +9,7 @@ from the lowered program (the tests do).
 
 Kinds of terms:
   * ``"energy"``: conservative, element energy (J) of the element's vertex positions; forces are its
-    negative gradient, stiffness its Hessian (``jax.jacfwd`` of ``jax.grad``). Its element function also
-    takes ``smoothing`` (None, or a tension in N): the solver's tangent is the Hessian of the energy with
-    the slack kink smoothed over that tension (see :func:`jaxnet.terms.tension.elastic_energy`).
+    negative gradient, stiffness its Hessian (``jax.jacfwd`` of ``jax.grad``).
   * ``"load"``: a nodal force (N) independent of positions (weight of an immersed net, external forces):
     evaluated once per solve, no stiffness.
 """
@@ -22,9 +20,7 @@ import dataclasses
 from typing import Callable
 
 import numpy as np
-import jax.numpy as jnp
 
-from jaxnet import geometry
 from jaxnet.terms import cable, gravity, tension
 
 
@@ -47,17 +43,12 @@ class Term:
 # -- element adapters: map a family row onto the term functions ------------------------------------
 
 
-def _netting_tension(x, p, env, compression, smoothing=None):
-    ea_c = p.ea_compression if compression else None
-    return tension.netting_energy(x, p.uv, p.l0, p.ea_traction, ea_c, smoothing)
+def _netting_tension(x, p, env, compression):
+    return tension.netting_energy(x, p.uv, p.l0, p.ea_traction, p.ea_compression if compression else None)
 
 
-def _bar_tension(x, p, env, compression, smoothing=None):
-    ea_c = p.ea_compression if compression else None
-    if smoothing is None:
-        return cable.bar_energy(x, p.rest_length, p.ea_traction, ea_c)
-    length = geometry.safe_norm(x[1] - x[0])
-    return tension.elastic_energy(length, p.rest_length, p.ea_traction, ea_c, smoothing)
+def _bar_tension(x, p, env, compression):
+    return cable.bar_energy(x, p.rest_length, p.ea_traction, p.ea_compression if compression else None)
 
 
 def _netting_weight(p, env):

@@ -5,6 +5,7 @@ import dataclasses
 import numpy as np
 
 import jaxnet as jn
+import jaxnet.net  # noqa: F401
 from jaxnet import assemble, model
 from jaxnet.net import Rope
 from jaxnet.scenes.panel import hanging_panel
@@ -30,11 +31,15 @@ def test_weightless_net_compiles_no_weight():
     assert "netting_tension" in light and "bar_tension" in light and "node_force" in light
 
 
-def test_compression_branch_only_with_compression_stiffness():
-    scene = hanging_panel(meshes=6, step=0.1).build()
-    assert "compression" not in lowered_text(scene)
+def test_pushing_twines_are_traced_only_when_some_can_push():
+    slack = jn.net.Twine(l0=0.025, ea=2000.0, diameter=1.5e-3, ea_compression=0.0)
+    net = hanging_panel(meshes=6, step=0.1, twine=slack)
+    for cable in net._cables.values():
+        assert cable.rope.ea_compression == 0.0
+    scene = net.build()
+    assert "compressive_branch" not in lowered_text(scene)
     net = dataclasses.replace(scene.netting, ea_compression=np.full_like(np.asarray(scene.netting.ea_compression), 5.0))
-    assert "compression" in lowered_text(dataclasses.replace(scene, netting=net))
+    assert "compressive_branch" in lowered_text(dataclasses.replace(scene, netting=net))
 
 
 def test_nodes_only_scene_without_netting_compiles_no_netting():

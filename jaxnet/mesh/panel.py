@@ -29,10 +29,10 @@ from scipy.spatial import Delaunay, cKDTree
 __all__ = ["PanelMesh", "PanelError", "side_divisions", "mesh_panel"]
 
 #: Refuse to mesh a panel whose estimated node count exceeds this.
-MAX_NODES = 20_000_000
+MAX_NODES = 5_000_000
 
 # Lattice points closer than this fraction of h to the boundary are dropped.
-_CLEARANCE = 0.5
+_CLEARANCE = 0.6
 # Relative tolerance of the geometric predicates (times the squared scale).
 _REL_EPS = 1e-12
 # Points processed per chunk in the vectorised (points x corners) kernels.
@@ -190,7 +190,7 @@ def _validate(corners_uv, corners_xyz, step, l0, divisions, name):
     if dup.size:
         k = int(dup[0])
         raise _err(name, f"corners {k} and {(k + 1) % C} have the same twine coordinates "
-                         f"{tuple(uv[k])} (side {k} has zero length)")
+                         f"({uv[k, 0]:g}, {uv[k, 1]:g}) (side {k} has zero length)")
     eps = _REL_EPS * scale * scale
     # all corners on one line -> zero area
     c0 = uv - uv[0]
@@ -311,7 +311,11 @@ def _mean_value_coordinates(points, poly):
         r1 = np.roll(r, -1, axis=1)
         cross = d[..., 0] * d1[..., 1] - d[..., 1] * d1[..., 0]
         dot = (d * d1).sum(axis=2)
-        tan_half = cross / (r * r1 + dot)                # tan(alpha_k / 2), signed
+        # tan(alpha_k / 2), signed, alpha_k the angle from d_k to d_{k+1}; the
+        # two equivalent forms avoid cancellation near alpha = 0 and alpha = pi
+        rr = r * r1
+        with np.errstate(divide="ignore", invalid="ignore"):
+            tan_half = np.where(dot >= 0.0, cross / (rr + dot), (rr - dot) / cross)
         w = (np.roll(tan_half, 1, axis=1) + tan_half) / r
         out[s:s + _CHUNK] = w / w.sum(axis=1, keepdims=True)
     return out
@@ -416,40 +420,6 @@ def _interior_points(uv, area, h, seg, div, convex, bpts, segs):
     return pts
 
 
-_SMOOTH_ITERS = 1
-_SMOOTH_BAND = 3.0
-
-
-def _smooth(nodes, tri, nb, uv_c, h, iters):
-    """Laplacian smoothing of the interior nodes near the boundary.
-
-    Returns the new positions of the interior nodes (``nodes[nb:]``).  Nodes
-    farther than ``_SMOOTH_BAND * h`` from the boundary (the regular lattice)
-    are left alone; a moved node that would leave the polygon or come closer
-    than ``0.25 h`` to the boundary keeps its lattice position.
-    """
-    n = len(nodes)
-    orig = nodes[nb:]
-    dist = _dist_to_boundary(orig, uv_c)
-    movable = np.zeros(n, dtype=bool)
-    movable[nb:] = dist < _SMOOTH_BAND * h
-    if not movable.any():
-        return orig
-    e = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]], axis=0)
-    e = np.concatenate([e, e[:, ::-1]], axis=0)
-    e = e[movable[e[:, 0]]]
-    deg = np.bincount(e[:, 0], minlength=n).astype(np.float64)
-    pts = nodes.copy()
-    idx = np.nonzero(movable)[0]
-    for _ in range(iters):
-        acc = np.zeros_like(pts)
-        np.add.at(acc, e[:, 0], pts[e[:, 1]])
-        pts[idx] = acc[idx] / deg[idx, None]
-    new = pts[nb:]
-    ok = _inside(new, uv_c) & (_dist_to_boundary(new, uv_c) >= 0.25 * h)
-    return np.where(ok[:, None], new, orig)
-
-
 def _edge_keys(a, b, n):
     lo, hi = np.minimum(a, b), np.maximum(a, b)
     return lo.astype(np.int64) * n + hi
@@ -514,16 +484,7 @@ def mesh_panel(corners_uv, corners_xyz, step, l0, divisions=None, name="panel") 
     w_i = _mean_value_coordinates(i_pts, uv_c) if len(i_pts) else np.zeros((0, C))
     weights = np.concatenate([w_b, w_i], axis=0)
     nodes = weights @ uv_c
-    n = len(nodes)
-
     tri = _triangulate(nodes, uv_c, area, segs, scale, name)
-    nb = len(b_pts)
-    if _SMOOTH_ITERS and n > nb:
-        moved = _smooth(nodes, tri, nb, uv_c, h, _SMOOTH_ITERS)
-        w_i = _mean_value_coordinates(moved, uv_c)
-        weights = np.concatenate([w_b, w_i], axis=0)
-        nodes = weights @ uv_c
-        tri = _triangulate(nodes, uv_c, area, segs, scale, name)
 
     xyz = weights @ xyz_c
     arrays = dict(uv=nodes, xyz=xyz, triangles=tri, corner_nodes=np.arange(C, dtype=np.int64),
@@ -532,7 +493,6 @@ def mesh_panel(corners_uv, corners_xyz, step, l0, divisions=None, name="panel") 
         a.setflags(write=False)
     for s in sides:
         s.setflags(write=False)
-    assert n == len(xyz)
     return PanelMesh(side_nodes=sides, **arrays)
 
 

@@ -68,9 +68,6 @@ class Newton:
     min_damping: float = 1e-12
     max_damping: float = 1e8
     line_search: int = 30
-    smoothing: float = 1.0
-    armijo: float = 1e-4
-    curvature: float = 0.3
     verbose: bool = False
 
 
@@ -91,8 +88,6 @@ class Equilibrium(eqx.Module):
     worst_node: jax.Array
     history: jax.Array
     energy: jax.Array
-    factorisations: jax.Array
-    energy_evaluations: jax.Array
 
     @property
     def converged(self):
@@ -113,9 +108,8 @@ def _nodal_norm(f_free, pattern, n_nodes):
     return jnp.sqrt(jnp.sum(full * full, axis=1))
 
 
-def _progress(it, res, damping, step, evals, smoothing):
-    print(f"  newton {int(it):4d}  residual {float(res):11.4e} N  damping {float(damping):8.1e}  step {float(step):9.3e}"
-          f"  evals {int(evals):2d}  smoothing {float(smoothing):8.1e} N")
+def _progress(it, res, damping, step):
+    print(f"  newton {int(it):4d}  residual {float(res):11.4e} N  damping {float(damping):8.1e}  step {float(step):6.3f}")
 
 
 def newton_loop(x0, scene, pattern, model, opts: Newton):
@@ -146,60 +140,14 @@ def newton_loop(x0, scene, pattern, model, opts: Newton):
     e0 = merit(x0)
     res0, st0 = status_of(0, f0, e0)
     hist0 = jnp.full(opts.max_iter + 1, jnp.nan).at[0].set(res0)
-    zero = jnp.asarray(0)
-    state0 = (x0, f0, e0, jnp.asarray(opts.damping), zero, st0, hist0, opts.smoothing * res0, zero, zero)
+    state0 = (x0, f0, e0, jnp.asarray(opts.damping), jnp.asarray(0), st0, hist0)
 
     def cond(state):
         return state[5] == RUNNING
 
-    def line_search(x, dx, e, f, slope, roundoff, usable):
-        """Energy minimisation along x + a dx to the strong Wolfe conditions; returns (a, e, f, evals, ok)."""
-        d0 = -slope  # d(energy)/da at a = 0, < 0
-
-        def probe(a):
-            ea, g = jax.value_and_grad(merit)(x + a * dx)
-            return ea, jnp.dot(g, dx), -g
-
-        def ls_cond(s):
-            return usable & ~s[-1]
-
-        def ls_body(s):
-            lo, e_lo, d_lo, f_lo, hi, e_hi, d_hi, a, k, _ = s
-            ea, da, fa = probe(a)
-            finite = jnp.isfinite(ea) & jnp.isfinite(da)
-            armijo = finite & (ea <= e + opts.armijo * a * d0 + roundoff)
-            wolfe = armijo & (jnp.abs(da) <= opts.curvature * jnp.abs(d0))
-            right = armijo & (da < 0)  # the minimiser along the line lies beyond a
-            take = right | wolfe
-            lo, e_lo, d_lo, f_lo = (jnp.where(take, a, lo), jnp.where(take, ea, e_lo), jnp.where(take, da, d_lo),
-                                    jnp.where(take, fa, f_lo))
-            hi, e_hi, d_hi = (jnp.where(take, hi, a), jnp.where(take, e_hi, jnp.where(finite, ea, jnp.inf)),
-                              jnp.where(take, d_hi, jnp.where(finite, da, jnp.nan)))
-            h = hi - lo
-            # not bracketed yet: extrapolate by the secant of the derivative, 1.5 to 8 times further
-            d_prev = jnp.where(k == 0, d0, s[2])
-            a_prev = jnp.where(k == 0, 0.0, s[0])
-            grow = jnp.where(da > d_prev, a - da * (a - a_prev) / (da - d_prev), 8.0 * a)
-            a_out = jnp.clip(grow, 1.5 * a, 8.0 * a)
-            # bracketed: secant of the derivative if it changes sign, else minimum of the quadratic through
-            # (e_lo, d_lo, e_hi), else bisection; kept inside the bracket's middle 80 %.
-            secant = lo - d_lo * h / (d_hi - d_lo)
-            quad = lo - d_lo * h * h / (2.0 * (e_hi - e_lo - d_lo * h))
-            a_in = jnp.where(jnp.isfinite(d_hi) & (d_hi > 0), secant,
-                             jnp.where(jnp.isfinite(e_hi) & (e_hi - e_lo - d_lo * h > 0), quad, lo + 0.5 * h))
-            a_in = jnp.clip(jnp.nan_to_num(a_in, nan=lo + 0.5 * h), lo + 0.1 * h, hi - 0.1 * h)
-            a_next = jnp.where(jnp.isfinite(hi), a_in, a_out)
-            done = wolfe | (k + 1 >= opts.line_search) | (h <= 1e-14 * hi)
-            return lo, e_lo, d_lo, f_lo, hi, e_hi, d_hi, a_next, k + 1, done
-
-        init = (jnp.asarray(0.0), e, d0, f, jnp.asarray(jnp.inf), jnp.asarray(jnp.inf), jnp.asarray(jnp.nan),
-                jnp.asarray(1.0), zero, jnp.asarray(False))
-        lo, e_lo, _, f_lo, _, _, _, _, k, _ = jax.lax.while_loop(ls_cond, ls_body, init)
-        return lo, e_lo, f_lo, k, usable & (lo > 0)
-
     def body(state):
-        x, f, e, mu, it, _, hist, w, n_fact, n_eval = state
-        data = assemble.tangent(full(x), scene, model, pattern, smoothing=w if opts.smoothing > 0 else None)
+        x, f, e, mu, it, _, hist = state
+        data = assemble.tangent(full(x), scene, model, pattern)
         scale = jnp.maximum(jnp.mean(jnp.abs(data[pattern.diagonal])), 1e-300)
         damped = data.at[pattern.diagonal].add(mu * scale)
         dx, ok = linalg.solve(damped, f, pattern.indptr, pattern.indices)
@@ -207,25 +155,48 @@ def newton_loop(x0, scene, pattern, model, opts: Newton):
         biggest = jnp.max(_nodal_norm(dx, pattern, n_nodes))
         dx = dx * jnp.minimum(1.0, opts.max_step / jnp.maximum(biggest, 1e-300))
         slope = jnp.dot(f, dx)  # -d(energy)/d(alpha) at alpha = 0: > 0 for a descent direction
+        curvature = jnp.dot(dx, linalg.matvec(data, pattern.rows, pattern.indices, dx))
+        predicted = slope - 0.5 * curvature  # decrease predicted by the undamped quadratic model
         usable = ok & (slope > 0)
-        # Near the solution the energy decrease falls below the roundoff of the energy itself: there the
-        # derivative condition alone decides.
+
+        # Backtracking (Armijo) line search on the total potential energy. Near the solution the energy
+        # decrease falls below the roundoff of the energy itself; there a step is judged by the force.
         roundoff = 1e-12 * (jnp.abs(e) + jnp.abs(jnp.dot(load.ravel(), full(x).ravel())))
-        alpha, e_new, f_new, k, accepted = line_search(x, dx, e, f, slope, roundoff, usable)
-        mu_next = mu * jnp.where(accepted, jnp.where(alpha >= 0.5, 1.0 / 3.0, 2.0), 10.0)
+        res_now = jnp.linalg.norm(f)
+
+        def sufficient(alpha, e_try):
+            armijo = e_try <= e - 1e-4 * alpha * slope
+            flat = (alpha * slope <= roundoff) & (jnp.abs(e_try - e) <= roundoff)
+            return jnp.isfinite(e_try) & (armijo | (flat & (jnp.linalg.norm(force(x + alpha * dx)) < res_now)))
+
+        def ls_cond(s):
+            alpha, e_try, k = s
+            return usable & (k < opts.line_search) & ~sufficient(alpha, e_try)
+
+        def ls_body(s):
+            alpha, _, k = s
+            alpha = 0.5 * alpha
+            return alpha, merit(x + alpha * dx), k + 1
+
+        e1 = jnp.where(usable, merit(x + dx), jnp.inf)
+        alpha, e_new, k = jax.lax.while_loop(ls_cond, ls_body, (jnp.asarray(1.0), e1, 0))
+        accepted = usable & sufficient(alpha, e_new)
+        # Gain ratio of the full step decides the damping (Levenberg-Marquardt, Nielsen's update).
+        rho = jnp.where(k == 0, (e - e1) / jnp.maximum(predicted, 1e-300), 0.0)
+        mu_good = mu * jnp.maximum(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
+        mu_next = jnp.where(accepted & (k == 0) & (rho > 0.25), mu_good, mu * jnp.where(accepted, 2.0, 10.0))
         mu_next = jnp.clip(mu_next, opts.min_damping, opts.max_damping)
         x_new = jnp.where(accepted, x + alpha * dx, x)
-        f_new = jnp.where(accepted, f_new, f)
+        f_new = jnp.where(accepted, force(x_new), f)
         e_new = jnp.where(accepted, e_new, e)
         res, st = status_of(it + 1, f_new, e_new)
         st = jnp.where((st == RUNNING) & ~accepted & (mu >= opts.max_damping), STALLED, st)
         hist = hist.at[it + 1].set(res)
         if opts.verbose:
-            jax.debug.callback(_progress, it + 1, res, mu, jnp.where(accepted, alpha, 0.0), k, w, ordered=True)
-        w_new = jnp.minimum(w, opts.smoothing * res)
-        return x_new, f_new, e_new, mu_next, it + 1, st, hist, w_new, n_fact + ok.astype(int) * 0 + 1, n_eval + k
+            jax.debug.callback(_progress, it + 1, res, mu, jnp.where(accepted, alpha, 0.0), ordered=True)
+        return x_new, f_new, e_new, mu_next, it + 1, st, hist
 
-    x, f, e, mu, it, st, hist, _, n_fact, n_eval = jax.lax.while_loop(cond, body, state0)
+    x, f, e, mu, it, st, hist = jax.lax.while_loop(cond, body, state0)
     nodal = _nodal_norm(f, pattern, n_nodes)
     force_full = assemble.nodal_force(full(x), scene, model, load)
     return Equilibrium(
@@ -237,8 +208,6 @@ def newton_loop(x0, scene, pattern, model, opts: Newton):
         worst_node=jnp.argmax(nodal),
         history=hist,
         energy=e,
-        factorisations=n_fact,
-        energy_evaluations=n_eval + 1,
     )
 
 

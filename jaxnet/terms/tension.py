@@ -18,26 +18,13 @@ then carries nothing.
 
 from __future__ import annotations
 
+import jax
 import jax.numpy as jnp
 
 from jaxnet import geometry
 
 
-def _smoothed_half_square(strain, width):
-    """C² smoothing of max(strain, 0)² / 2 over the band |strain| < width (exact outside it).
-
-    Its second derivative ramps linearly from 0 at -width to 1 at +width, so its first derivative (the
-    tension per unit EA) is (strain + width)² / (4 width) in the band: positive, and never below
-    max(strain, 0). Only the tangent uses it (see :func:`elastic_energy`); the constant added above the
-    band keeps the function continuous but does not matter there.
-    """
-    w = jnp.maximum(width, 1e-300)
-    s = jnp.clip(strain, -w, w)
-    band = (s + w) ** 3 / (12.0 * w)
-    return jnp.where(strain >= w, 0.5 * strain**2 + w**2 / 6.0, band)
-
-
-def elastic_energy(length, rest_length, ea_traction, ea_compression=None, smoothing=None):
+def elastic_energy(length, rest_length, ea_traction, ea_compression=None):
     """Elastic energy (J) of one straight elastic rod: EA L0 eps² / 2 with eps = (L - L0) / L0.
 
     Shared by twines and cable bars. Its derivative in ``length`` is the tension EA eps (N), with EA the
@@ -48,21 +35,12 @@ def elastic_energy(length, rest_length, ea_traction, ea_compression=None, smooth
       rest_length: unstretched length L0 (m), > 0.
       ea_traction: traction stiffness EA (N).
       ea_compression: compression stiffness (N), or None for a rod that cannot be compressed (slack).
-      smoothing: None for the exact law, or a tension (N): the kink of the law at strain 0 (stiffness
-        jumping from EA_c to EA) is then smoothed over the strain band |eps| < smoothing / EA, so that the
-        stiffness ramps linearly across it. The static solver uses the Hessian of this smoothed energy
-        as its *tangent only* (energy and forces stay exact): it gives twines at or near the slack limit
-        a partial axial stiffness and a small geometric (prestress) stiffness, between the tension the
-        residual cannot resolve and the exact values, instead of switching between 0 and EA.
     """
     strain = (length - rest_length) / rest_length
-    if smoothing is not None:
-        ea_c = 0.0 if ea_compression is None else ea_compression
-        kink = _smoothed_half_square(strain, smoothing / ea_traction)
-        return rest_length * (0.5 * ea_c * strain**2 + (ea_traction - ea_c) * kink)
     if ea_compression is None:
         return 0.5 * ea_traction * rest_length * jnp.maximum(strain, 0.0) ** 2
-    ea = jnp.where(strain > 0.0, ea_traction, ea_compression)
+    with jax.named_scope("compressive_branch"):  # traced only when some rod has a compression stiffness
+        ea = jnp.where(strain > 0.0, ea_traction, ea_compression)
     return 0.5 * ea * rest_length * strain**2
 
 
@@ -74,21 +52,20 @@ def tension(length, rest_length, ea_traction, ea_compression=None):
     return jnp.where(strain > 0.0, ea_traction, ea_compression) * strain
 
 
-def netting_energy(x, uv, l0, ea_traction, ea_compression=None, smoothing=None):
+def netting_energy(x, uv, l0, ea_traction, ea_compression=None):
     """Elastic energy (J) of the twines of one diamond-mesh triangle.
 
     Args:
       x: (3, 3) vertex positions (m).
       uv: (3, 2) twine coordinates of the vertices (twines).
       l0: unstretched length of one twine (mesh side) (m).
-      ea_traction, ea_compression, smoothing: twine stiffnesses (N) and tangent smoothing (N); see
-        :func:`elastic_energy`.
+      ea_traction, ea_compression: twine stiffnesses (N); see :func:`elastic_energy`.
     """
     U, V, d = geometry.twine_vectors(x, uv)
     per_family = geometry.twine_count(d)
     return per_family * (
-        elastic_energy(geometry.safe_norm(U), l0, ea_traction, ea_compression, smoothing)
-        + elastic_energy(geometry.safe_norm(V), l0, ea_traction, ea_compression, smoothing)
+        elastic_energy(geometry.safe_norm(U), l0, ea_traction, ea_compression)
+        + elastic_energy(geometry.safe_norm(V), l0, ea_traction, ea_compression)
     )
 
 
