@@ -156,13 +156,17 @@ def nodal_force(x, scene, model, load):
     return load - jax.grad(energy)(x, scene, model)
 
 
-def tangent(x, scene, model, pattern):
-    """CSR entries (nnz,) of the tangent K = -d force / dx over the free coordinates."""
+def scatter_hessians(x, scene, pattern, element_energies):
+    """CSR entries (nnz,) of the sum of per-element Hessians of ``element_energies[family](x, p, env)``.
+
+    Each element energy is differentiated twice (``jax.jacfwd`` of ``jax.grad``) on its own vertices,
+    vmapped over the family, and its entries are summed into the pattern's slots (entries on fixed
+    coordinates are dropped).
+    """
     data = jnp.zeros(pattern.nnz + 1)
-    for family in stiff_families(model):
+    for family, element in element_energies.items():
         conn = connectivity(scene, family)
         fam = getattr(scene, family)
-        element = _family_energy(model, family)
         k = conn.shape[1]
 
         def hess(xe, p, element=element, k=k):
@@ -172,3 +176,8 @@ def tangent(x, scene, model, pattern):
         blocks = jax.vmap(hess)(x[conn], fam)
         data = data + jax.ops.segment_sum(blocks.reshape(-1), pattern.slots[family].reshape(-1), pattern.nnz + 1)
     return data[:-1]
+
+
+def tangent(x, scene, model, pattern):
+    """CSR entries (nnz,) of the tangent K = -d force / dx over the free coordinates."""
+    return scatter_hessians(x, scene, pattern, {f: _family_energy(model, f) for f in stiff_families(model)})

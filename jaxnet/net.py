@@ -74,6 +74,14 @@ class Side:
 
 
 @dataclasses.dataclass(frozen=True)
+class Nearest:
+    """The node of a panel nearest to a point (x, y, z) of the start geometry (m)."""
+
+    panel: str
+    point: tuple
+
+
+@dataclasses.dataclass(frozen=True)
 class CableEnd:
     """End 0 (start) or 1 (end) of a cable."""
 
@@ -97,6 +105,10 @@ class PanelRef:
 
     def side(self, k):
         return Side(self.name, int(k))
+
+    def nearest(self, x, y, z):
+        """The panel's node nearest to the start position (x, y, z) (m), e.g. for a sinker at its centre."""
+        return Nearest(self.name, (float(x), float(y), float(z)))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -365,6 +377,13 @@ class Net:
             return np.array([self._point(builder, meshes, ref, what)[0]])
         if isinstance(ref, Side):
             return self._side_nodes(meshes, ref)
+        if isinstance(ref, Nearest):
+            self._panel(ref.panel, what)
+            m, offset = meshes[ref.panel]
+            xyz = np.asarray(ref.point, dtype=float)
+            if not np.all(np.isfinite(xyz)):
+                raise SceneError(f"{what}: the point must be finite")
+            return np.array([offset + int(np.argmin(np.linalg.norm(m.xyz - xyz, axis=1)))])
         if isinstance(ref, PanelRef):
             self._panel(ref.name, what)
             m, offset = meshes[ref.name]

@@ -1,6 +1,12 @@
-"""Benchmark of the static solver: hanging panels of 10² to 10⁵ nodes, from the flat stress-free start.
+"""Benchmark of the static solver: panels of 10² to 10⁵ nodes under weight, from the flat stress-free start.
 
-    python validation/bench_statics.py [--sizes 100 1000 10000 100000] [--ea-compression 0]
+    python validation/bench_statics.py [--sizes 100 1000 10000 100000] [--scene framed|hanging]
+                                       [--ea-compression EA_C]
+
+Scenes (jaxnet.scenes.panel): ``framed`` — a horizontal panel of 100 x 100 meshes held along its border,
+sagging under its weight and a 20 kg sinker (twines EA_c = 0 by default: slack allowed); ``hanging`` — the
+default scene, a curtain of 100 x 100 meshes hanging from a headline with a sinker bar (twines EA_c = EA
+by default). The meshing step sets the node count.
 
 Each size runs in its own process (so that peak memory is that size's). Printed per size: nodes, unknowns,
 tangent non-zeros, compile time, Newton iterations, time of one tangent assembly and of one sparse
@@ -18,20 +24,25 @@ import sys
 import time
 
 
-def one(n_target, ea_compression):
+def one(n_target, scene_name, ea_compression):
     import jax
     import numpy as np
 
     import jaxnet as jn
     from jaxnet import assemble, linalg, model
     from jaxnet.net import Twine
-    from jaxnet.scenes.panel import hanging_panel
+    from jaxnet.scenes.panel import framed_panel, hanging_panel
 
     meshes, l0 = 100, 0.025
     width = meshes * l0 * np.sqrt(2.0)
     step = width / np.sqrt(n_target / 1.15)  # the mesher's lattice holds about 1.15 nodes per step²
+    if ea_compression is None:
+        ea_compression = 0.0 if scene_name == "framed" else 2000.0
     twine = Twine(l0=l0, ea=2000.0, diameter=1.5e-3, ea_compression=ea_compression)
-    scene = hanging_panel(meshes=meshes, l0=l0, step=step, twine=twine).build()
+    if scene_name == "framed":
+        scene = framed_panel(meshes=meshes, l0=l0, step=step, twine=twine, sinker_kg=20.0).build()
+    else:
+        scene = hanging_panel(meshes=meshes, l0=l0, step=step, twine=twine).build()
     eq, timing = jn.solve(scene, max_iter=200)
     m = model.active_terms(scene)
     pattern = assemble.build_pattern(scene, m)
@@ -66,20 +77,22 @@ def one(n_target, ea_compression):
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--sizes", type=int, nargs="*", default=[100, 1000, 10000, 100000])
-    parser.add_argument("--ea-compression", type=float, default=0.0)
+    parser.add_argument("--scene", choices=("framed", "hanging"), default="framed")
+    parser.add_argument("--ea-compression", type=float, default=None, help="twine EA_c (N); default per scene")
     parser.add_argument("--one", type=int, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.one:
-        print(json.dumps(one(args.one, args.ea_compression)))
+        print(json.dumps(one(args.one, args.scene, args.ea_compression)))
         return
     import numpy as np
 
     rows = []
     head = f"{'nodes':>7} {'dof':>7} {'nnz':>9} {'compile s':>9} {'iter':>4} {'assembly s':>10} {'factor s':>9} {'total s':>8} {'tot/(it*fac)':>12} {'residual N':>10} {'peak MB':>8}"
-    print(f"hanging panel, flat stress-free start, EA_c = {args.ea_compression} N")
+    print(f"{args.scene} panel, flat stress-free start, twine EA_c = {args.ea_compression if args.ea_compression is not None else 'scene default'} N")
     print(head)
     for n in args.sizes:
-        out = subprocess.run([sys.executable, __file__, "--one", str(n), "--ea-compression", str(args.ea_compression)],
+        extra = [] if args.ea_compression is None else ["--ea-compression", str(args.ea_compression)]
+        out = subprocess.run([sys.executable, __file__, "--one", str(n), "--scene", args.scene, *extra],
                              capture_output=True, text=True)
         if out.returncode != 0:
             print(f"{n:>7} failed: {out.stderr.strip().splitlines()[-1] if out.stderr else out.returncode}")

@@ -1,13 +1,24 @@
-"""Built-in scene: a square diamond-mesh panel hanging from a top rope, with a sinker bar along its bottom.
+"""Built-in scenes: square diamond-mesh panels under weight, from a flat, stress-free start.
+
+:func:`hanging_panel` (the default scene of ``jaxnet run``): a panel hanging from a top rope, with a sinker
+bar along its bottom. :func:`framed_panel`: a horizontal panel held along its four sides, sagging under its
+own weight and a sinker at its centre (the benchmark and Newton-test scene: its start has no out-of-plane
+stiffness at all, and with slack twines its equilibrium is still well posed).
+
+Hanging panel.
 
 The panel is ``meshes`` meshes across and high (mesh coordinates u across, v up; twine coordinates
 U = u + v, V = v - u, book eqs 4.12-4.13), drawn with square meshes (half opening angle 45°), in the
 vertical x-z plane. The headline is sewn along the top border and held at both ends; the sinker bar (a
 heavy rope) is sewn along the bottom border. Polyamide netting in sea water, no current.
 
-The default twine has a compression stiffness equal to its traction stiffness. Real twines go slack
-(EA_c = 0, FEMNET's usual setting), but jaxnet's Newton does not yet converge robustly from a flat start on
-nets with slack regions (open work, see the notes of issue 2); pass ``twine=`` to choose.
+The sinker bar is a bar: it resists compression (EA_c = EA), so the bottom keeps its width. The default
+twine also has a compression stiffness equal to its traction stiffness. Real twines go slack (EA_c = 0,
+FEMNET's usual setting; pass ``twine=`` to choose), and then the free sides of this curtain gather: their
+meshes close and large regions of netting go slack. That equilibrium is degenerate (the energy is flat over
+every arrangement of the slack netting, and the last loads hang on twines a few 1e-7 in strain from their
+slack kink), and Newton converges on it only linearly, in a few hundred iterations: a poor first
+impression, so the default scene keeps the stiff twine.
 """
 
 from __future__ import annotations
@@ -36,7 +47,29 @@ def hanging_panel(meshes: int = 40, l0: float = 0.025, step: float = 0.1, twine:
     # lead rope: diameter from the mass per metre (kg/m = density * pi D²/4)
     lead = 11340.0
     diameter = float(np.sqrt(4.0 * sinker_kg_per_m / (np.pi * lead)))
-    net.cable("sinker bar", along=panel.side(0), rope=Rope(ea=1e5, diameter=diameter, density=lead))
+    net.cable("sinker bar", along=panel.side(0), rope=Rope(ea=1e5, diameter=diameter, density=lead, ea_compression=1e5))
     net.fix(panel.corner(2))
     net.fix(panel.corner(3))
+    return net
+
+
+def framed_panel(meshes: int = 40, l0: float = 0.025, step: float = 0.1, twine: Twine | None = None,
+                 sinker_kg: float = 5.0) -> Net:
+    """A horizontal square panel held along its four sides, sagging under its weight and a central sinker.
+
+    ``meshes`` meshes a side, square meshes (half opening angle 45°) in the plane z = 0, all border nodes
+    fixed; the twine (default: polyamide, EA = 2000 N, EA_c = 0) is stress-free at the start, which is
+    flat: the tangent there has no out-of-plane stiffness at all. ``sinker_kg``: lead sinker (kg) at the
+    node nearest the centre. l0: mesh side (m); step: meshing step (m).
+    """
+    twine = twine or Twine(l0=l0, ea=2000.0, diameter=1.5e-3, density=1140.0)
+    width = meshes * l0 * np.sqrt(2.0)
+    n = meshes
+    corners = [(0.0, 0.0, 0.0, 0.0, 0.0), (width, 0.0, 0.0, n, -n), (width, width, 0.0, 2 * n, 0.0), (0.0, width, 0.0, n, n)]
+    net = Net()
+    panel = net.panel("netting", corners, twine, step)
+    for k in range(4):
+        net.fix(panel.side(k))
+    if sinker_kg:
+        net.sinker(panel.nearest(0.5 * width, 0.5 * width, 0.0), sinker_kg)
     return net

@@ -1,20 +1,28 @@
 """Static equilibrium by a damped (Levenberg-Marquardt) Newton method with an energy line search, jitted.
 
-Why this globalisation. A net starts flat and stress-free: its tangent is singular there (a slack membrane
+Why this globalisation. A net starts flat and stress-free: its tangent K is singular there (a slack membrane
 has no out-of-plane stiffness, twines with zero compression stiffness none in compression, and the mesh
 opening is a mechanism until the twines are loaded). FEMNET keeps a large added diagonal stiffness for
-all iterations and needs thousands of them. Here the added diagonal mu * s (s the mean diagonal stiffness)
-is *adaptive*: it is raised when the quadratic model of the energy predicts its decrease badly and lowered
+all iterations and needs thousands of them. Here each iteration solves ``(K + mu S) dx = F`` with S the
+scene's *spring network* (every twine and bar a zero-length spring EA/l0; :mod:`jaxnet.solve.spring_network`):
+``mu S`` acts as a fictitious prestrain ``mu`` (dimensionless) that gives the slack net the stiffness of a
+prestressed one, so a damped step moves the net smoothly instead of node by node. ``mu`` is *adaptive*
+(Nielsen's rule): raised when the quadratic model of the energy predicts its decrease badly, lowered
 geometrically when it predicts it well, so it vanishes near the solution and the last iterations are pure
-Newton steps (quadratic convergence). Every step is then checked by a backtracking line search on the
-total potential energy, which costs energy evaluations only (no factorisation): each iteration is one
-assembly and one sparse factorisation. An optional per-iteration displacement limit (FEMNET's) caps the
-largest nodal move.
+Newton steps (quadratic convergence). Every step is checked by a backtracking line search on the total
+potential energy, which costs energy evaluations only: each iteration is one assembly and one sparse
+factorisation. An optional per-iteration displacement limit (FEMNET's) caps the largest nodal move.
 
 Convergence is judged as in FEMNET on forces: the largest nodal out-of-balance force over the free
 coordinates, in newtons (FEMNET's default threshold is 1e-3 N). A solve stops with a named reason;
 :func:`solve` raises :class:`SolveError` (reason, iteration, worst node) unless asked not to, and never
 returns NaN silently.
+
+Known limit. Nets whose equilibrium holds large *slack* regions (twines with EA_c = 0 and no tension: the
+free sides of a curtain hanging from a rope, which gather and close their meshes) have a degenerate
+minimum — the energy is flat over every arrangement of the slack netting and the last loads are carried by
+twines a few 1e-7 in strain from their slack kink — and converge linearly, in a few hundred iterations
+(issue 2's notes). Well-held nets converge in 5-15 iterations.
 """
 
 from __future__ import annotations
@@ -28,6 +36,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxnet import assemble, linalg, model as model_lib, scene as scene_lib
+from jaxnet.solve import spring_network
 
 #: stop reasons (``Equilibrium.status``)
 RUNNING, CONVERGED, MAX_ITERATIONS, NON_FINITE, STALLED = 0, 1, 2, 3, 4
@@ -55,14 +64,14 @@ class Newton:
     tol: convergence threshold on the largest nodal out-of-balance force (N).
     max_iter: maximum number of Newton iterations (factorisations).
     max_step: largest displacement of any node in one iteration (m); inf for none.
-    damping: initial added diagonal, relative to the mean diagonal stiffness.
-    min_damping, max_damping: bounds of the relative added diagonal.
+    damping: initial damping mu, the fictitious prestrain of the spring-network metric (dimensionless).
+    min_damping, max_damping: bounds of mu.
     line_search: maximum number of step halvings per iteration.
     verbose: print one line per iteration.
     """
 
     tol: float = 1e-3
-    max_iter: int = 100
+    max_iter: int = 500
     max_step: float = float("inf")
     damping: float = 1e-3
     min_damping: float = 1e-12
@@ -136,6 +145,7 @@ def newton_loop(x0, scene, pattern, model, opts: Newton):
             ~finite, NON_FINITE, jnp.where(res <= opts.tol, CONVERGED, jnp.where(it >= opts.max_iter, MAX_ITERATIONS, RUNNING))
         )
 
+    springs = spring_network.stiffness(scene, model, pattern)
     f0 = force(x0)
     e0 = merit(x0)
     res0, st0 = status_of(0, f0, e0)
@@ -148,8 +158,7 @@ def newton_loop(x0, scene, pattern, model, opts: Newton):
     def body(state):
         x, f, e, mu, it, _, hist = state
         data = assemble.tangent(full(x), scene, model, pattern)
-        scale = jnp.maximum(jnp.mean(jnp.abs(data[pattern.diagonal])), 1e-300)
-        damped = data.at[pattern.diagonal].add(mu * scale)
+        damped = data + mu * springs
         dx, ok = linalg.solve(damped, f, pattern.indptr, pattern.indices)
         # FEMNET's displacement limit: scale the step so that no node moves more than max_step.
         biggest = jnp.max(_nodal_norm(dx, pattern, n_nodes))
@@ -181,15 +190,18 @@ def newton_loop(x0, scene, pattern, model, opts: Newton):
         e1 = jnp.where(usable, merit(x + dx), jnp.inf)
         alpha, e_new, k = jax.lax.while_loop(ls_cond, ls_body, (jnp.asarray(1.0), e1, 0))
         accepted = usable & sufficient(alpha, e_new)
-        # Gain ratio of the full step decides the damping (Levenberg-Marquardt, Nielsen's update).
-        rho = jnp.where(k == 0, (e - e1) / jnp.maximum(predicted, 1e-300), 0.0)
-        mu_good = mu * jnp.maximum(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
-        mu_next = jnp.where(accepted & (k == 0) & (rho > 0.25), mu_good, mu * jnp.where(accepted, 2.0, 10.0))
-        mu_next = jnp.clip(mu_next, opts.min_damping, opts.max_damping)
         x_new = jnp.where(accepted, x + alpha * dx, x)
         f_new = jnp.where(accepted, force(x_new), f)
         e_new = jnp.where(accepted, e_new, e)
         res, st = status_of(it + 1, f_new, e_new)
+        # Gain ratio of the full step decides the damping (Levenberg-Marquardt, Nielsen's update) ...
+        rho = jnp.where(k == 0, (e - e1) / jnp.maximum(predicted, 1e-300), 0.0)
+        mu_good = mu * jnp.maximum(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
+        # ... and a good step lowers it at least as fast as the residual: mu = O(|F|) near the solution
+        # makes the last steps quadratic (Nielsen's rule alone divides mu by 3 at most: linear).
+        mu_good = jnp.minimum(mu_good, mu * res / jnp.maximum(hist[it], 1e-300))
+        mu_next = jnp.where(accepted & (k == 0) & (rho > 0.25), mu_good, mu * jnp.where(accepted, 2.0, 10.0))
+        mu_next = jnp.clip(mu_next, opts.min_damping, opts.max_damping)
         st = jnp.where((st == RUNNING) & ~accepted & (mu >= opts.max_damping), STALLED, st)
         hist = hist.at[it + 1].set(res)
         if opts.verbose:
@@ -213,6 +225,21 @@ def newton_loop(x0, scene, pattern, model, opts: Newton):
 
 _newton_jit = jax.jit(newton_loop, static_argnames=("model", "opts"))
 
+#: compiled Newton programs, keyed by what identifies them: the active terms and their options, the solver
+#: options, and the structure, shapes and dtypes of the arguments. A second solve of a scene of the same
+#: shape (another load, another panel cut, another start) reuses the program and compiles nothing.
+_compiled: dict = {}
+
+
+def _compiled_newton(start, scene, pattern, model, opts):
+    leaves, treedef = jax.tree.flatten((start, scene, pattern))
+    key = (model, opts, treedef, tuple((np.shape(a), np.asarray(a).dtype.str if not hasattr(a, "dtype") else a.dtype.str) for a in leaves))
+    program = _compiled.get(key)
+    if program is None:
+        program = _newton_jit.lower(start, scene, pattern, model=model, opts=opts).compile()
+        _compiled[key] = program
+    return program
+
 
 @dataclasses.dataclass
 class Timing:
@@ -230,7 +257,8 @@ def solve(scene, solver: Newton | None = None, x0=None, raise_on_failure=True, *
         scene's positions.
       raise_on_failure: raise :class:`SolveError` if the solve does not converge.
     Returns:
-      (equilibrium, timing): an :class:`Equilibrium` and the compile and run wall times (s).
+      (equilibrium, timing): an :class:`Equilibrium` and the compile and run wall times (s); ``compile_s``
+      is ~0 when a program compiled for a scene of the same shape and terms is reused.
     """
     solver = dataclasses.replace(solver or Newton(), **options)
     scene_lib.validate(scene)
@@ -238,7 +266,7 @@ def solve(scene, solver: Newton | None = None, x0=None, raise_on_failure=True, *
     pattern = assemble.build_pattern(scene, model)
     start = np.asarray(scene.nodes.position if x0 is None else x0, dtype=float).ravel()[np.asarray(pattern.free)]
     t0 = time.perf_counter()
-    compiled = _newton_jit.lower(jnp.asarray(start), scene, pattern, model=model, opts=solver).compile()
+    compiled = _compiled_newton(jnp.asarray(start), scene, pattern, model, solver)
     t1 = time.perf_counter()
     eq = compiled(jnp.asarray(start), scene, pattern)
     eq = jax.block_until_ready(eq)
