@@ -93,3 +93,17 @@ def half_opening_angle(U, V):
     Computed with atan2 so that it is accurate for nearly closed and nearly square meshes alike.
     """
     return 0.5 * jnp.arctan2(safe_norm(jnp.cross(U, V)), jnp.dot(U, V))
+
+
+def surface_vector(x):
+    """Area vector of a triangle, (12 ^ 13) / 2 in m²: normal to it, of length its surface (eq. 4.18).
+
+    Its direction follows the vertex order (right-hand rule); a scene orients it (e.g. outward of a
+    cod-end) by the order of the triangle's vertices.
+    """
+    return 0.5 * jnp.cross(x[1] - x[0], x[2] - x[0])
+
+
+def centroid(x):
+    """Centroid of an element's vertices (m): x (k, 3) -> (3,)."""
+    return jnp.mean(x, axis=0)
