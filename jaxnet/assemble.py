@@ -1,15 +1,26 @@
 """Global assembly: total energy, out-of-balance force and sparse tangent stiffness of a scene.
 
-Per element family, the active energy terms are summed into one element energy, evaluated on the gathered
-vertex positions and vmapped over the elements. The force is minus the gradient of the total energy plus
-the constant loads; the tangent is the per-element Hessian (``jax.jacfwd`` over ``jax.grad``), vmapped,
-scattered by ``segment_sum`` into the entries of a CSR matrix over the free coordinates. The CSR
-structure and the slot of every element-matrix entry are computed once per scene in numpy
-(:func:`build_pattern`) and passed to the jitted functions as arguments — never closed over, so XLA does
-not constant-fold large index arrays. No dense global matrix is ever formed.
+Per element family (netting triangles, cable bars, bending hinges, nodes), the active terms are summed
+into one element function, evaluated on the gathered vertex positions and vmapped over the elements:
+*energy* terms into an element energy (J), *force* terms (drag, catch pressure: not conservative) into
+element nodal forces (N). The out-of-balance force is
+
+    F = loads - grad(energy) + forces,
+
+and the tangent K = -dF/dx is, per element, the Hessian of the element energy (``jax.jacfwd`` over
+``jax.grad``) minus the Jacobian of the element forces (``jax.jacfwd``), vmapped, scattered by
+``segment_sum`` into the entries of a CSR matrix over the free coordinates. With force terms, K is not
+symmetric. The CSR structure and the slot of every element-matrix entry are computed once per scene in
+numpy (:func:`build_pattern`) and passed to the jitted functions as arguments — never closed over, so XLA
+does not constant-fold large index arrays. No dense global matrix is ever formed.
+
+Some force terms depend on a global quantity of the whole net (the catch front, placed so that the
+enclosed volume is the catch volume): each such term's ``state(x, scene)`` is computed once per
+evaluation and handed to its elements; the tangent treats it as constant (a quasi-Newton
+approximation of that one coupling, stated where it is used).
 
 Sign convention: ``force`` is the out-of-balance force on the nodes (N), zero at equilibrium;
-``tangent`` is K = -d force / dx (book eq. 4.46), symmetric for conservative terms.
+``tangent`` is K = -d force / dx (book eq. 4.46).
 """
 
 from __future__ import annotations
@@ -21,14 +32,12 @@ import numpy as np
 
 from jaxnet.model import ActiveTerm
 
-#: vertices per element of each family
-ARITY = {"netting": 3, "bars": 2}
-
-
 def connectivity(scene, family):
-    """(E, k) node indices of the elements of a family."""
+    """(E, k) node indices of the elements of a family ("nodes": each node is its own element)."""
+    if family == "nodes":
+        return jnp.arange(scene.n_nodes)[:, None]
     f = getattr(scene, family)
-    return f.vertices if family == "netting" else f.ends
+    return f.ends if family == "bars" else f.vertices
 
 
 class Pattern(eqx.Module):
@@ -58,7 +67,12 @@ class Pattern(eqx.Module):
 
 
 def stiff_families(model):
-    return tuple(sorted({t.term.family for t in model if t.term.kind == "energy"}))
+    """Families with a stiffness: those with an energy or a force term."""
+    return tuple(sorted({t.term.family for t in model if t.term.kind in ("energy", "force")}))
+
+
+def _families(model, kind):
+    return tuple(sorted({t.term.family for t in model if t.term.kind == kind}))
 
 
 def build_pattern(scene, model) -> Pattern:
@@ -71,7 +85,8 @@ def build_pattern(scene, model) -> Pattern:
     keys_per_family = {}
     all_keys = [np.arange(n, dtype=np.int64) * (n + 1)]  # the diagonal is always present
     for family in stiff_families(model):
-        conn = np.asarray(connectivity(scene, family), dtype=np.int64)
+        conn = np.arange(scene.n_nodes)[:, None] if family == "nodes" else np.asarray(connectivity(scene, family))
+        conn = conn.astype(np.int64)
         dofs = (3 * conn[:, :, None] + np.arange(3)).reshape(conn.shape[0], -1)
         fd = dof_map[dofs]
         r = np.broadcast_to(fd[:, :, None], fd.shape + fd.shape[-1:])
@@ -119,10 +134,28 @@ def _family_energy(model, family):
     return energy
 
 
+def _family_force(model, family):
+    terms = [t for t in model if t.term.family == family and t.term.kind == "force"]
+
+    def force(x, p, env, state):
+        total = jnp.zeros_like(x)
+        for t in terms:
+            with jax.named_scope(t.name):
+                total = total + t.term.element(x, p, env, state.get(t.name), **t.kwargs())
+        return total
+
+    return force
+
+
+def states(x, scene, model):
+    """Global quantities some force terms need (e.g. the catch front), computed once from positions x."""
+    return {t.name: t.term.state(x, scene) for t in model if t.term.kind == "force" and t.term.state is not None}
+
+
 def energy(x, scene, model: tuple[ActiveTerm, ...]):
     """Total stored energy (J) of all energy terms at positions x (N, 3)."""
     total = 0.0
-    for family in stiff_families(model):
+    for family in _families(model, "energy"):
         conn = connectivity(scene, family)
         fam = getattr(scene, family)
         e = jax.vmap(_family_energy(model, family), in_axes=(0, 0, None))(x[conn], fam, scene.environment)
@@ -151,33 +184,79 @@ def potential(x, scene, model, load):
     return energy(x, scene, model) - jnp.sum(load * x)
 
 
+def forces(x, scene, model, state=None):
+    """(N, 3) nodal forces (N) of the force terms (drag, pressure: not conservative) at positions x."""
+    state = states(x, scene, model) if state is None else state
+    total = jnp.zeros_like(x)
+    for family in _families(model, "force"):
+        conn = connectivity(scene, family)
+        fam = getattr(scene, family)
+        f = jax.vmap(_family_force(model, family), in_axes=(0, 0, None, None))(x[conn], fam, scene.environment, state)
+        total = total.at[conn.ravel()].add(f.reshape(-1, 3))
+    return total
+
+
 def nodal_force(x, scene, model, load):
     """(N, 3) out-of-balance force on every node (N), including reactions' share at fixed coordinates."""
-    return load - jax.grad(energy)(x, scene, model)
+    f = load - jax.grad(energy)(x, scene, model)
+    if _families(model, "force"):
+        f = f + forces(x, scene, model)
+    return f
 
 
-def scatter_hessians(x, scene, pattern, element_energies):
-    """CSR entries (nnz,) of the sum of per-element Hessians of ``element_energies[family](x, p, env)``.
+def term_forces(x, scene, model, load=None):
+    """Per term, the (N, 3) nodal forces (N) it exerts at positions x: the force breakdown of a result.
 
-    Each element energy is differentiated twice (``jax.jacfwd`` of ``jax.grad``) on its own vertices,
-    vmapped over the family, and its entries are summed into the pattern's slots (entries on fixed
-    coordinates are dropped).
+    Energy terms give -grad of their own energy, load terms their load, force terms their force.
+    """
+    state = states(x, scene, model)
+    out = {}
+    for t in model:
+        only = (t,)
+        if t.term.kind == "energy":
+            out[t.name] = -jax.grad(energy)(x, scene, only)
+        elif t.term.kind == "load":
+            out[t.name] = loads(scene, only)
+        else:
+            out[t.name] = forces(x, scene, only, {t.name: state.get(t.name)})
+    return out
+
+
+def scatter_hessians(x, scene, pattern, element_energies, element_forces=None, state=None):
+    """CSR entries (nnz,) of the stiffness of per-element energies and forces.
+
+    ``element_energies[family](x, p, env)`` (J) is differentiated twice (``jax.jacfwd`` of ``jax.grad``)
+    on its own vertices; ``element_forces[family](x, p, env, state)`` (N) once (``jax.jacfwd``), with
+    the sign of K = -dF/dx; both vmapped over the family, their entries summed into the pattern's slots
+    (entries on fixed coordinates are dropped).
     """
     data = jnp.zeros(pattern.nnz + 1)
-    for family, element in element_energies.items():
+    element_forces = element_forces or {}
+    for family in sorted(set(element_energies) | set(element_forces)):
         conn = connectivity(scene, family)
         fam = getattr(scene, family)
         k = conn.shape[1]
+        energy_fn, force_fn = element_energies.get(family), element_forces.get(family)
 
-        def hess(xe, p, element=element, k=k):
-            flat = lambda v: element(v.reshape(k, 3), p, scene.environment)  # noqa: E731
-            return jax.jacfwd(jax.grad(flat))(xe.ravel())
+        def stiffness(xe, p, energy_fn=energy_fn, force_fn=force_fn, k=k):
+            block = jnp.zeros((3 * k, 3 * k))
+            if energy_fn is not None:
+                flat = lambda v: energy_fn(v.reshape(k, 3), p, scene.environment)  # noqa: E731
+                block = block + jax.jacfwd(jax.grad(flat))(xe.ravel())
+            if force_fn is not None:
+                flat = lambda v: force_fn(v.reshape(k, 3), p, scene.environment, state).ravel()  # noqa: E731
+                block = block - jax.jacfwd(flat)(xe.ravel())
+            return block
 
-        blocks = jax.vmap(hess)(x[conn], fam)
+        blocks = jax.vmap(stiffness)(x[conn], fam)
         data = data + jax.ops.segment_sum(blocks.reshape(-1), pattern.slots[family].reshape(-1), pattern.nnz + 1)
     return data[:-1]
 
 
 def tangent(x, scene, model, pattern):
     """CSR entries (nnz,) of the tangent K = -d force / dx over the free coordinates."""
-    return scatter_hessians(x, scene, pattern, {f: _family_energy(model, f) for f in stiff_families(model)})
+    energies = {f: _family_energy(model, f) for f in _families(model, "energy")}
+    element_forces = {f: _family_force(model, f) for f in _families(model, "force")}
+    # global states (the catch front) are held fixed in the tangent: see the module docstring
+    state = jax.lax.stop_gradient(states(x, scene, model)) if element_forces else None
+    return scatter_hessians(x, scene, pattern, energies, element_forces, state)

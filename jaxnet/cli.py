@@ -1,6 +1,7 @@
-"""Command line: ``jaxnet run [SCENE] [--out DIR]``.
+"""Command line: ``jaxnet run [SCENE] [--scene NAME] [--out DIR]``.
 
-With no SCENE, solves the built-in default scene (a panel hanging from a top rope with a sinker bar).
+With no SCENE, solves a built-in scene (``--scene``, default ``cage``: a fish cage in a current; see
+``jaxnet run --help`` for the list).
 Writes DIR/result.json (figures, see README), DIR/net.vtu (ParaView) and DIR/net.png, prints one line
 per Newton iteration and a short summary. Exit status 0 on convergence, 1 on a failed solve, 2 on bad input.
 """
@@ -16,12 +17,13 @@ import sys
 def _run(args):
     from jaxnet import figures
     from jaxnet.io import plot, scene_file, vtk
-    from jaxnet.scenes.panel import hanging_panel
+    from jaxnet.scenes import BUILT_IN
     from jaxnet.solve.statics import Newton, SolveError, solve
 
     if args.scene is None:
-        net, solver = hanging_panel(), Newton()
-        label = "default scene: panel hanging from a top rope with a sinker bar"
+        make, description = BUILT_IN[args.builtin]
+        net, solver = make(), Newton()
+        label = f"built-in scene '{args.builtin}': {description}"
     else:
         net, solver = scene_file.read(args.scene)
         label = str(args.scene)
@@ -55,10 +57,16 @@ def _run(args):
 
 
 def main(argv=None):
+    from jaxnet.scenes import BUILT_IN, DEFAULT
+
     parser = argparse.ArgumentParser(prog="jaxnet", description="Static equilibrium of nets (Priour's netting element) on JAX.")
     sub = parser.add_subparsers(dest="command", required=True)
-    run = sub.add_parser("run", help="solve a scene (the built-in default scene if none is given)")
+    listing = "; ".join(f"{name}: {text}" for name, (_, text) in BUILT_IN.items())
+    run = sub.add_parser("run", help="solve a scene (a built-in scene if no file is given)",
+                         description=f"Built-in scenes ({DEFAULT} by default): {listing}.")
     run.add_argument("scene", nargs="?", help="scene file (.json or .toml)")
+    run.add_argument("--scene", dest="builtin", choices=sorted(BUILT_IN), default=DEFAULT,
+                     help=f"built-in scene to solve when no file is given (default: {DEFAULT})")
     run.add_argument("--out", default="jaxnet-out", help="output directory (default: jaxnet-out)")
     run.add_argument("--tol", type=float, help="convergence threshold on the largest nodal force (N)")
     run.add_argument("--max-iter", type=int, dest="max_iter", help="maximum Newton iterations")

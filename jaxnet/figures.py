@@ -8,8 +8,19 @@ from __future__ import annotations
 import jax
 import numpy as np
 
-from jaxnet import assemble, model as model_lib
-from jaxnet.terms import cable, tension
+from jaxnet import assemble, catch as catch_lib, model as model_lib
+from jaxnet.terms import cable, pressure, tension
+
+#: result.json force groups: name -> the terms whose total force (over all nodes) it sums
+FORCE_GROUPS = {
+    "drag_netting_N": ("netting_drag",),
+    "drag_cables_N": ("bar_drag",),
+    "drag_nodes_N": ("node_drag",),
+    "catch_N": ("catch_pressure",),
+    "weight_and_buoyancy_N": ("netting_weight", "bar_weight", "node_weight", "netting_gravity_at_surface",
+                              "bar_gravity_at_surface", "node_gravity_at_surface"),
+    "external_N": ("node_force",),
+}
 
 
 def twine_tensions(scene, x):
@@ -36,6 +47,53 @@ def total_load(scene):
     return np.asarray(assemble.loads(scene, model_lib.active_terms(scene))).sum(axis=0)
 
 
+def forces_by_term(scene, x):
+    """Per active term, the total force (3,) in N it exerts on the net at positions x (N, 3).
+
+    Internal terms (twine tension, bending, ...) sum to zero over the whole net; the external ones (drag,
+    catch, weight and buoyancy, applied forces) make up, with the reactions, the balance of the net.
+    """
+    m = model_lib.active_terms(scene)
+    per_term = assemble.term_forces(np.asarray(x), scene, m)
+    return {name: np.asarray(f).sum(axis=0) for name, f in per_term.items()}
+
+
+def force_breakdown(scene, x):
+    """result.json's force groups (:data:`FORCE_GROUPS`): total drag on netting, cables, nodes, catch, ... (N)."""
+    by_term = forces_by_term(scene, x)
+    return {group: np.sum([by_term[t] for t in terms if t in by_term] or [np.zeros(3)], axis=0)
+            for group, terms in FORCE_GROUPS.items()}
+
+
+def catch_report(scene, x):
+    """Catch front, volume, drag, thickness and largest diameter (FEMNET's catch summary), or None."""
+    c = scene.catch
+    if c is None or scene.netting is None:
+        return None
+    net = scene.netting
+    front = catch_lib.catch_front(np.asarray(x), net.vertices, c.axis, c.volume, c.symmetry, sign=net.outward)
+    p = pressure.dynamic_pressure(scene.environment.water_density, c.drag_coefficient, scene.environment.current_speed)
+    summary = catch_lib.catch_summary(np.asarray(x), net.vertices, c.axis, front.position, p, c.symmetry,
+                                      sign=net.outward, center=c.center, up=scene.environment.up)
+    return {
+        "front_m": float(front.position),
+        "holds_the_volume": bool(front.holds),
+        "volume_m3": float(summary.volume),
+        "drag_N": float(summary.drag),
+        "thickness_m": float(summary.thickness),
+        "diameter_m": float(summary.diameter),
+    }
+
+
+def enclosed_volume(scene, x):
+    """Volume (m³) the net holds behind its opening (scenes with an enclosure), or None."""
+    e = scene.enclosure
+    if e is None or scene.netting is None:
+        return None
+    front = float(np.dot(e.center, e.axis))
+    return float(catch_lib.enclosed_volume(np.asarray(x), scene.netting.vertices, front, e.axis, sign=scene.netting.outward))
+
+
 def summary(scene, eq, timing=None):
     """The figures of ``result.json`` (see the README for their meaning and units)."""
     reaction = eq.reaction(scene)
@@ -60,7 +118,14 @@ def summary(scene, eq, timing=None):
         "max_twine_tension_N": float(tw.max()) if tw.size else 0.0,
         "max_bar_tension_N": float(bt.max()) if bt.size else 0.0,
         "bounding_box_m": [np.asarray(eq.x).min(axis=0).tolist(), np.asarray(eq.x).max(axis=0).tolist()],
+        "forces_N": {k: v.tolist() for k, v in force_breakdown(scene, eq.x).items()},
     }
+    volume = enclosed_volume(scene, eq.x)
+    if volume is not None:
+        out["enclosed_volume_m3"] = volume
+    report = catch_report(scene, eq.x)
+    if report is not None:
+        out["catch"] = report
     if timing is not None:
         out["wall_s"] = float(timing.wall_s)
         out["compile_s"] = float(timing.compile_s)

@@ -12,6 +12,9 @@ Kinds of terms:
     negative gradient, stiffness its Hessian (``jax.jacfwd`` of ``jax.grad``).
   * ``"load"``: a nodal force (N) independent of positions (weight of an immersed net, external forces):
     evaluated once per solve, no stiffness.
+  * ``"force"``: a non-conservative element force (drag, catch pressure): ``(k, 3)`` nodal forces (N) of
+    the element's vertex positions; stiffness minus its ``jax.jacfwd``. A force term may need a global
+    ``state`` of the whole net (the catch front), computed once per evaluation.
 """
 
 from __future__ import annotations
@@ -19,9 +22,12 @@ from __future__ import annotations
 import dataclasses
 from typing import Callable
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 
-from jaxnet.terms import cable, gravity, tension
+from jaxnet import catch as catch_lib, current, geometry
+from jaxnet.terms import bending, cable, drag, gravity, knot, opening, pressure, screen, surface, tension
 
 
 @dataclasses.dataclass(frozen=True)
@@ -29,8 +35,10 @@ class Term:
     """A physical term acting on one element family ("netting", "bars" or "nodes").
 
     element: for an energy, ``element(x, p, env, **options) -> J`` with x the (k, 3) vertex positions and
-      p one row of the family; for a load, ``element(p, env, **options) -> (k, 3)`` forces in N.
+      p one row of the family; for a load, ``element(p, env, **options) -> (k, 3)`` forces in N; for a
+      force, ``element(x, p, env, state, **options) -> (k, 3)`` forces in N.
     options: ``options(scene) -> dict | None``, the static choices for this scene, None if inactive.
+    state: for a force term, optional ``state(x, scene)``: a global quantity of positions x (N, 3).
     """
 
     name: str
@@ -38,6 +46,7 @@ class Term:
     kind: str
     element: Callable
     options: Callable
+    state: Callable | None = None
 
 
 # -- element adapters: map a family row onto the term functions ------------------------------------
@@ -49,6 +58,18 @@ def _netting_tension(x, p, env, compression):
 
 def _bar_tension(x, p, env, compression):
     return cable.bar_energy(x, p.rest_length, p.ea_traction, p.ea_compression if compression else None)
+
+
+def _opening(x, p, env):
+    return opening.opening_energy(x, p.uv, p.opening_stiffness, p.rest_angle)
+
+
+def _knot_contact(x, p, env):
+    return knot.knot_contact_energy(x, p.uv, p.l0, p.knot_size, p.knot_stiffness)
+
+
+def _twine_bending(x, p, env):
+    return bending.hinge_energy(x, p.uv, p.l0, p.stiffness)
 
 
 def _netting_weight(p, env):
@@ -65,6 +86,74 @@ def _node_weight(p, env):
 
 def _node_force(p, env):
     return p.force[None, :]
+
+
+# near the free surface, weight and buoyancy depend on the height: energies (jaxnet.terms.surface)
+def _netting_gravity(x, p, env):
+    return surface.netting_gravity_energy(x, p.uv, p.l0, p.diameter, p.density, env.water_density, env.gravity, env.up,
+                                          env.surface_level)
+
+
+def _bar_gravity(x, p, env):
+    return surface.bar_gravity_energy(x, p.rest_length, p.diameter, p.density, env.water_density, env.gravity, env.up,
+                                      env.surface_level)
+
+
+def _node_gravity(x, p, env):
+    # a body given no size is taken as the sphere of its volume (1 mm at least) for its waterline band
+    sphere = jnp.cbrt(6.0 * p.volume / jnp.pi)
+    size = jnp.maximum(jnp.where(p.size > 0, p.size, sphere), 1e-3)
+    return surface.node_gravity_energy(x[0], p.mass, p.volume, size, env.water_density, env.gravity, env.up,
+                                       env.surface_level)
+
+
+def _water_velocity(x, env):
+    """Current (m/s) at the centroid of an element's vertices x (k, 3), inside the differentiated function
+    so that the stiffness sees how the current varies with depth."""
+    z = jnp.dot(geometry.centroid(x), env.up)
+    return current.current_velocity(z, env.current_speed, env.current_direction, env.profile_depth,
+                                    env.profile_factor, env.surface_level)
+
+
+#: netting drag models (``Netting.drag_model`` codes), each a function of (x, p, c, rho) -> (3, 3) N
+NETTING_DRAG = {
+    0: ("twine_drag", lambda x, p, c, rho: drag.netting_drag(x, p.uv, p.l0, p.diameter, p.cd_normal,
+                                                             p.tangential_ratio * p.cd_normal, c, rho)),
+    1: ("loland_screen", lambda x, p, c, rho: screen.loland_force(x, p.uv, p.l0, p.diameter, c, rho)),
+    2: ("kristiansen_faltinsen_screen", lambda x, p, c, rho: screen.kristiansen_faltinsen_force(x, p.uv, p.l0, p.diameter, c, rho)),
+}
+
+
+def _netting_drag(x, p, env, state, models):
+    c = _water_velocity(x, env)
+    total = jnp.zeros((3, 3))
+    for code in models:
+        name, force = NETTING_DRAG[code]
+        with jax.named_scope(name):
+            f = force(x, p, c, env.water_density)
+        total = total + (f if len(models) == 1 else jnp.where(p.drag_model == code, f, 0.0))
+    return total
+
+
+def _bar_drag(x, p, env, state):
+    return drag.bar_drag(x, p.rest_length, p.diameter, p.cd_normal, p.tangential_ratio * p.cd_normal,
+                         _water_velocity(x, env), env.water_density)
+
+
+def _node_drag(x, p, env, state):
+    return drag.node_drag(p.drag_area, _water_velocity(x, env), env.water_density)[None, :]
+
+
+def _catch_state(x, scene):
+    """The catch front (abscissa along the axis, m) for positions x, with the pressure and axis."""
+    c, env = scene.catch, scene.environment
+    front = catch_lib.catch_front(x, scene.netting.vertices, c.axis, c.volume, c.symmetry, sign=scene.netting.outward)
+    p = pressure.dynamic_pressure(env.water_density, c.drag_coefficient, env.current_speed)
+    return {"front": front.position, "pressure": p, "axis": c.axis}
+
+
+def _catch_pressure(x, p, env, state):
+    return pressure.catch_pressure(x, state["pressure"], state["front"], state["axis"], p.outward)
 
 
 # -- activity: which parameters make a term present ----------------------------------------------
@@ -84,13 +173,21 @@ def _tension_options(family):
     return options
 
 
-def _weight_options(family, volume):
+def _floating(scene):
+    return bool(np.isfinite(scene.environment.surface_level))
+
+
+def _weight_options(family, volume, at_surface=False):
+    """Weight of a family: a constant load when fully immersed, an energy of the heights with a free surface."""
+
     def options(scene):
         f = getattr(scene, family)
         env = scene.environment
-        if f is None or env.gravity == 0:
+        if f is None or env.gravity == 0 or _floating(scene) != at_surface:
             return None
         net_density = np.asarray(f.density) - env.water_density
+        if at_surface:  # above the surface even a neutrally buoyant net weighs
+            net_density = np.asarray(f.density) + np.abs(net_density)
         if not _any(np.asarray(volume(f)) * net_density):
             return None
         return {}
@@ -100,13 +197,67 @@ def _weight_options(family, volume):
 
 def _node_weight_options(scene):
     n = scene.nodes
-    if scene.environment.gravity == 0 or not _any(np.asarray(n.mass) - scene.environment.water_density * np.asarray(n.volume)):
+    if scene.environment.gravity == 0 or _floating(scene):
+        return None
+    if not _any(np.asarray(n.mass) - scene.environment.water_density * np.asarray(n.volume)):
+        return None
+    return {}
+
+
+def _node_gravity_options(scene):
+    n = scene.nodes
+    if scene.environment.gravity == 0 or not _floating(scene) or not (_any(n.mass) or _any(n.volume)):
         return None
     return {}
 
 
 def _node_force_options(scene):
     return {} if _any(scene.nodes.force) else None
+
+
+def _netting_parameter_options(name):
+    def options(scene):
+        net = scene.netting
+        value = None if net is None else getattr(net, name)
+        return {} if value is not None and _any(value) else None
+
+    return options
+
+
+def _hinge_options(scene):
+    return {} if scene.hinges is not None and _any(scene.hinges.stiffness) else None
+
+
+def _catch_options(scene):
+    if scene.catch is None or scene.netting is None or not _current(scene) or scene.catch.drag_coefficient == 0:
+        return None
+    return {}
+
+
+def _current(scene):
+    return scene.environment.current_speed > 0
+
+
+def _netting_drag_options(scene):
+    net = scene.netting
+    if net is None or not _current(scene) or net.drag_model is None:
+        return None
+    codes = np.asarray(net.drag_model)
+    twine_drag = (codes == 0) & ((np.asarray(net.cd_normal) != 0) if net.cd_normal is not None else False)
+    models = tuple(sorted(set(codes[codes != 0].tolist()) | ({0} if np.any(twine_drag) else set())))
+    return {"models": models} if models else None
+
+
+def _bar_drag_options(scene):
+    bars = scene.bars
+    if bars is None or not _current(scene) or bars.cd_normal is None or not _any(bars.cd_normal):
+        return None
+    return {}
+
+
+def _node_drag_options(scene):
+    n = scene.nodes
+    return {} if _current(scene) and n.drag_area is not None and _any(n.drag_area) else None
 
 
 #: The registry: one line per physical term.
@@ -116,7 +267,18 @@ TERMS = (
     Term("netting_weight", "netting", "load", _netting_weight, _weight_options("netting", lambda f: f.diameter)),
     Term("bar_weight", "bars", "load", _bar_weight, _weight_options("bars", lambda f: f.diameter)),
     Term("node_weight", "nodes", "load", _node_weight, _node_weight_options),
+    Term("netting_gravity_at_surface", "netting", "energy", _netting_gravity,
+         _weight_options("netting", lambda f: f.diameter, at_surface=True)),
+    Term("bar_gravity_at_surface", "bars", "energy", _bar_gravity, _weight_options("bars", lambda f: f.diameter, at_surface=True)),
+    Term("node_gravity_at_surface", "nodes", "energy", _node_gravity, _node_gravity_options),
     Term("node_force", "nodes", "load", _node_force, _node_force_options),
+    Term("mesh_opening", "netting", "energy", _opening, _netting_parameter_options("opening_stiffness")),
+    Term("knot_contact", "netting", "energy", _knot_contact, _netting_parameter_options("knot_size")),
+    Term("twine_bending", "hinges", "energy", _twine_bending, _hinge_options),
+    Term("netting_drag", "netting", "force", _netting_drag, _netting_drag_options),
+    Term("bar_drag", "bars", "force", _bar_drag, _bar_drag_options),
+    Term("node_drag", "nodes", "force", _node_drag, _node_drag_options),
+    Term("catch_pressure", "netting", "force", _catch_pressure, _catch_options, state=_catch_state),
 )
 
 

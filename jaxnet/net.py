@@ -31,27 +31,53 @@ from jaxnet.mesh.panel import PanelError, mesh_panel, side_divisions
 from jaxnet.scene import Bars, Environment, Netting, Nodes, Scene, SceneError
 
 
+#: how the current loads netting (``Twine.drag_model``) -> code in ``Netting.drag_model``
+DRAG_MODELS = {"twines": 0, "loland": 1, "kristiansen-faltinsen": 2}
+
+
 @dataclasses.dataclass(frozen=True)
 class Twine:
-    """Netting material. l0: unstretched twine length = mesh side (m); ea: traction stiffness (N);
-    ea_compression: compression stiffness (N, 0 = twines go slack); diameter: twine (hydrodynamic)
-    diameter (m); density: volumic mass (kg/m³, 1140 = polyamide)."""
+    """Netting material.
+
+    l0: unstretched twine length = mesh side (m); ea: traction stiffness (N); ea_compression: compression
+    stiffness (N, 0 = twines go slack); diameter: twine (hydrodynamic) diameter (m); density: volumic mass
+    (kg/m³, 1140 = polyamide).
+    cd_normal, tangential_ratio: twine drag: normal coefficient Cd and f, the tangential drag as a fraction
+      of Cd (eqs 4.114-4.115; FEMNET's usual 1.2 and 0.08); drag_model: "twines" (drag on every twine, the book), "loland" or
+      "kristiansen-faltinsen" (screen models of aquaculture engineering).
+    opening_stiffness: mesh opening stiffness H (N·m/rad, eqs 4.211-4.219); rest_angle: the half opening
+      angle α0 (rad) at which the mesh is unstressed in flexion (π/4: square meshes).
+    knot_size: knot size (m, eq. 4.278: meshes cannot close below the angle it sets; 0 for none);
+      knot_stiffness: contact stiffness (N·m/rad), None for the default of eq. 4.280.
+    bending_stiffness: flexural stiffness EI of one twine (N·m², eqs 4.220-4.245; 0 for none).
+    """
 
     l0: float
     ea: float
     diameter: float
     ea_compression: float = 0.0
     density: float = 1140.0
+    cd_normal: float = 1.2
+    tangential_ratio: float = 0.08
+    drag_model: str = "twines"
+    opening_stiffness: float = 0.0
+    rest_angle: float = float(np.pi / 4)
+    knot_size: float = 0.0
+    knot_stiffness: float | None = None
+    bending_stiffness: float = 0.0
 
 
 @dataclasses.dataclass(frozen=True)
 class Rope:
-    """Cable material: ea, ea_compression (N), diameter (m), density (kg/m³)."""
+    """Cable material: ea, ea_compression (N), diameter (m), density (kg/m³); Morison drag coefficients
+    cd_normal and tangential_ratio f (tangential drag f x Cd; FEMNET's usual 1.2 and 0.08)."""
 
     ea: float
     diameter: float
     ea_compression: float = 0.0
     density: float = 1140.0
+    cd_normal: float = 1.2
+    tangential_ratio: float = 0.08
 
 
 # -- references to places in a net that is not built yet ------------------------------------------
@@ -156,11 +182,13 @@ class Net:
     def __init__(self, environment: Environment | None = None, merge_tolerance: float = 1e-6):
         self.environment = environment or Environment()
         self.merge_tolerance = merge_tolerance
+        self._catch = None
+        self._enclosure = None
         self._panels: dict[str, _Panel] = {}
         self._cables: dict[str, _Cable] = {}
         self._seams: list[tuple[Side, Side]] = []
         self._fixed: list[tuple[object, tuple[bool, bool, bool]]] = []
-        self._attached: list[tuple[object, float, float, np.ndarray]] = []
+        self._attached: list[tuple[object, float, float, np.ndarray, float, float]] = []
 
     # -- description ------------------------------------------------------------------------------
 
@@ -171,7 +199,14 @@ class Net:
         corners = np.asarray(corners, dtype=float)
         if corners.ndim != 2 or corners.shape[1] != 5:
             raise SceneError(f"panel '{name}': corners must be rows of x y z U V, got shape {corners.shape}")
-        _check_material(twine, f"panel '{name}'", ("l0", "ea", "ea_compression", "diameter", "density"), positive=("l0",))
+        _check_material(twine, f"panel '{name}'", ("l0", "ea", "ea_compression", "diameter", "density", "cd_normal",
+                        "tangential_ratio", "opening_stiffness", "knot_size", "bending_stiffness"), positive=("l0",))
+        if twine.drag_model not in DRAG_MODELS:
+            raise SceneError(f"panel '{name}': drag_model must be one of {sorted(DRAG_MODELS)}, got {twine.drag_model!r}")
+        if not 0.0 < twine.rest_angle <= np.pi / 2:
+            raise SceneError(f"panel '{name}': rest_angle (half opening angle, rad) must be in (0, pi/2], got {twine.rest_angle!r}")
+        if twine.knot_stiffness is not None:
+            _check_material(twine, f"panel '{name}'", ("knot_stiffness",))
         self._panels[name] = _Panel(name, corners, twine, float(step))
         return PanelRef(name)
 
@@ -183,7 +218,7 @@ class Net:
             raise SceneError(f"cable '{name}': the name is already used")
         if rope is None:
             raise SceneError(f"cable '{name}': no rope material given")
-        _check_material(rope, f"cable '{name}'", ("ea", "ea_compression", "diameter", "density"))
+        _check_material(rope, f"cable '{name}'", ("ea", "ea_compression", "diameter", "density", "cd_normal", "tangential_ratio"))
         if along is None and (start is None or end is None):
             raise SceneError(f"cable '{name}': give both ends (start=, end=) or a panel side (along=)")
         if n_bars is not None and (int(n_bars) != n_bars or n_bars < 1):
@@ -204,19 +239,39 @@ class Net:
             raise SceneError(f"fix: unknown axes {sorted(bad)} (use x, y, z)")
         self._fixed.append((where, tuple(a in axes for a in "xyz")))
 
-    def attach(self, where, mass=0.0, volume=0.0, force=(0.0, 0.0, 0.0)):
-        """Attach a lumped mass (kg) displacing ``volume`` (m³) and/or an external force (N) to the
-        node(s) at ``where``; on several nodes (a side, a cable) the amounts are shared equally."""
-        self._attached.append((where, float(mass), float(volume), np.asarray(force, dtype=float)))
+    def attach(self, where, mass=0.0, volume=0.0, force=(0.0, 0.0, 0.0), drag_area=0.0, size=0.0):
+        """Attach a lumped mass (kg) displacing ``volume`` (m³), an external force (N) and/or a drag area
+        Cd·A (m²) to the node(s) at ``where``; on several nodes (a side, a cable) the amounts are shared
+        equally. ``size`` (m): the vertical size of the body, over which it goes from immersed to
+        emerged when it crosses the free surface (floats)."""
+        self._attached.append((where, float(mass), float(volume), np.asarray(force, dtype=float), float(drag_area), float(size)))
 
     def sinker(self, where, mass, density=11340.0):
         """A sinker of ``mass`` kg of a material of ``density`` (kg/m³, lead by default)."""
         self.attach(where, mass=mass, volume=mass / density)
 
-    def float_(self, where, buoyancy_N, mass=0.0):
-        """A float pulling up with ``buoyancy_N`` newtons net of its own weight (+ optional mass, kg)."""
+    def float_(self, where, buoyancy_N, mass=0.0, size=0.0, drag_area=0.0):
+        """A float pulling up with ``buoyancy_N`` newtons net of its own weight (+ optional mass, kg) when
+        immersed; ``size`` (m) its height, for a float at the free surface; ``drag_area`` Cd·A (m²)."""
         g, rho = self.environment.gravity, self.environment.water_density
-        self.attach(where, mass=mass, volume=(buoyancy_N / g + mass) / rho)
+        self.attach(where, mass=mass, volume=(buoyancy_N / g + mass) / rho, drag_area=drag_area, size=size)
+
+    def catch(self, volume, drag_coefficient=1.4, symmetry=1.0, center=(0.0, 0.0, 0.0), axis=None):
+        """Fill the cod-end with ``volume`` m³ of catch (whole cod-end; ``symmetry`` copies of the modelled
+        part make it, e.g. 4 for a quarter model), of drag coefficient Cd. The cod-end's axis passes through
+        ``center`` (a point at its opening, m) along ``axis`` (downstream; default the current's
+        direction). The netting's outward side is found from the start shape: away from ``center``.
+        See :class:`jaxnet.scene.Catch`."""
+        if not volume > 0 or not drag_coefficient >= 0 or not symmetry >= 1:
+            raise SceneError(f"catch: volume must be > 0, drag_coefficient >= 0 and symmetry >= 1, got "
+                             f"{volume!r}, {drag_coefficient!r}, {symmetry!r}")
+        self._catch = dict(volume=float(volume), drag_coefficient=float(drag_coefficient), symmetry=float(symmetry),
+                           center=_point(center, "catch: center"), axis=None if axis is None else _unit(axis, "catch: axis"))
+
+    def enclose(self, center, axis):
+        """Declare the net closed but for the opening through ``center`` (m) normal to ``axis`` (pointing into
+        the net): the result reports the volume it holds. See :class:`jaxnet.scene.Enclosure`."""
+        self._enclosure = dict(center=_point(center, "enclose: center"), axis=_unit(axis, "enclose: axis"))
 
     # -- building ---------------------------------------------------------------------------------
 
@@ -257,21 +312,33 @@ class Net:
 
         netting = self._netting(meshes, ids)
         bars = self._bars(cable_nodes, ids, position)
+        environment = _normalised(self.environment)
+        catch, enclosure = self._catch_and_enclosure(environment)
+        if netting is not None and (catch is not None or enclosure is not None):
+            center = (catch or enclosure).center
+            netting = dataclasses.replace(netting, outward=_outward(position, np.asarray(netting.vertices), center))
         fixed = np.zeros((n, 3), dtype=bool)
         mass, volume, force = np.zeros(n), np.zeros(n), np.zeros((n, 3))
+        drag_area, size = np.zeros(n), np.zeros(n)
         lookup = lambda ref: np.unique(ids[self._nodes_of(ref, meshes, cable_nodes, builder)])  # noqa: E731
         for ref, axes in self._fixed:
             fixed[lookup(ref)] |= np.array(axes)
-        for ref, m, v, f in self._attached:
+        for ref, m, v, f, a, h in self._attached:
             nodes = lookup(ref)
             mass[nodes] += m / nodes.size
             volume[nodes] += v / nodes.size
             force[nodes] += f / nodes.size
+            drag_area[nodes] += a / nodes.size
+            size[nodes] = np.maximum(size[nodes], h)
         scene = Scene(
-            nodes=Nodes(position=position, fixed=fixed, mass=mass, volume=volume, force=force),
+            nodes=Nodes(position=position, fixed=fixed, mass=mass, volume=volume, force=force,
+                        drag_area=drag_area, size=size),
             netting=netting,
             bars=bars,
-            environment=self.environment,
+            hinges=_hinges(netting),
+            catch=catch,
+            enclosure=enclosure,
+            environment=environment,
             panel_names=tuple(self._panels),
             cable_names=tuple(self._cables),
         )
@@ -281,6 +348,21 @@ class Net:
         return scene
 
     # -- helpers of build -------------------------------------------------------------------------
+
+    def _catch_and_enclosure(self, environment):
+        from jaxnet.scene import Catch, Enclosure
+
+        catch = enclosure = None
+        if self._catch is not None:
+            spec = dict(self._catch)
+            if spec["axis"] is None:
+                if not environment.current_speed > 0:
+                    raise SceneError("catch: give its axis, or a current (the axis defaults to its direction)")
+                spec["axis"] = np.asarray(environment.current_direction, dtype=float)
+            catch = Catch(**spec)
+        if self._enclosure is not None:
+            enclosure = Enclosure(**self._enclosure)
+        return catch, enclosure
 
     def _panel(self, name, what):
         if name not in self._panels:
@@ -408,23 +490,31 @@ class Net:
     def _netting(self, meshes, ids):
         if not meshes:
             return None
-        rows = {k: [] for k in ("vertices", "uv", "l0", "ea_traction", "ea_compression", "diameter", "density", "panel")}
+        columns = {  # Netting field <- Twine field
+            "l0": "l0", "ea_traction": "ea", "ea_compression": "ea_compression", "diameter": "diameter",
+            "density": "density", "cd_normal": "cd_normal", "tangential_ratio": "tangential_ratio",
+            "opening_stiffness": "opening_stiffness", "rest_angle": "rest_angle", "knot_size": "knot_size",
+            "bending_stiffness": "bending_stiffness",
+        }
+        rows = {k: [] for k in ("vertices", "uv", "panel", "drag_model", "knot_stiffness", *columns)}
         for k, p in enumerate(self._panels.values()):
             m, offset = meshes[p.name]
             tri = m.triangles
             e = len(tri)
             rows["vertices"].append(ids[offset + tri])
             rows["uv"].append(m.uv[tri])
-            for key, value in (("l0", p.twine.l0), ("ea_traction", p.twine.ea), ("ea_compression", p.twine.ea_compression),
-                               ("diameter", p.twine.diameter), ("density", p.twine.density)):
-                rows[key].append(np.full(e, float(value)))
+            for key, field in columns.items():
+                rows[key].append(np.full(e, float(getattr(p.twine, field))))
+            rows["drag_model"].append(np.full(e, DRAG_MODELS[p.twine.drag_model]))
+            rows["knot_stiffness"].append(np.full(e, _knot_stiffness(p.twine)))
             rows["panel"].append(np.full(e, k))
         return Netting(**{k: np.concatenate(v) for k, v in rows.items()})
 
     def _bars(self, cable_nodes, ids, position):
         if not cable_nodes:
             return None
-        rows = {k: [] for k in ("ends", "rest_length", "ea_traction", "ea_compression", "diameter", "density", "cable")}
+        rows = {k: [] for k in ("ends", "rest_length", "ea_traction", "ea_compression", "diameter", "density", "cable",
+                                "cd_normal", "tangential_ratio")}
         for k, c in enumerate(self._cables.values()):
             nodes = ids[cable_nodes[c.name]]
             ends = np.stack([nodes[:-1], nodes[1:]], axis=1)
@@ -435,10 +525,79 @@ class Net:
             rows["ends"].append(ends)
             rows["rest_length"].append(total * share)
             for key, value in (("ea_traction", c.rope.ea), ("ea_compression", c.rope.ea_compression),
-                               ("diameter", c.rope.diameter), ("density", c.rope.density)):
+                               ("diameter", c.rope.diameter), ("density", c.rope.density),
+                               ("cd_normal", c.rope.cd_normal), ("tangential_ratio", c.rope.tangential_ratio)):
                 rows[key].append(np.full(len(ends), float(value)))
             rows["cable"].append(np.full(len(ends), k))
         return Bars(**{k: np.concatenate(v) for k, v in rows.items()})
+
+
+def _knot_stiffness(twine):
+    """Knot contact stiffness (N·m/rad): the twine's, or the default of eq. 4.280, H = l0² EA / (100 knot)."""
+    if twine.knot_stiffness is not None:
+        return float(twine.knot_stiffness)
+    if twine.knot_size <= 0:
+        return 0.0
+    return twine.l0**2 * twine.ea / (100.0 * twine.knot_size)
+
+
+def _hinges(netting):
+    """Bending hinges (pairs of triangles of one panel sharing an edge) where the twines have an EI."""
+    if netting is None or not np.any(np.asarray(netting.bending_stiffness) > 0):
+        return None
+    from jaxnet.mesh.hinges import find_hinges
+    from jaxnet.scene import Hinges
+
+    vertices = np.asarray(netting.vertices)
+    pairs, nodes = find_hinges(vertices, np.asarray(netting.panel))
+    first, second = pairs[:, 0], pairs[:, 1]
+    uv = np.asarray(netting.uv)
+    # twine coordinates of the four hinge nodes: the first triangle's for the edge and its opposite
+    # node, the second triangle's for its own opposite node (one panel: the edge nodes agree)
+    def uv_of(tri, node):
+        k = np.argmax(vertices[tri] == node[:, None], axis=1)
+        return uv[tri, k]
+
+    hinge_uv = np.stack([uv_of(first, nodes[:, 0]), uv_of(first, nodes[:, 1]), uv_of(first, nodes[:, 2]),
+                         uv_of(second, nodes[:, 3])], axis=1)
+    ei = 0.5 * (np.asarray(netting.bending_stiffness)[first] + np.asarray(netting.bending_stiffness)[second])
+    keep = ei > 0
+    return Hinges(vertices=nodes[keep], uv=hinge_uv[keep], l0=np.asarray(netting.l0)[first][keep], stiffness=ei[keep],
+                  panel=np.asarray(netting.panel)[first][keep])
+
+
+def _point(value, what):
+    p = np.asarray(value, dtype=float)
+    if p.shape != (3,) or not np.all(np.isfinite(p)):
+        raise SceneError(f"{what}: expected a finite point (x, y, z), got {value!r}")
+    return p
+
+
+def _unit(value, what):
+    v = _point(value, what)
+    n = np.linalg.norm(v)
+    if not n > 0:
+        raise SceneError(f"{what}: expected a non-zero vector, got {value!r}")
+    return v / n
+
+
+def _outward(position, triangles, center):
+    """(E,) +1 where a triangle's 12 ^ 13 points away from ``center`` (out of the net), -1 otherwise."""
+    x = position[triangles]
+    normal = np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
+    away = x.mean(axis=1) - center
+    return np.where(np.einsum("ij,ij->i", normal, away) >= 0.0, 1.0, -1.0)
+
+
+def _normalised(env):
+    """The environment with a unit current direction (a zero vector is an error when there is a current)."""
+    direction = np.asarray(env.current_direction, dtype=float)
+    norm = np.linalg.norm(direction)
+    if env.current_speed and not norm > 0:
+        raise SceneError(f"environment: current_direction must be a non-zero vector, got {direction.tolist()}")
+    if norm > 0:
+        env = dataclasses.replace(env, current_direction=direction / norm)
+    return env
 
 
 def _check_material(material, what, fields, positive=()):

@@ -11,6 +11,7 @@ Element families:
   * :class:`Netting` — diamond-mesh triangles (book section 4.2), one row per triangle, every per-element
     parameter an array so that panels of different netting share one vmapped family.
   * :class:`Bars` — straight cable bars (ropes), one row per bar.
+  * :class:`Hinges` — pairs of neighbouring triangles, for twine bending (built from the netting).
 Nodes carry fixity per axis, lumped mass and displaced volume (sinkers, floats) and an external force.
 
 :func:`validate` checks a scene and raises :class:`SceneError` naming the culprit (node, element, cable,
@@ -38,6 +39,9 @@ class Nodes(eqx.Module):
     mass: (N,) lumped mass (kg): sinkers, floats, anything attached to the node.
     volume: (N,) displaced volume (m³) of what is attached (buoyancy rho_water g volume).
     force: (N, 3) external force applied to the node (N).
+    drag_area: (N,) drag area Cd·A of what is attached (m²): node drag ½ρ Cd A |c| c; None for none.
+    size: (N,) vertical size of what is attached (m): the band over which a float crossing the free
+      surface goes from immersed to emerged; None where the scene has no free surface.
     """
 
     position: np.ndarray
@@ -45,6 +49,8 @@ class Nodes(eqx.Module):
     mass: np.ndarray
     volume: np.ndarray
     force: np.ndarray
+    drag_area: np.ndarray | None = None
+    size: np.ndarray | None = None
 
 
 class Netting(eqx.Module):
@@ -57,6 +63,17 @@ class Netting(eqx.Module):
     diameter: (E,) twine diameter (m), for weight and drag.
     density: (E,) volumic mass of the twine material (kg/m³).
     panel: (E,) index of the panel each triangle belongs to (for reports).
+  Optional (None: the term is absent):
+    cd_normal: (E,) normal drag coefficient Cd of a twine; tangential_ratio: (E,) f, the tangential drag
+      as a fraction of Cd (tangential drag f ½ρ Cd D l0 (c cos α)², eqs 4.114-4.115).
+    drag_model: (E,) int, how the current loads the netting: 0 twine drag (Morison per twine, the book),
+      1 Løland screen model, 2 Kristiansen-Faltinsen screen model.
+    opening_stiffness: (E,) mesh opening stiffness H (N·m/rad, eqs 4.211-4.219); rest_angle: (E,) rest
+      half opening angle α0 (rad).
+    knot_size: (E,) knot size (m, eq. 4.278); knot_stiffness: (E,) contact stiffness (N·m/rad, default 4.280).
+    bending_stiffness: (E,) flexural stiffness EI of one twine (N·m², eqs 4.220-4.245): makes hinges.
+    outward: (E,) +1 where 12 ^ 13 points out of the volume the net encloses (cod-end, cage), -1 where
+      it points in; set with a catch or an enclosure, from the start shape.
     """
 
     vertices: np.ndarray
@@ -67,6 +84,15 @@ class Netting(eqx.Module):
     diameter: np.ndarray
     density: np.ndarray
     panel: np.ndarray
+    cd_normal: np.ndarray | None = None
+    tangential_ratio: np.ndarray | None = None
+    drag_model: np.ndarray | None = None
+    opening_stiffness: np.ndarray | None = None
+    rest_angle: np.ndarray | None = None
+    knot_size: np.ndarray | None = None
+    knot_stiffness: np.ndarray | None = None
+    bending_stiffness: np.ndarray | None = None
+    outward: np.ndarray | None = None
 
 
 class Bars(eqx.Module):
@@ -76,6 +102,8 @@ class Bars(eqx.Module):
     rest_length: (B,) unstretched length (m).
     ea_traction, ea_compression: (B,) stiffness (N).
     diameter: (B,) (m); density: (B,) volumic mass (kg/m³); cable: (B,) index of the cable.
+    cd_normal: (B,) Morison normal drag coefficient; tangential_ratio: (B,) f, tangential drag as a fraction of
+      Cd, as for twines (None: no drag).
     """
 
     ends: np.ndarray
@@ -85,14 +113,70 @@ class Bars(eqx.Module):
     diameter: np.ndarray
     density: np.ndarray
     cable: np.ndarray
+    cd_normal: np.ndarray | None = None
+    tangential_ratio: np.ndarray | None = None
+
+
+class Hinges(eqx.Module):
+    """Pairs of triangles of one panel sharing an edge, for twine bending (eqs 4.220-4.245); one row per pair.
+
+    vertices: (H, 4) node indices: the shared edge's two nodes, then the opposite node of each triangle.
+    uv: (H, 4, 2) twine coordinates of those nodes. l0: (H,) twine length (m). stiffness: (H,) EI (N·m²).
+    panel: (H,) panel index.
+    """
+
+    vertices: np.ndarray
+    uv: np.ndarray
+    l0: np.ndarray
+    stiffness: np.ndarray
+    panel: np.ndarray
+
+
+class Catch(eqx.Module):
+    """Fish catch in a cod-end (eqs 4.246-4.264): the netting behind the catch front, placed so that the
+    enclosed volume is ``volume``, carries the pressure ½ ρ Cd v² (v: the current speed).
+
+    volume: catch volume (m³) of the whole cod-end. drag_coefficient: Cd of the catch. symmetry: how many
+    copies of the modelled part make the whole cod-end (4 for a quarter model). axis: unit vector of the
+    cod-end axis, pointing downstream. center: a point (m) on the axis at the opening of the cod-end.
+    The netting's outward side is ``Netting.outward``.
+    """
+
+    volume: float
+    drag_coefficient: float
+    axis: np.ndarray
+    center: np.ndarray
+    symmetry: float = 1.0
+
+
+class Enclosure(eqx.Module):
+    """The opening of a closed net (a cage's collar): the result reports the volume the net holds behind
+    the plane through ``center`` (m) normal to ``axis`` (unit, pointing into the net, e.g. down for a
+    cage). The netting's outward side is ``Netting.outward``."""
+
+    center: np.ndarray
+    axis: np.ndarray
 
 
 class Environment(eqx.Module):
-    """Surroundings: gravity g (m/s²), water density (kg/m³), unit vertical ``up`` (weight acts along -up)."""
+    """Surroundings.
+
+    gravity: g (m/s²); water_density (kg/m³); up: unit vertical (weight acts along -up).
+    current_speed (m/s) and current_direction (unit vector, normalised by the builders): a uniform
+      current, scaled with depth by profile_factor (dimensionless) at profile_depth (m below the surface,
+      increasing; linear in between, constant beyond; empty: uniform). See :mod:`jaxnet.current`.
+    surface_level: height of the free surface along ``up`` (m); NaN (default) for none: everything is
+      fully immersed and weight is a constant load.
+    """
 
     gravity: float = 9.81
     water_density: float = 1025.0
     up: np.ndarray = dataclasses.field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))
+    current_speed: float = 0.0
+    current_direction: np.ndarray = dataclasses.field(default_factory=lambda: np.array([1.0, 0.0, 0.0]))
+    profile_depth: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
+    profile_factor: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
+    surface_level: float = float("nan")
 
 
 class Scene(eqx.Module):
@@ -102,6 +186,9 @@ class Scene(eqx.Module):
     netting: Netting | None = None
     bars: Bars | None = None
     environment: Environment = dataclasses.field(default_factory=Environment)
+    hinges: Hinges | None = None
+    catch: Catch | None = None
+    enclosure: Enclosure | None = None
     panel_names: tuple = eqx.field(static=True, default=())
     cable_names: tuple = eqx.field(static=True, default=())
 
@@ -152,6 +239,11 @@ def _check_positive(values, what, culprit, strict=True):
         raise SceneError(f"{culprit(i)}: {what} must be {sign}, got {values[i]!r}")
 
 
+def has_free_surface(scene) -> bool:
+    """Whether the scene has a free surface (``environment.surface_level`` not NaN)."""
+    return bool(np.isfinite(scene.environment.surface_level))
+
+
 def validate(scene: Scene) -> None:
     """Raise :class:`SceneError` if the scene cannot be solved; the message names the culprit."""
     nodes = scene.nodes
@@ -173,6 +265,19 @@ def validate(scene: Scene) -> None:
         raise SceneError(f"environment: water density must be > 0, got {env.water_density!r}")
     if abs(np.linalg.norm(env.up) - 1.0) > 1e-9:
         raise SceneError(f"environment: 'up' must be a unit vector, got {env.up!r}")
+    if not (np.isfinite(env.current_speed) and env.current_speed >= 0):
+        raise SceneError(f"environment: current_speed must be finite and >= 0, got {env.current_speed!r}")
+    if env.current_speed > 0 and abs(np.linalg.norm(env.current_direction) - 1.0) > 1e-9:
+        raise SceneError(f"environment: current_direction must be a unit vector, got {env.current_direction!r}")
+    depth, factor = np.asarray(env.profile_depth, dtype=float), np.asarray(env.profile_factor, dtype=float)
+    if depth.shape != factor.shape or depth.ndim != 1:
+        raise SceneError(f"environment: profile_depth and profile_factor must be 1-D of one length, got "
+                         f"{depth.shape} and {factor.shape}")
+    if not (np.all(np.isfinite(depth)) and np.all(np.isfinite(factor)) and np.all(np.diff(depth) > 0)):
+        raise SceneError("environment: the current profile needs finite factors at strictly increasing depths")
+    for name in ("drag_area", "size"):
+        if getattr(nodes, name) is not None:
+            _check_positive(getattr(nodes, name), name, lambda i: f"node {i}", strict=False)
 
     used = np.zeros(n, dtype=bool)
     edges = []
@@ -200,6 +305,19 @@ def validate(scene: Scene) -> None:
         _check_positive(net.ea_compression, "compression stiffness EA", culprit, strict=False)
         _check_positive(net.diameter, "twine diameter", culprit, strict=False)
         _check_positive(net.density, "volumic mass", culprit, strict=False)
+        for name in ("cd_normal", "tangential_ratio", "opening_stiffness", "knot_size", "knot_stiffness", "bending_stiffness"):
+            if getattr(net, name) is not None:
+                _check_positive(getattr(net, name), name.replace("_", " "), culprit, strict=False)
+        if net.rest_angle is not None:
+            a = np.asarray(net.rest_angle, dtype=float)
+            bad = np.flatnonzero(~((a > 0) & (a <= np.pi / 2)))
+            if bad.size:
+                raise SceneError(f"{culprit(int(bad[0]))}: rest half opening angle must be in (0, pi/2] rad, got {a[bad[0]]!r}")
+        if net.drag_model is not None:
+            m = np.asarray(net.drag_model)
+            bad = np.flatnonzero(~np.isin(m, (0, 1, 2)))
+            if bad.size:
+                raise SceneError(f"{culprit(int(bad[0]))}: drag model code must be 0, 1 or 2, got {m[bad[0]]!r}")
         used[tri.ravel()] = True
         edges += [tri[:, [0, 1]], tri[:, [1, 2]]]
     if scene.bars is not None:
@@ -214,6 +332,9 @@ def validate(scene: Scene) -> None:
         _check_positive(bars.ea_compression, "compression stiffness EA", culprit, strict=False)
         _check_positive(bars.diameter, "diameter", culprit, strict=False)
         _check_positive(bars.density, "volumic mass", culprit, strict=False)
+        for name in ("cd_normal", "tangential_ratio"):
+            if getattr(bars, name) is not None:
+                _check_positive(getattr(bars, name), name.replace("_", " "), culprit, strict=False)
         same = np.flatnonzero(ends[:, 0] == ends[:, 1])
         if same.size:
             raise SceneError(f"{culprit(int(same[0]))}: both ends on node {ends[same[0], 0]}")
@@ -226,7 +347,11 @@ def validate(scene: Scene) -> None:
         raise SceneError(f"node {int(free_unused[0])} belongs to no element and is not fixed: nothing holds it")
     if not fixed.any():
         raise SceneError("no node is fixed: the net is free to drift as a rigid body (fix at least one node)")
+    floating = has_free_surface(scene)
     for axis, label in enumerate("xyz"):
+        # a net at the free surface is held vertically by its buoyancy (waterplane stiffness)
+        if floating and abs(float(np.asarray(env.up)[axis])) > 1e-12:
+            continue
         if not fixed[:, axis].any():
             raise SceneError(f"no node is fixed along {label}: the net is free to translate along {label}")
     # Every connected piece of the net must be held somewhere, or it drifts as a rigid body.

@@ -2,16 +2,20 @@
 
 The format mirrors the Python API (see README, "Scene files"). Top-level keys::
 
-    environment  {gravity, water_density, up}
-    twines       {NAME: {l0, ea, diameter, ea_compression?, density?}}       netting materials
-    ropes        {NAME: {ea, diameter, ea_compression?, density?}}           cable materials
+    environment  {gravity, water_density, up, current_speed, current_direction, profile_depth,
+                  profile_factor, surface_level}
+    twines       {NAME: {l0, ea, diameter, ea_compression?, density?, cd_normal?, tangential_ratio?,
+                         drag_model?, opening_stiffness?, rest_angle?, knot_size?, knot_stiffness?,
+                         bending_stiffness?}}                                netting materials
+    ropes        {NAME: {ea, diameter, ea_compression?, density?, cd_normal?, tangential_ratio?}}
     panels       [{name, corners: [[x, y, z, U, V], ...], twine: NAME | {...}, step}]
     cables       [{name, rope: NAME | {...}, start?: REF, end?: REF, along?: SIDE, n_bars?, length?}]
     seams        [[SIDE, SIDE], ...]
     fix          [{at: REF, axes?: "xyz"}]
-    attach       [{at: REF, mass?, volume?, force?: [fx, fy, fz]}]
+    attach       [{at: REF, mass?, volume?, force?: [fx, fy, fz], drag_area?, size?}]
     sinkers      [{at: REF, mass, density?}]
-    floats       [{at: REF, buoyancy_N, mass?}]
+    floats       [{at: REF, buoyancy_N, mass?, size?, drag_area?}]
+    catch        {volume, drag_coefficient?, symmetry?, axis?}              fish catch in a cod-end
     solver       {tol, max_iter, max_step, ...}                               Newton options
 
 A REF is ``{"panel": P, "corner": k}``, ``{"panel": P, "side": k}`` (SIDE), ``{"panel": P}`` (all its
@@ -31,7 +35,9 @@ from jaxnet.net import CableEnd, CableNodes, Corner, Net, PanelRef, Rope, Side, 
 from jaxnet.scene import Environment, SceneError
 from jaxnet.solve.statics import Newton
 
-_TOP = {"environment", "twines", "ropes", "panels", "cables", "seams", "fix", "attach", "sinkers", "floats", "solver", "description"}
+_TOP = {"environment", "twines", "ropes", "panels", "cables", "seams", "fix", "attach", "sinkers", "floats", "catch",
+        "solver", "description"}
+_STRINGS = {"drag_model"}  # material fields that are not numbers
 
 
 def _keys(obj, allowed, where, required=()):
@@ -53,7 +59,7 @@ def _material(spec, table, cls, where):
         return table[spec]
     fields = [f.name for f in dataclasses.fields(cls)]
     required = [f.name for f in dataclasses.fields(cls) if f.default is dataclasses.MISSING]
-    return cls(**{k: float(v) for k, v in _keys(spec, fields, where, required).items()})
+    return cls(**{k: (v if k in _STRINGS else float(v)) for k, v in _keys(spec, fields, where, required).items()})
 
 
 def _ref(spec, where):
@@ -82,10 +88,11 @@ def _ref(spec, where):
 def net_from_dict(doc: dict) -> tuple[Net, Newton]:
     """Build a :class:`Net` and solver options from a parsed scene document."""
     _keys(doc, _TOP, "scene")
-    env_fields = {"gravity", "water_density", "up"}
+    env_fields = {f.name for f in dataclasses.fields(Environment)}
     env_spec = dict(_keys(doc.get("environment", {}), env_fields, "environment"))
-    if "up" in env_spec:
-        env_spec["up"] = np.asarray(env_spec["up"], dtype=float)
+    for key in ("up", "current_direction", "profile_depth", "profile_factor"):
+        if key in env_spec:
+            env_spec[key] = np.asarray(env_spec[key], dtype=float)
     env = Environment(**env_spec)
     net = Net(environment=env)
     twines = {k: _material(v, {}, Twine, f"twines.{k}") for k, v in doc.get("twines", {}).items()}
@@ -115,14 +122,18 @@ def net_from_dict(doc: dict) -> tuple[Net, Newton]:
         _keys(f, {"at", "axes"}, f"fix[{i}]", ("at",))
         net.fix(_ref(f["at"], f"fix[{i}].at"), f.get("axes", "xyz"))
     for i, a in enumerate(doc.get("attach", [])):
-        _keys(a, {"at", "mass", "volume", "force"}, f"attach[{i}]", ("at",))
-        net.attach(_ref(a["at"], f"attach[{i}].at"), a.get("mass", 0.0), a.get("volume", 0.0), a.get("force", (0.0, 0.0, 0.0)))
+        _keys(a, {"at", "mass", "volume", "force", "drag_area", "size"}, f"attach[{i}]", ("at",))
+        net.attach(_ref(a["at"], f"attach[{i}].at"), a.get("mass", 0.0), a.get("volume", 0.0), a.get("force", (0.0, 0.0, 0.0)),
+                   a.get("drag_area", 0.0), a.get("size", 0.0))
     for i, s in enumerate(doc.get("sinkers", [])):
         _keys(s, {"at", "mass", "density"}, f"sinkers[{i}]", ("at", "mass"))
         net.sinker(_ref(s["at"], f"sinkers[{i}].at"), s["mass"], s.get("density", 11340.0))
     for i, s in enumerate(doc.get("floats", [])):
-        _keys(s, {"at", "buoyancy_N", "mass"}, f"floats[{i}]", ("at", "buoyancy_N"))
-        net.float_(_ref(s["at"], f"floats[{i}].at"), s["buoyancy_N"], s.get("mass", 0.0))
+        _keys(s, {"at", "buoyancy_N", "mass", "size", "drag_area"}, f"floats[{i}]", ("at", "buoyancy_N"))
+        net.float_(_ref(s["at"], f"floats[{i}].at"), s["buoyancy_N"], s.get("mass", 0.0), s.get("size", 0.0), s.get("drag_area", 0.0))
+    if "catch" in doc:
+        c = _keys(doc["catch"], {"volume", "drag_coefficient", "symmetry", "axis"}, "catch", ("volume",))
+        net.catch(c["volume"], c.get("drag_coefficient", 1.4), c.get("symmetry", 1.0), c.get("axis"))
     solver_fields = {f.name for f in dataclasses.fields(Newton)}
     solver = Newton(**_keys(doc.get("solver", {}), solver_fields, "solver"))
     return net, solver

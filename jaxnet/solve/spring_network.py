@@ -44,4 +44,5 @@ SPRINGS = {"netting": _netting_springs, "bars": _bar_spring}
 def stiffness(scene, model, pattern):
     """CSR entries (nnz,) of the spring-network stiffness S (N/m) over the free coordinates."""
     x = jnp.asarray(scene.nodes.position)
-    return assemble.scatter_hessians(x, scene, pattern, {f: SPRINGS[f] for f in assemble.stiff_families(model)})
+    families = [f for f in assemble.stiff_families(model) if f in SPRINGS]
+    return assemble.scatter_hessians(x, scene, pattern, {f: SPRINGS[f] for f in families})

@@ -132,8 +132,18 @@ def newton_loop(x0, scene, pattern, model, opts: Newton):
     def full(x):
         return assemble.positions(x, scene, pattern)
 
-    def merit(x):
-        return assemble.potential(full(x), scene, model, load)
+    nonconservative = any(t.term.kind == "force" for t in model)
+
+    def frozen_load(x):
+        # Drag and catch pressure have no potential. Each iteration's line search uses the potential
+        # energy of the conservative terms under the loads *plus* these forces frozen at the iterate:
+        # its slope along the step is -F.dx as for a conservative net, and at a fixed point F = 0.
+        if not nonconservative:
+            return load
+        return load + assemble.forces(full(x), scene, model)
+
+    def merit(x, total_load):
+        return assemble.potential(full(x), scene, model, total_load)
 
     def force(x):
         return assemble.nodal_force(full(x), scene, model, load).ravel()[pattern.free]
@@ -147,7 +157,7 @@ def newton_loop(x0, scene, pattern, model, opts: Newton):
 
     springs = spring_network.stiffness(scene, model, pattern)
     f0 = force(x0)
-    e0 = merit(x0)
+    e0 = merit(x0, frozen_load(x0))
     res0, st0 = status_of(0, f0, e0)
     hist0 = jnp.full(opts.max_iter + 1, jnp.nan).at[0].set(res0)
     state0 = (x0, f0, e0, jnp.asarray(opts.damping), jnp.asarray(0), st0, hist0)
@@ -157,6 +167,9 @@ def newton_loop(x0, scene, pattern, model, opts: Newton):
 
     def body(state):
         x, f, e, mu, it, _, hist = state
+        total_load = frozen_load(x)
+        if nonconservative:
+            e = merit(x, total_load)
         data = assemble.tangent(full(x), scene, model, pattern)
         damped = data + mu * springs
         dx, ok = linalg.solve(damped, f, pattern.indptr, pattern.indices)
@@ -170,7 +183,7 @@ def newton_loop(x0, scene, pattern, model, opts: Newton):
 
         # Backtracking (Armijo) line search on the total potential energy. Near the solution the energy
         # decrease falls below the roundoff of the energy itself; there a step is judged by the force.
-        roundoff = 1e-12 * (jnp.abs(e) + jnp.abs(jnp.dot(load.ravel(), full(x).ravel())))
+        roundoff = 1e-12 * (jnp.abs(e) + jnp.abs(jnp.dot(total_load.ravel(), full(x).ravel())))
         res_now = jnp.linalg.norm(f)
 
         def sufficient(alpha, e_try):
@@ -185,9 +198,9 @@ def newton_loop(x0, scene, pattern, model, opts: Newton):
         def ls_body(s):
             alpha, _, k = s
             alpha = 0.5 * alpha
-            return alpha, merit(x + alpha * dx), k + 1
+            return alpha, merit(x + alpha * dx, total_load), k + 1
 
-        e1 = jnp.where(usable, merit(x + dx), jnp.inf)
+        e1 = jnp.where(usable, merit(x + dx, total_load), jnp.inf)
         alpha, e_new, k = jax.lax.while_loop(ls_cond, ls_body, (jnp.asarray(1.0), e1, 0))
         accepted = usable & sufficient(alpha, e_new)
         x_new = jnp.where(accepted, x + alpha * dx, x)
@@ -199,7 +212,8 @@ def newton_loop(x0, scene, pattern, model, opts: Newton):
         mu_good = mu * jnp.maximum(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
         # ... and a good step lowers it at least as fast as the residual: mu = O(|F|) near the solution
         # makes the last steps quadratic (Nielsen's rule alone divides mu by 3 at most: linear).
-        mu_good = jnp.minimum(mu_good, mu * res / jnp.maximum(hist[it], 1e-300))
+        ratio = res / jnp.maximum(hist[it], 1e-300)
+        mu_good = jnp.where(ratio > 1.0, mu_good * jnp.minimum(ratio, 10.0), jnp.minimum(mu_good, mu * ratio))
         mu_next = jnp.where(accepted & (k == 0) & (rho > 0.25), mu_good, mu * jnp.where(accepted, 2.0, 10.0))
         mu_next = jnp.clip(mu_next, opts.min_damping, opts.max_damping)
         st = jnp.where((st == RUNNING) & ~accepted & (mu >= opts.max_damping), STALLED, st)

@@ -1,0 +1,68 @@
+"""Built-in scene (the default of ``jaxnet run``): a cylindrical fish-farm cage in a uniform current.
+
+The net: a vertical cylinder of ``sides`` flat wall panels (each ``meshes_around`` meshes across and
+``meshes_deep`` deep, square meshes at the start) sewn side to side, closed by a flat bottom of ``sides``
+triangular panels meeting at the centre. Its top border hangs from the floating collar, an HDPE pipe
+(a ring cable at the surface, half immersed at rest): the collar floats on the free surface (its
+buoyancy and waterplane stiffness come from the free-surface term) and is moored horizontally at every
+node (a real collar is a stiff ring held by a mooring grid: without bending stiffness in the bars, a
+moored ring of pin-jointed bars would fold, so its horizontal position is held). A sinker hangs at the
+foot of every seam of the wall. The current flows along x.
+
+The result reports the drag on the netting, the cables and the sinkers, and the volume the net keeps
+below the collar plane (m³).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from jaxnet.net import Net, Rope, Twine
+from jaxnet.scene import Environment
+
+
+def fish_cage(radius: float = 5.0, depth: float = 5.0, sides: int = 8, l0: float = 0.05, step: float = 0.5,
+              current: float = 0.5, sinker_kg: float = 20.0, twine: Twine | None = None) -> Net:
+    """The cage (see module docstring).
+
+    radius, depth: of the cylinder at the start (m); sides: number of wall panels (and bottom slices);
+    l0: mesh side (m); step: meshing step (m); current: speed along x (m/s); sinker_kg: lead at the foot
+    of each wall seam (kg); twine: netting material (default: polyamide 2.5 mm, EA 5000 N, Cd 1.2).
+    """
+    twine = twine or Twine(l0=l0, ea=5000.0, diameter=2.5e-3, density=1140.0, cd_normal=1.2, tangential_ratio=0.08)
+    env = Environment(current_speed=current, current_direction=np.array([1.0, 0.0, 0.0]), surface_level=0.0)
+    net = Net(environment=env)
+    mesh_width = l0 * np.sqrt(2.0)  # a square mesh is l0 * sqrt(2) across and high
+    angles = 2 * np.pi * np.arange(sides + 1) / sides
+    rim = np.stack([radius * np.cos(angles), radius * np.sin(angles)], axis=1)
+    chord = np.linalg.norm(rim[1] - rim[0])
+    around = max(1, int(round(chord / mesh_width)))
+    deep = max(1, int(round(depth / mesh_width)))
+    apothem = radius * np.cos(np.pi / sides)
+    rows = max(1, int(round(apothem / mesh_width)))
+    walls, bottoms = [], []
+    for k in range(sides):
+        (xa, ya), (xb, yb) = rim[k], rim[k + 1]
+        # mesh coordinates (u across, v down) -> twine coordinates U = u + v, V = v - u
+        corners = [(xa, ya, 0.0, 0, 0), (xb, yb, 0.0, around, -around),
+                   (xb, yb, -depth, around + deep, deep - around), (xa, ya, -depth, deep, deep)]
+        walls.append(net.panel(f"wall {k}", corners, twine, step))
+        # bottom slice: outer edge along u (the wall's foot), apex at the centre `rows` meshes inward
+        u_apex, v_apex = 0.5 * around, rows
+        corners = [(xa, ya, -depth, 0, 0), (0.0, 0.0, -depth, u_apex + v_apex, v_apex - u_apex),
+                   (xb, yb, -depth, around, -around)]
+        bottoms.append(net.panel(f"bottom {k}", corners, twine, step))
+    for k in range(sides):
+        nxt = (k + 1) % sides
+        net.seam(walls[k].side(1), walls[nxt].side(3))      # wall to wall
+        net.seam(walls[k].side(2), bottoms[k].side(2))      # wall foot to its bottom slice (rim to rim)
+        net.seam(bottoms[k].side(1), bottoms[nxt].side(0))  # slice to slice (centre to rim)
+    # HDPE collar pipe, 250 mm across, 15 mm wall: 10.5 kg/m, i.e. 214 kg/m³ over its outer section
+    pipe = Rope(ea=2e6, diameter=0.25, density=214.0, ea_compression=2e6)
+    for k in range(sides):
+        net.cable(f"collar {k}", along=walls[k].side(0), rope=pipe)
+    for k in range(sides):
+        net.fix(walls[k].side(0), axes="xy")  # moored collar: see the module docstring
+        net.sinker(walls[k].corner(3), sinker_kg)
+    net.enclose(center=(0.0, 0.0, 0.0), axis=(0.0, 0.0, -1.0))  # the volume held below the collar
+    return net

@@ -1,0 +1,150 @@
+"""Hydrodynamic drag (book section 4.3.3, eqs 4.114-4.135) on netting twines, cable bars and lumped bodies.
+
+Every drag here is the Morison drag of a cylinder, split into a part normal to its axis (Landweber) and a
+part along it (Richtmeyer). For the U twines of a triangle the book gives (4.114-4.117)
+
+    |F| = ½ ρ Cd D l0 [|c| sin α]² |d|/2,      F/|F| = U ^ (c ^ U) / |U ^ (c ^ U)|,
+    |T| = f ½ ρ Cd D l0 [|c| cos α]² |d|/2,    T/|T| = F ^ (c ^ F) / |F ^ (c ^ F)|,
+
+with c the velocity of the water relative to the twine and α its angle to U (4.132); the V twines alike
+with β. Split c into its parts along and across the twine, c_t = (c.û) û and c_n = c - c_t (û = U/|U|):
+|c_n| = |c| sin α, |c_t| = |c| |cos α|, U ^ (c ^ U) = |U|² c_n, and F ^ (c ^ F) is (4.198) a positive
+multiple of (c.U) U, i.e. of c_t. So, exactly,
+
+    F = K_n |c_n| c_n,     T = K_t |c_t| c_t,     K = ½ ρ C D l0 |d|/2,
+
+which is what is computed. The printed directions are 0/0 when the water runs along the twine (for both:
+F = 0 there, and T, which is then largest, is built on F), across it (4.117) and in still water; the
+stiffness derivation inherits these as the 1/sin α of 4.156-4.160 and 4.187-4.195 and the 1/|cos α| of
+4.200-4.208. The product |v| v is continuously differentiable with zero derivative at v = 0, so the form
+above is smooth, with finite value and ``jax.jacfwd`` in all these cases (norms through
+:func:`jaxnet.geometry.safe_norm`, whose derivative at 0 is 0, the correct derivative of |v| v there).
+
+Conventions and choices:
+
+* Coefficients. The printed 4.115 multiplies Cd by f, which the book's list calls the "tangential drag
+  coefficient". FEMNET's own source (``trainee_fil.c``, ``efforttraineeelem.c``: ``t = f*k*cos²`` with
+  ``k = ½ ρ cdnormal D l0 |c|²``) confirms that f is a ratio to the normal coefficient. Here
+  ``cd_tangential`` is the tangential drag coefficient itself, Ct = f Cd, so that a twine and a bar share
+  one Morison form and a tangential drag does not vanish with Cd: a FEMNET input (cdnormal, ftangent)
+  maps to ``cd_normal = cdnormal, cd_tangential = ftangent * cdnormal``.
+* Length. The projected area is D l0 with l0 the *unstretched* twine (or bar) length, as in the book: a
+  stretched twine also thins (Poisson), which the model does not represent, and for a constant-volume
+  twine D L grows only as sqrt(L/l0); taking l0 keeps both effects out consistently. FEMNET does the same
+  for twines and bars ("on ne prend pas en compte l'allongement"). Only the *direction* of U (of the bar)
+  comes from the current positions.
+* Counts. |d|/2 U twines and |d|/2 V twines per triangle (4.25-4.26); the printed d/2 gives the wrong
+  sign for clockwise triangles (d < 0), as in the tension forces.
+* Spreading. A triangle's drag is spread one third per vertex (text after 4.117); a bar's one half per
+  end, as FEMNET does.
+* Relative velocity. ``water_velocity`` is the water velocity relative to the element (m/s): the current
+  in statics (evaluated by the caller where it chooses, e.g. at the element's centroid, with
+  :func:`jaxnet.current.current_velocity`); in dynamics the current minus the element's velocity. The
+  force is along the relative velocity's components, i.e. it drags the net *with* the water.
+
+These are forces (N), not energies: drag is not conservative. Its tangent -d force/dx (book 4.136-4.210)
+is obtained by ``jax.jacfwd`` of these functions and is not symmetric; when the current depends on depth
+the caller composes :func:`jaxnet.current.current_velocity` inside the differentiated function so that
+the tangent sees dc/dz too (the book's 4.157 takes c constant).
+"""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+
+from jaxnet import geometry
+
+
+def twine_drag(axis, length, diameter, cd_normal, cd_tangential, water_velocity, water_density):
+    """Morison drag on one straight cylinder (a twine or a bar), split in normal and tangential parts.
+
+    Normal part ½ ρ Cn D L |c_n| c_n (4.114, 4.116), tangential part ½ ρ Ct D L |c_t| c_t (4.115, 4.117),
+    with c_t the component of the water velocity along ``axis`` and c_n the rest.
+
+    Args:
+      axis: (3,) any vector along the cylinder (m); only its direction is used. A zero axis (collapsed
+        twine) has no direction: all the velocity is then taken as normal.
+      length: length L used for the projected area D L (m); the unstretched length, see module docstring.
+      diameter: hydrodynamic diameter D (m).
+      cd_normal: normal drag coefficient Cn (dimensionless).
+      cd_tangential: tangential drag coefficient Ct (dimensionless; the book's f times Cd).
+      water_velocity: (3,) velocity of the water relative to the cylinder (m/s).
+      water_density: ρ (kg/m³).
+    Returns:
+      (normal, tangential): two (3,) forces in N on the whole cylinder.
+    """
+    c = water_velocity
+    sq = jnp.dot(axis, axis)
+    has_axis = sq > 0.0
+    # double where: 1/|axis|² must not be evaluated (nor differentiated) at a zero axis
+    inv_sq = jnp.where(has_axis, 1.0 / jnp.where(has_axis, sq, 1.0), 0.0)
+    c_t = (jnp.dot(c, axis) * inv_sq) * axis
+    c_n = c - c_t
+    k = 0.5 * water_density * diameter * length
+    normal = (k * cd_normal * geometry.safe_norm(c_n)) * c_n
+    tangential = (k * cd_tangential * geometry.safe_norm(c_t)) * c_t
+    return normal, tangential
+
+
+def netting_drag_parts(x, uv, l0, diameter, cd_normal, cd_tangential, water_velocity, water_density):
+    """Drag on the U twines and on the V twines of one triangle, each split in normal and tangential.
+
+    Same arguments as :func:`netting_drag`. Returns a dict of (3,) forces in N on the whole element:
+    ``u_normal``, ``u_tangential`` (4.114-4.117), ``v_normal``, ``v_tangential`` (the same with V, β).
+    """
+    U, V, d = geometry.twine_vectors(x, uv)
+    count = geometry.twine_count(d)
+    un, ut = twine_drag(U, l0, diameter, cd_normal, cd_tangential, water_velocity, water_density)
+    vn, vt = twine_drag(V, l0, diameter, cd_normal, cd_tangential, water_velocity, water_density)
+    return {
+        "u_normal": count * un,
+        "u_tangential": count * ut,
+        "v_normal": count * vn,
+        "v_tangential": count * vt,
+    }
+
+
+def netting_drag(x, uv, l0, diameter, cd_normal, cd_tangential, water_velocity, water_density):
+    """Per-vertex drag (3, 3) in N on one diamond-mesh triangle: its U and V twines, one third per vertex.
+
+    Args:
+      x: (3, 3) vertex positions (m).
+      uv: (3, 2) twine coordinates of the vertices (twines); d may be negative.
+      l0: unstretched length of one twine (mesh side) (m), used for the projected area D l0.
+      diameter: hydrodynamic twine diameter D (m).
+      cd_normal: normal drag coefficient of a twine (dimensionless), the book's Cd.
+      cd_tangential: tangential drag coefficient of a twine (dimensionless), the book's f times Cd.
+      water_velocity: (3,) velocity of the water relative to the netting (m/s).
+      water_density: ρ (kg/m³).
+    """
+    parts = netting_drag_parts(x, uv, l0, diameter, cd_normal, cd_tangential, water_velocity, water_density)
+    total = parts["u_normal"] + parts["u_tangential"] + parts["v_normal"] + parts["v_tangential"]
+    return jnp.broadcast_to(total / 3.0, (3, 3))
+
+
+def bar_drag(x, rest_length, diameter, cd_normal, cd_tangential, water_velocity, water_density):
+    """Per-end drag (2, 3) in N on one cable bar (a cylinder), half on each end.
+
+    Args:
+      x: (2, 3) end positions (m); only the bar's direction is taken from them.
+      rest_length: unstretched length of the bar (m), used for the projected area D L0 as for twines.
+      diameter: hydrodynamic diameter D (m).
+      cd_normal, cd_tangential: normal and tangential drag coefficients (dimensionless).
+      water_velocity: (3,) velocity of the water relative to the bar (m/s).
+      water_density: ρ (kg/m³).
+    """
+    normal, tangential = twine_drag(
+        x[1] - x[0], rest_length, diameter, cd_normal, cd_tangential, water_velocity, water_density
+    )
+    return jnp.broadcast_to((normal + tangential) / 2.0, (2, 3))
+
+
+def node_drag(drag_area, water_velocity, water_density):
+    """Drag (3,) in N on a lumped body (float, sinker, ...): ½ ρ (Cd A) |c| c.
+
+    Args:
+      drag_area: drag coefficient times reference area, Cd·A (m²).
+      water_velocity: (3,) velocity of the water relative to the body (m/s).
+      water_density: ρ (kg/m³).
+    """
+    return (0.5 * water_density * drag_area * geometry.safe_norm(water_velocity)) * water_velocity

@@ -1,0 +1,361 @@
+"""Hydrodynamic drag (book 4.114-4.135) on twines, bars and nodes, and the current profile."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import jaxnet  # noqa: F401  (float64)
+from jaxnet import current, geometry
+from jaxnet.terms import drag
+
+RNG = np.random.default_rng(20261204)
+
+L0, D, CN, CT, RHO = 0.02, 0.0012, 1.2, 0.1, 1025.0
+#: ½ ρ Cn D l0 and ½ ρ Ct D l0: drag of one twine per (m/s)² normal to and along it
+KN, KT = 0.5 * RHO * CN * D * L0, 0.5 * RHO * CT * D * L0
+
+
+def netting(x, uv, c):
+    return drag.netting_drag(x, uv, L0, D, CN, CT, c, RHO)
+
+
+netting_jit = jax.jit(netting)
+netting_parts = jax.jit(lambda x, uv, c: drag.netting_drag_parts(x, uv, L0, D, CN, CT, c, RHO))
+jac_x = jax.jit(jax.jacfwd(netting, argnums=0))
+jac_c = jax.jit(jax.jacfwd(netting, argnums=2))
+
+
+def random_element(clockwise=False):
+    """A random triangle: twine coordinates (d of the requested sign) and positions around 5 cm."""
+    uv = RNG.uniform(-5, 5, size=(3, 2))
+    if (geometry.twine_determinant(uv) < 0) != clockwise:
+        uv = uv[[0, 2, 1]]
+    return jnp.asarray(RNG.normal(size=(3, 3)) * 0.05), jnp.asarray(uv)
+
+
+def random_rotation():
+    q, r = np.linalg.qr(RNG.normal(size=(3, 3)))
+    q = q * np.sign(np.diag(r))
+    return jnp.asarray(q * np.linalg.det(q))  # proper rotation
+
+
+def diamond_panel(nu=4, nv=3, stretch=1.05, half_angle=0.6):
+    """Flat panel in z = 0 covering [0, nu] x [0, nv] in twine coordinates, every other triangle clockwise.
+
+    The twines are stretched (|U| = |V| = stretch * l0) so that using |U| instead of l0 would show.
+    """
+    Uvec = stretch * L0 * np.array([np.cos(half_angle), np.sin(half_angle), 0.0])
+    Vvec = stretch * L0 * np.array([np.cos(half_angle), -np.sin(half_angle), 0.0])
+    uvs, xs = [], []
+    for i in range(nu):
+        for j in range(nv):
+            corners = np.array([[i, j], [i + 1, j], [i + 1, j + 1], [i, j + 1]], float)
+            for k, tri in enumerate(([0, 1, 2], [0, 2, 3])):
+                t = corners[tri]
+                if (i + j + k) % 2:
+                    t = t[[0, 2, 1]]
+                uvs.append(t)
+                xs.append(t[:, :1] * Uvec + t[:, 1:] * Vvec)
+    return jnp.asarray(np.array(xs)), jnp.asarray(np.array(uvs))
+
+
+@pytest.mark.parametrize("rotated", [False, True])
+def test_flat_panel_normal_to_the_current(rotated):
+    # every twine is normal to c: total drag = (number of twines) ½ ρ Cd D l0 c² along c, nothing tangential
+    x, uv = diamond_panel()
+    d = jax.vmap(geometry.twine_determinant)(uv)
+    assert (d < 0).any() and (d > 0).any()
+    n_twines = 2 * 4 * 3  # U twines = V twines = twine-coordinate area
+    np.testing.assert_allclose(jnp.abs(d).sum(), n_twines)
+    c = jnp.array([0.0, 0.0, -0.8])
+    if rotated:
+        R = random_rotation()
+        x, c = x @ R.T, R @ c
+    f = jax.vmap(netting_jit, in_axes=(0, 0, None))(x, uv, c)
+    total = f.sum(axis=(0, 1))
+    np.testing.assert_allclose(total, n_twines * KN * 0.8**2 * c / 0.8, rtol=1e-12, atol=1e-17)
+    # each vertex of each element takes one third of its element's drag, all along c
+    across = f - (f @ c)[..., None] * c / 0.64
+    assert np.abs(across).max() < 1e-15
+    parts = jax.vmap(netting_parts, in_axes=(0, 0, None))(x, uv, c)
+    assert np.abs(parts["u_tangential"]).max() < 1e-18 and np.abs(parts["v_tangential"]).max() < 1e-18
+    np.testing.assert_allclose(parts["u_normal"] + parts["v_normal"], 3 * f[:, 0], rtol=1e-13)
+    for jac in (jac_x, jac_c):
+        assert np.isfinite(jax.vmap(jac, in_axes=(0, 0, None))(x, uv, c)).all()
+
+
+def test_drag_uses_unstretched_twine_length():
+    # book text after 4.117: the area is D l0 whatever the stretch; only U's direction matters
+    x, uv = random_element()
+    c = jnp.asarray(RNG.normal(size=3))
+    np.testing.assert_allclose(netting_jit(1.7 * x, uv, c), netting_jit(x, uv, c), rtol=1e-12)
+
+
+def axis_element(clockwise):
+    """Element whose U twine is exactly along x (U = 12, V = 13 exactly, |d| = 1)."""
+    uv = jnp.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    if clockwise:
+        uv = uv[jnp.array([0, 2, 1])]
+    U, V = jnp.array([0.021, 0.0, 0.0]), jnp.array([0.004, 0.017, 0.007])
+    origin = jnp.array([0.3, -0.2, -1.5])
+    x = origin + uv[:, :1] * U + uv[:, 1:] * V
+    U_, V_, d = geometry.twine_vectors(x, uv)
+    assert (U_[1], U_[2]) == (0.0, 0.0)
+    return x, uv, U, V
+
+
+@pytest.mark.parametrize("clockwise", [False, True])
+@pytest.mark.parametrize(
+    "case",
+    ["along_u", "against_u", "normal_to_u", "normal_to_panel", "still_water"],
+)
+def test_degenerate_directions_are_smooth(case, clockwise):
+    # the printed directions 4.116-4.117 are 0/0 here; force and stiffness must be finite and equal to
+    # the limit from either side (direction perturbed by +-1e-7)
+    x, uv, U, V = axis_element(clockwise)
+    speed = 1.3
+    directions = {
+        "along_u": U / jnp.linalg.norm(U),
+        "against_u": -U / jnp.linalg.norm(U),
+        "normal_to_u": jnp.array([0.0, 0.0, 1.0]),
+        "normal_to_panel": jnp.cross(U, V) / jnp.linalg.norm(jnp.cross(U, V)),
+        "still_water": jnp.zeros(3),
+    }
+    c0 = speed * directions[case]
+    wobble = jnp.array([0.3, -0.8, 0.52])
+    f0, jx0, jc0 = netting_jit(x, uv, c0), jac_x(x, uv, c0), jac_c(x, uv, c0)
+    for a in (f0, jx0, jc0):
+        assert np.isfinite(a).all()
+    scale_f, scale_j = (KN + KT) * speed**2, (KN + KT) * speed
+    for sign in (1.0, -1.0):
+        c = c0 + sign * 1e-7 * speed * wobble
+        np.testing.assert_allclose(netting_jit(x, uv, c), f0, atol=1e-6 * scale_f, rtol=0)
+        np.testing.assert_allclose(jac_x(x, uv, c), jx0, atol=1e-5 * scale_j / 0.02, rtol=0)
+        np.testing.assert_allclose(jac_c(x, uv, c), jc0, atol=1e-5 * scale_j, rtol=0)
+    parts = netting_parts(x, uv, c0)
+    if case in ("along_u", "against_u"):
+        # all of the U twines' drag is tangential: Ct-drag along c, |d|/2 = 1/2 twine
+        np.testing.assert_allclose(parts["u_normal"], 0.0, atol=1e-30)
+        np.testing.assert_allclose(parts["u_tangential"], 0.5 * KT * speed * c0, rtol=1e-13)
+    if case == "normal_to_u":
+        np.testing.assert_allclose(parts["u_tangential"], 0.0, atol=1e-30)
+        np.testing.assert_allclose(parts["u_normal"], 0.5 * KN * speed * c0, rtol=1e-13)
+    if case == "still_water":
+        np.testing.assert_array_equal(f0, 0.0)
+        np.testing.assert_array_equal(jx0, 0.0)
+        np.testing.assert_array_equal(jc0, 0.0)
+
+
+def test_collapsed_element_is_finite():
+    # a triangle shrunk to a point has no twine direction: all the velocity counts as normal, no NaN
+    x = jnp.ones((3, 3)) * 0.4
+    uv = jnp.array([[0.0, 0.0], [2.0, 0.0], [0.0, 3.0]])
+    c = jnp.array([0.2, -0.5, 0.1])
+    expected = 2 * 3.0 * KN * jnp.linalg.norm(c) * c  # |d| = 6: 3 U and 3 V twines
+    np.testing.assert_allclose(netting_jit(x, uv, c).sum(0), expected, rtol=1e-13)
+    assert np.isfinite(jac_x(x, uv, c)).all() and np.isfinite(jac_c(x, uv, c)).all()
+
+
+def central_differences(f, a, h):
+    """Jacobian of f at a by central differences of step h: (f.size, a.size)."""
+    a = np.asarray(a, float)
+    cols = []
+    for i in range(a.size):
+        e = np.zeros(a.size)
+        e[i] = h
+        e = e.reshape(a.shape)
+        cols.append((np.asarray(f(jnp.asarray(a + e))) - np.asarray(f(jnp.asarray(a - e)))) / (2 * h))
+    return np.stack(cols, axis=-1)
+
+
+@pytest.mark.parametrize("clockwise", [False, True])
+def test_stiffness_equals_finite_differences(clockwise):
+    for _ in range(6):
+        x, uv = random_element(clockwise)
+        c = jnp.asarray(RNG.normal(size=3))
+        jx = np.asarray(jac_x(x, uv, c)).reshape(9, 9)
+        fd = central_differences(lambda y: netting_jit(y.reshape(3, 3), uv, c).ravel(), x.ravel(), 1e-7)
+        np.testing.assert_allclose(jx, fd, rtol=1e-5, atol=1e-6 * np.abs(fd).max())
+        jc = np.asarray(jac_c(x, uv, c)).reshape(9, 3)
+        fdc = central_differences(lambda w: netting_jit(x, uv, w).ravel(), c, 1e-6)
+        np.testing.assert_allclose(jc, fdc, rtol=1e-6, atol=1e-8 * np.abs(fdc).max())
+
+
+def book_directions(U, c):
+    """Unit directions of the normal and tangential drag as printed, 4.116-4.117 (non-degenerate cases)."""
+    E = jnp.cross(U, jnp.cross(c, U))
+    T = jnp.cross(E, jnp.cross(c, E))
+    return E / jnp.linalg.norm(E), T / jnp.linalg.norm(T)
+
+
+@pytest.mark.parametrize("clockwise", [False, True])
+@pytest.mark.parametrize("alpha_deg", [17.0, 60.0, 110.0, 163.0])
+def test_twine_at_an_angle_matches_book_4114_4117(alpha_deg, clockwise):
+    # U twines at angle alpha to c: |F| = ½ρ Cd D l0 (|c| sin a)² |d|/2, |T| = f ½ρ Cd D l0 (|c| cos a)² |d|/2
+    # (Ct = f Cd), directions 4.116-4.117; the V twines alike with beta
+    R = random_rotation()
+    uv = jnp.array([[0.0, 0.0], [3.0, 0.0], [0.0, 2.0]])
+    if clockwise:
+        uv = uv[jnp.array([0, 2, 1])]
+    n = abs(float(geometry.twine_determinant(uv))) / 2
+    assert n == 3.0
+    U = R @ jnp.array([0.022, 0.0, 0.0])
+    V = R @ jnp.array([0.01, 0.015, 0.004])
+    x = jnp.array([0.1, 0.2, -3.0]) + uv[:, :1] * U + uv[:, 1:] * V
+    a = np.radians(alpha_deg)
+    speed = 0.9
+    c = speed * (R @ jnp.array([np.cos(a), np.sin(a) * 0.6, np.sin(a) * 0.8]))
+    parts = netting_parts(x, uv, c)
+    f = netting_jit(x, uv, c)
+    total = jnp.zeros(3)
+    for name, twine in (("u", U), ("v", V)):
+        cos_a = jnp.dot(c, twine) / (speed * jnp.linalg.norm(twine))  # 4.132 / 4.135
+        assert 1e-3 < abs(float(cos_a)) < 0.999  # neither along nor across c: the book's forms are defined
+        sin_a = jnp.sqrt(1 - cos_a**2)
+        normal, tangential = parts[name + "_normal"], parts[name + "_tangential"]
+        np.testing.assert_allclose(jnp.linalg.norm(normal), KN * (speed * sin_a) ** 2 * n, rtol=1e-12)
+        np.testing.assert_allclose(jnp.linalg.norm(tangential), KT * (speed * cos_a) ** 2 * n, rtol=1e-12)
+        e_normal, e_tangential = book_directions(twine, c)
+        np.testing.assert_allclose(normal / jnp.linalg.norm(normal), e_normal, atol=1e-12)
+        np.testing.assert_allclose(tangential / jnp.linalg.norm(tangential), e_tangential, atol=1e-12)
+        total = total + normal + tangential
+    np.testing.assert_allclose(f, jnp.broadcast_to(total / 3, (3, 3)), rtol=1e-13)
+
+
+def bar(x, rest, c):
+    return drag.bar_drag(x, rest, D, CN, CT, c, RHO)
+
+
+bar_jit = jax.jit(bar)
+
+
+@pytest.mark.parametrize("alpha_deg", [0.0, 35.0, 90.0, 140.0])
+def test_bar_drag_closed_form(alpha_deg):
+    # Morison on a cylinder of rest length L0: ½ρ Cn D L0 (c sin a)² across, ½ρ Ct D L0 (c cos a)² along,
+    # half per end; the current length of the bar does not enter
+    a = np.radians(alpha_deg)
+    rest, speed = 2.5, 1.4
+    axis = jnp.array([np.cos(a), np.sin(a), 0.0])
+    c = speed * jnp.array([1.0, 0.0, 0.0])
+    for stretch in (1.0, 1.08):
+        x = jnp.stack([jnp.array([1.0, 2.0, -4.0]), jnp.array([1.0, 2.0, -4.0]) + stretch * rest * axis])
+        f = bar_jit(x, rest, c)
+        np.testing.assert_array_equal(f[0], f[1])
+        k = 0.5 * RHO * D * rest * speed**2
+        normal_dir = np.array([1.0, 0.0, 0.0]) - np.cos(a) * np.asarray(axis)
+        normal_dir = normal_dir / (np.linalg.norm(normal_dir) or 1.0)
+        expected = CN * k * np.sin(a) ** 2 * normal_dir + CT * k * np.cos(a) * abs(np.cos(a)) * np.asarray(axis)
+        np.testing.assert_allclose(2 * f[0], expected, rtol=1e-12, atol=1e-15)
+
+
+def test_bar_stiffness_equals_finite_differences():
+    jx = jax.jit(jax.jacfwd(bar, argnums=0))
+    jc = jax.jit(jax.jacfwd(bar, argnums=2))
+    for _ in range(6):
+        x, c, rest = jnp.asarray(RNG.normal(size=(2, 3))), jnp.asarray(RNG.normal(size=3)), 0.7
+        fd = central_differences(lambda y: bar_jit(y.reshape(2, 3), rest, c).ravel(), x.ravel(), 1e-7)
+        got = np.asarray(jx(x, rest, c)).reshape(6, 6)
+        np.testing.assert_allclose(got, fd, rtol=1e-5, atol=1e-7 * np.abs(fd).max())
+        fdc = central_differences(lambda w: bar_jit(x, rest, w).ravel(), c, 1e-6)
+        got = np.asarray(jc(x, rest, c)).reshape(6, 3)
+        np.testing.assert_allclose(got, fdc, rtol=1e-6, atol=1e-8 * np.abs(fdc).max())
+    # along the bar and in still water the stiffness is finite
+    x = jnp.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    for c in (jnp.array([0.5, 0.0, 0.0]), jnp.array([0.0, 0.5, 0.0]), jnp.zeros(3)):
+        assert np.isfinite(jx(x, 1.0, c)).all() and np.isfinite(jc(x, 1.0, c)).all()
+
+
+def test_node_drag_closed_form():
+    cda = 0.35  # Cd A (m²)
+    c = jnp.array([0.6, -0.8, 0.0]) * 1.5
+    np.testing.assert_allclose(drag.node_drag(cda, c, RHO), 0.5 * RHO * cda * 1.5 * c, rtol=1e-14)
+    # d(|c| c)/dc = |c| I + c c^T / |c|, and 0 in still water
+    jac = jax.jacfwd(drag.node_drag, argnums=1)
+    expected = 0.5 * RHO * cda * (1.5 * np.eye(3) + np.outer(c, c) / 1.5)
+    np.testing.assert_allclose(jac(cda, c, RHO), expected, rtol=1e-13)
+    np.testing.assert_array_equal(jac(cda, jnp.zeros(3), RHO), 0.0)
+    np.testing.assert_array_equal(drag.node_drag(cda, jnp.zeros(3), RHO), 0.0)
+
+
+def test_rotating_element_and_current_rotates_the_forces():
+    for clockwise in (False, True):
+        for _ in range(3):
+            x, uv = random_element(clockwise)
+            c = jnp.asarray(RNG.normal(size=3))
+            R = random_rotation()
+            shift = jnp.asarray(RNG.normal(size=3))
+            moved = netting_jit(x @ R.T + shift, uv, R @ c)
+            np.testing.assert_allclose(moved, netting_jit(x, uv, c) @ R.T, rtol=1e-11, atol=1e-16)
+            moved = bar_jit(x[:2] @ R.T + shift, 0.3, R @ c)
+            np.testing.assert_allclose(moved, bar_jit(x[:2], 0.3, c) @ R.T, rtol=1e-11, atol=1e-16)
+
+
+PROFILE_DEPTH = jnp.array([0.0, 10.0, 30.0])
+PROFILE_FACTOR = jnp.array([1.0, 0.8, 0.2])
+
+
+def sheared(z, surface=0.0, speed=1.2, direction=jnp.array([3.0, 4.0, 0.0])):
+    return current.current_velocity(z, speed, direction, PROFILE_DEPTH, PROFILE_FACTOR, surface)
+
+
+sheared_jit, sheared_dz = jax.jit(sheared), jax.jit(jax.jacfwd(sheared))
+
+
+@pytest.mark.parametrize(
+    "depth, factor, slope",  # slope: d factor / d depth (1/m)
+    [
+        (-2.0, 1.0, 0.0),  # above the surface: first point's factor
+        (0.0, 1.0, -0.02),
+        (4.0, 0.92, -0.02),
+        (10.0, 0.8, -0.03),  # interior point: deeper segment's slope
+        (25.0, 0.35, -0.03),
+        (30.0, 0.2, -0.03),
+        (55.0, 0.2, 0.0),  # below the last point: constant
+    ],
+)
+def test_current_profile(depth, factor, slope):
+    speed, surface = 1.2, 2.5
+    z = surface - depth
+    unit = np.array([0.6, 0.8, 0.0])
+    np.testing.assert_allclose(sheared_jit(z, surface), speed * factor * unit, rtol=1e-13, atol=1e-15)
+    # z up: d c / dz = - d c / d depth
+    np.testing.assert_allclose(sheared_dz(z, surface), -speed * slope * unit, rtol=1e-13, atol=1e-15)
+
+
+def test_current_without_profile_and_with_one_point():
+    south = jnp.array([0.0, -2.0, 0.0])  # not unit: normalised inside
+    empty = jnp.zeros((0,))
+    uniform = jax.jit(lambda z: current.current_velocity(z, 0.7, south, empty, empty))
+    scaled = jax.jit(lambda z: current.current_velocity(z, 0.7, south, jnp.array([5.0]), jnp.array([0.5])))
+    for z in (3.0, -40.0):
+        np.testing.assert_allclose(uniform(z), [0.0, -0.7, 0.0], rtol=1e-15)
+        np.testing.assert_allclose(scaled(z), [0.0, -0.35, 0.0], rtol=1e-15)
+        assert float(jnp.abs(jax.jacfwd(uniform)(z)).max()) == 0.0
+    # vectorised in z
+    east = jnp.array([1.0, 0.0, 0.0])
+    got = sheared_jit(jnp.array([0.0, -5.0, -20.0]), 0.0, 1.0, east)
+    np.testing.assert_allclose(got[:, 0], [1.0, 0.9, 0.5], rtol=1e-14)
+    # a scene without free surface (surface_level NaN) measures depth from z = 0, and stays finite
+    got = sheared_jit(jnp.array([-5.0, -20.0]), jnp.nan, 1.0, east)
+    np.testing.assert_allclose(got[:, 0], [0.9, 0.5], rtol=1e-14)
+    np.testing.assert_allclose(sheared_dz(-5.0, jnp.nan, 1.0, east)[0], 0.02, rtol=1e-14)
+
+
+def test_drag_in_a_sheared_current_sees_dc_dz():
+    # with the current evaluated at the element's centroid inside the differentiated function, the stiffness
+    # includes d c/d z: compare with finite differences of the composed force
+    x, uv = random_element()
+    x = x + jnp.array([0.0, 0.0, -5.0])
+    force = jax.jit(lambda y: netting(y, uv, sheared(geometry.centroid(y)[2])))
+    jx = np.asarray(jax.jit(jax.jacfwd(force))(x)).reshape(9, 9)
+    fd = central_differences(lambda y: force(y.reshape(3, 3)).ravel(), x.ravel(), 1e-7)
+    np.testing.assert_allclose(jx, fd, rtol=1e-5, atol=1e-6 * np.abs(fd).max())
+    # the difference from a uniform current of the same local velocity is (dF/dc)(dc/dz)(dz_centroid/dz_j)
+    z = geometry.centroid(x)[2]
+    uniform = np.asarray(jac_x(x, uv, sheared_jit(z))).reshape(9, 9)
+    shear = np.asarray(jac_c(x, uv, sheared_jit(z))).reshape(9, 3) @ np.asarray(sheared_dz(z)) / 3.0
+    assert np.abs(shear).max() > 1e-4 * np.abs(uniform).max()
+    expected = uniform.copy()
+    expected[:, 2::3] += shear[:, None]
+    np.testing.assert_allclose(jx, expected, rtol=1e-12, atol=1e-14)
