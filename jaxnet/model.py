@@ -27,7 +27,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxnet import catch as catch_lib, current, geometry
-from jaxnet.terms import bending, cable, drag, gravity, knot, opening, pressure, screen, surface, tension
+from jaxnet.terms import bending, cable, drag, gravity, hexagonal, knot, opening, pressure, screen, surface, tension
 
 
 @dataclasses.dataclass(frozen=True)
@@ -58,6 +58,17 @@ def _netting_tension(x, p, env, compression):
 
 def _bar_tension(x, p, env, compression):
     return cable.bar_energy(x, p.rest_length, p.ea_traction, p.ea_compression if compression else None)
+
+
+def _hexagonal_tension(x, p, env, compression):
+    return hexagonal.hexagonal_energy(x, p.uv, p.l0, p.ea_traction, p.ea_compression if compression else None)
+
+
+def _hexagonal_weight(p, env):
+    # |d| twines of each family l, m, n (text after 4.82): the analogue of 4.277, one third per vertex
+    d = geometry.twine_determinant(p.uv)
+    w = jnp.abs(d) * jnp.pi * p.diameter**2 / 4.0 * jnp.sum(p.l0) * (p.density - env.water_density) * env.gravity
+    return jnp.broadcast_to(-(w / 3.0) * env.up, (3, 3))
 
 
 def _opening(x, p, env):
@@ -178,12 +189,13 @@ def _floating(scene):
 
 
 def _weight_options(family, volume, at_surface=False):
-    """Weight of a family: a constant load when fully immersed, an energy of the heights with a free surface."""
+    """Weight of a family: a constant load when fully immersed, an energy of the heights with a free surface
+    (``at_surface=None``: always the constant load, for families without a free-surface form)."""
 
     def options(scene):
         f = getattr(scene, family)
         env = scene.environment
-        if f is None or env.gravity == 0 or _floating(scene) != at_surface:
+        if f is None or env.gravity == 0 or (at_surface is not None and _floating(scene) != at_surface):
             return None
         net_density = np.asarray(f.density) - env.water_density
         if at_surface:  # above the surface even a neutrally buoyant net weighs
@@ -272,6 +284,8 @@ TERMS = (
     Term("bar_gravity_at_surface", "bars", "energy", _bar_gravity, _weight_options("bars", lambda f: f.diameter, at_surface=True)),
     Term("node_gravity_at_surface", "nodes", "energy", _node_gravity, _node_gravity_options),
     Term("node_force", "nodes", "load", _node_force, _node_force_options),
+    Term("hexagonal_tension", "hexagonal", "energy", _hexagonal_tension, _tension_options("hexagonal")),
+    Term("hexagonal_weight", "hexagonal", "load", _hexagonal_weight, _weight_options("hexagonal", lambda f: f.diameter, at_surface=None)),
     Term("mesh_opening", "netting", "energy", _opening, _netting_parameter_options("opening_stiffness")),
     Term("knot_contact", "netting", "energy", _knot_contact, _netting_parameter_options("knot_size")),
     Term("twine_bending", "hinges", "energy", _twine_bending, _hinge_options),

@@ -80,6 +80,31 @@ class Rope:
     tangential_ratio: float = 0.08
 
 
+@dataclasses.dataclass(frozen=True)
+class HexTwine:
+    """Hexagonal-mesh netting material (book eqs 4.76-4.113): three twine families l, m, n.
+
+    l0, ea, ea_compression: per family (l, m, n), or one value for all three: unstretched twine length (m),
+    traction and compression stiffness (N). diameter (m) and density (kg/m³) of the twines. Twine
+    coordinates of a hexagonal panel count *base meshes* (see :mod:`jaxnet.terms.hexagonal`).
+    """
+
+    l0: float | tuple
+    ea: float | tuple
+    diameter: float
+    ea_compression: float | tuple = 0.0
+    density: float = 1140.0
+
+    def per_family(self, name):
+        value = np.broadcast_to(np.asarray(getattr(self, name), dtype=float), (3,))
+        return value
+
+    @property
+    def base_mesh_side(self):
+        """|U| of the regular base mesh (m): 3 twine lengths; sets how finely a panel is meshed."""
+        return 3.0 * float(np.mean(self.per_family("l0")))
+
+
 # -- references to places in a net that is not built yet ------------------------------------------
 
 
@@ -192,13 +217,22 @@ class Net:
 
     # -- description ------------------------------------------------------------------------------
 
-    def panel(self, name, corners, twine: Twine, step: float) -> PanelRef:
-        """Add a diamond-mesh panel. corners: (C, 5) rows x, y, z (m), U, V (twines); step: meshing step (m)."""
+    def panel(self, name, corners, twine: Twine | HexTwine, step: float) -> PanelRef:
+        """Add a panel. corners: (C, 5) rows x, y, z (m), U, V (twines of a diamond mesh, or base meshes of a
+        hexagonal mesh when ``twine`` is a :class:`HexTwine`); step: meshing step (m)."""
         if name in self._panels or name in self._cables:
             raise SceneError(f"panel '{name}': the name is already used")
         corners = np.asarray(corners, dtype=float)
         if corners.ndim != 2 or corners.shape[1] != 5:
             raise SceneError(f"panel '{name}': corners must be rows of x y z U V, got shape {corners.shape}")
+        if isinstance(twine, HexTwine):
+            for field in ("l0", "ea", "ea_compression"):
+                v = twine.per_family(field)
+                if not np.all(np.isfinite(v)) or np.any(v < 0) or (field == "l0" and np.any(v == 0)):
+                    raise SceneError(f"panel '{name}': {field} must be {'> 0' if field == 'l0' else '>= 0'} per family, got {v.tolist()}")
+            _check_material(twine, f"panel '{name}'", ("diameter", "density"))
+            self._panels[name] = _Panel(name, corners, twine, float(step))
+            return PanelRef(name)
         _check_material(twine, f"panel '{name}'", ("l0", "ea", "ea_compression", "diameter", "density", "cd_normal",
                         "tangential_ratio", "opening_stiffness", "knot_size", "bending_stiffness"), positive=("l0",))
         if twine.drag_model not in DRAG_MODELS:
@@ -284,7 +318,7 @@ class Net:
         meshes = {}
         for p in self._panels.values():
             try:
-                m = mesh_panel(p.corners[:, 3:5], p.corners[:, 0:3], p.step, p.twine.l0, divisions=divisions[p.name], name=p.name)
+                m = mesh_panel(p.corners[:, 3:5], p.corners[:, 0:3], p.step, _mesh_length(p.twine), divisions=divisions[p.name], name=p.name)
             except PanelError as err:
                 raise SceneError(str(err)) from err
             offset = builder.add_nodes(m.xyz)
@@ -310,7 +344,9 @@ class Net:
         np.add.at(count, ids, 1)
         position /= count[:, None]
 
-        netting = self._netting(meshes, ids)
+        diamond = {k: v for k, v in meshes.items() if not isinstance(self._panels[k].twine, HexTwine)}
+        hexagonal = self._hexagonal(meshes, ids)
+        netting = self._netting(diamond, ids)
         bars = self._bars(cable_nodes, ids, position)
         environment = _normalised(self.environment)
         catch, enclosure = self._catch_and_enclosure(environment)
@@ -336,6 +372,7 @@ class Net:
             netting=netting,
             bars=bars,
             hinges=_hinges(netting),
+            hexagonal=hexagonal,
             catch=catch,
             enclosure=enclosure,
             environment=environment,
@@ -374,7 +411,7 @@ class Net:
         div = {}
         for p in self._panels.values():
             try:
-                div[p.name] = np.array(side_divisions(p.corners[:, 3:5], p.step, p.twine.l0), dtype=int)
+                div[p.name] = np.array(side_divisions(p.corners[:, 3:5], p.step, _mesh_length(p.twine)), dtype=int)
             except PanelError as err:
                 raise SceneError(str(err)) from err
         sides = [s for seam in self._seams for s in seam]
@@ -498,6 +535,8 @@ class Net:
         }
         rows = {k: [] for k in ("vertices", "uv", "panel", "drag_model", "knot_stiffness", *columns)}
         for k, p in enumerate(self._panels.values()):
+            if p.name not in meshes:
+                continue
             m, offset = meshes[p.name]
             tri = m.triangles
             e = len(tri)
@@ -509,6 +548,27 @@ class Net:
             rows["knot_stiffness"].append(np.full(e, _knot_stiffness(p.twine)))
             rows["panel"].append(np.full(e, k))
         return Netting(**{k: np.concatenate(v) for k, v in rows.items()})
+
+    def _hexagonal(self, meshes, ids):
+        from jaxnet.scene import HexagonalNetting
+
+        rows = {k: [] for k in ("vertices", "uv", "l0", "ea_traction", "ea_compression", "diameter", "density", "panel")}
+        for k, p in enumerate(self._panels.values()):
+            if not isinstance(p.twine, HexTwine):
+                continue
+            m, offset = meshes[p.name]
+            tri = m.triangles
+            e = len(tri)
+            rows["vertices"].append(ids[offset + tri])
+            rows["uv"].append(m.uv[tri])
+            for key, field in (("l0", "l0"), ("ea_traction", "ea"), ("ea_compression", "ea_compression")):
+                rows[key].append(np.broadcast_to(p.twine.per_family(field), (e, 3)))
+            rows["diameter"].append(np.full(e, float(p.twine.diameter)))
+            rows["density"].append(np.full(e, float(p.twine.density)))
+            rows["panel"].append(np.full(e, k))
+        if not rows["vertices"]:
+            return None
+        return HexagonalNetting(**{key: np.concatenate(v) for key, v in rows.items()})
 
     def _bars(self, cable_nodes, ids, position):
         if not cable_nodes:
@@ -530,6 +590,11 @@ class Net:
                 rows[key].append(np.full(len(ends), float(value)))
             rows["cable"].append(np.full(len(ends), k))
         return Bars(**{k: np.concatenate(v) for k, v in rows.items()})
+
+
+def _mesh_length(twine):
+    """Length (m) of one unit of twine coordinates, which sets the size of the triangles in the mesher."""
+    return twine.base_mesh_side if isinstance(twine, HexTwine) else twine.l0
 
 
 def _knot_stiffness(twine):

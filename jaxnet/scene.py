@@ -117,6 +117,24 @@ class Bars(eqx.Module):
     tangential_ratio: np.ndarray | None = None
 
 
+class HexagonalNetting(eqx.Module):
+    """Hexagonal-mesh triangles (book eqs 4.76-4.113), one row per triangle.
+
+    vertices: (E, 3) node indices. uv: (E, 3, 2) twine coordinates in base meshes. l0, ea_traction,
+    ea_compression: (E, 3) per twine family (l, m, n): unstretched length (m), stiffness (N). diameter (E,)
+    (m), density (E,) (kg/m³), panel (E,) index.
+    """
+
+    vertices: np.ndarray
+    uv: np.ndarray
+    l0: np.ndarray
+    ea_traction: np.ndarray
+    ea_compression: np.ndarray
+    diameter: np.ndarray
+    density: np.ndarray
+    panel: np.ndarray
+
+
 class Hinges(eqx.Module):
     """Pairs of triangles of one panel sharing an edge, for twine bending (eqs 4.220-4.245); one row per pair.
 
@@ -187,6 +205,7 @@ class Scene(eqx.Module):
     bars: Bars | None = None
     environment: Environment = dataclasses.field(default_factory=Environment)
     hinges: Hinges | None = None
+    hexagonal: HexagonalNetting | None = None
     catch: Catch | None = None
     enclosure: Enclosure | None = None
     panel_names: tuple = eqx.field(static=True, default=())
@@ -198,9 +217,9 @@ class Scene(eqx.Module):
 
     @property
     def n_elements(self):
-        return (0 if self.netting is None else int(self.netting.vertices.shape[0])) + (
-            0 if self.bars is None else int(self.bars.ends.shape[0])
-        )
+        """Netting triangles (diamond and hexagonal) and cable bars."""
+        return sum(0 if f is None else int(f.vertices.shape[0] if hasattr(f, "vertices") else f.ends.shape[0])
+                   for f in (self.netting, self.hexagonal, self.bars))
 
     @property
     def n_dof(self):
@@ -215,6 +234,11 @@ class Scene(eqx.Module):
 
 def _panel_name(scene, e):
     p = int(np.asarray(scene.netting.panel)[e])
+    return scene.panel_names[p] if p < len(scene.panel_names) else f"panel {p}"
+
+
+def _panel_name_of(scene, family, e):
+    p = int(np.asarray(family.panel)[e])
     return scene.panel_names[p] if p < len(scene.panel_names) else f"panel {p}"
 
 
@@ -318,6 +342,26 @@ def validate(scene: Scene) -> None:
             bad = np.flatnonzero(~np.isin(m, (0, 1, 2)))
             if bad.size:
                 raise SceneError(f"{culprit(int(bad[0]))}: drag model code must be 0, 1 or 2, got {m[bad[0]]!r}")
+        used[tri.ravel()] = True
+        edges += [tri[:, [0, 1]], tri[:, [1, 2]]]
+    if scene.hexagonal is not None:
+        hexa = scene.hexagonal
+        tri = np.asarray(hexa.vertices)
+        culprit = lambda e: f"hexagonal triangle {e} ({_panel_name_of(scene, hexa, e)})"  # noqa: E731
+        if tri.size and (tri.min() < 0 or tri.max() >= n):
+            e = int(np.argwhere((tri < 0) | (tri >= n))[0][0])
+            raise SceneError(f"{culprit(e)}: vertex index outside 0..{n - 1}")
+        uv = np.asarray(hexa.uv, dtype=float)
+        _check_finite(uv, "hexagonal twine coordinates")
+        d = (uv[:, 1, 0] - uv[:, 0, 0]) * (uv[:, 2, 1] - uv[:, 0, 1]) - (uv[:, 2, 0] - uv[:, 0, 0]) * (uv[:, 1, 1] - uv[:, 0, 1])
+        flat = np.flatnonzero(np.abs(d) < 1e-12)
+        if flat.size:
+            raise SceneError(f"{culprit(int(flat[0]))}: collinear twine coordinates (d = {d[flat[0]]:.3g})")
+        for name in ("l0", "ea_traction", "ea_compression"):
+            values = np.asarray(getattr(hexa, name), dtype=float).min(axis=1)
+            _check_positive(values, name, culprit, strict=(name == "l0"))
+        _check_positive(hexa.diameter, "twine diameter", culprit, strict=False)
+        _check_positive(hexa.density, "volumic mass", culprit, strict=False)
         used[tri.ravel()] = True
         edges += [tri[:, [0, 1]], tri[:, [1, 2]]]
     if scene.bars is not None:

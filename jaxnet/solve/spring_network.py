@@ -38,7 +38,15 @@ def _bar_spring(x, p, env):
     return 0.5 * p.ea_traction / p.rest_length * jnp.sum(s * s)
 
 
-SPRINGS = {"netting": _netting_springs, "bars": _bar_spring}
+def _hexagonal_springs(x, p, env):
+    """Hexagonal mesh: zero-length springs along the base-mesh vectors U and V, |d| of each, of the mean
+    family stiffness mean(EA / l0) (a metric, not a model: it only has to be of the element's scale)."""
+    U, V, d = geometry.twine_vectors(x, p.uv)
+    k = jnp.mean(p.ea_traction / p.l0)
+    return jnp.abs(d) * 0.5 * k * (jnp.sum(U * U) + jnp.sum(V * V))
+
+
+SPRINGS = {"netting": _netting_springs, "bars": _bar_spring, "hexagonal": _hexagonal_springs}
 
 
 def stiffness(scene, model, pattern):
