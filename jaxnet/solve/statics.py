@@ -133,20 +133,22 @@ def newton_loop(x0, scene, pattern, model, opts: Newton):
         return assemble.positions(x, scene, pattern)
 
     nonconservative = any(t.term.kind == "force" for t in model)
+    energy_and_gradient = jax.value_and_grad(assemble.energy)
 
-    def frozen_load(x):
+    def evaluate(x):
+        """At free coordinates x: stored energy (J), out-of-balance force on the free coordinates (N) and
+        the non-conservative nodal forces (N, 3). The one place the residual is traced: each copy of it
+        in the program costs compile time, so the loop calls this once per line-search trial."""
+        X = full(x)
+        e, grad = energy_and_gradient(X, scene, model)
+        f_nc = assemble.forces(X, scene, model) if nonconservative else jnp.zeros_like(X)
+        return e, (load - grad + f_nc).ravel()[pattern.free], f_nc
+
+    def merit(x, e_stored, f_nc):
         # Drag and catch pressure have no potential. Each iteration's line search uses the potential
         # energy of the conservative terms under the loads *plus* these forces frozen at the iterate:
         # its slope along the step is -F.dx as for a conservative net, and at a fixed point F = 0.
-        if not nonconservative:
-            return load
-        return load + assemble.forces(full(x), scene, model)
-
-    def merit(x, total_load):
-        return assemble.potential(full(x), scene, model, total_load)
-
-    def force(x):
-        return assemble.nodal_force(full(x), scene, model, load).ravel()[pattern.free]
+        return e_stored - jnp.sum((load + f_nc) * full(x))
 
     def status_of(it, f, e):
         res = jnp.max(_nodal_norm(f, pattern, n_nodes))
@@ -156,75 +158,76 @@ def newton_loop(x0, scene, pattern, model, opts: Newton):
         )
 
     springs = spring_network.stiffness(scene, model, pattern)
-    f0 = force(x0)
-    e0 = merit(x0, frozen_load(x0))
+    e0, f0, nc0 = evaluate(x0)
     res0, st0 = status_of(0, f0, e0)
     hist0 = jnp.full(opts.max_iter + 1, jnp.nan).at[0].set(res0)
-    state0 = (x0, f0, e0, jnp.asarray(opts.damping), jnp.asarray(0), st0, hist0)
+    state0 = (x0, f0, e0, nc0, jnp.asarray(opts.damping), jnp.asarray(0), st0, hist0)
 
     def cond(state):
-        return state[5] == RUNNING
+        return state[6] == RUNNING
 
     def body(state):
-        x, f, e, mu, it, _, hist = state
-        total_load = frozen_load(x)
-        if nonconservative:
-            e = merit(x, total_load)
+        x, f, e_stored, f_nc, mu, it, _, hist = state
+        e = merit(x, e_stored, f_nc)
         data = assemble.tangent(full(x), scene, model, pattern)
         damped = data + mu * springs
         dx, ok = linalg.solve(damped, f, pattern.indptr, pattern.indices)
         # FEMNET's displacement limit: scale the step so that no node moves more than max_step.
         biggest = jnp.max(_nodal_norm(dx, pattern, n_nodes))
         dx = dx * jnp.minimum(1.0, opts.max_step / jnp.maximum(biggest, 1e-300))
-        slope = jnp.dot(f, dx)  # -d(energy)/d(alpha) at alpha = 0: > 0 for a descent direction
+        slope = jnp.dot(f, dx)  # -d(merit)/d(alpha) at alpha = 0: > 0 for a descent direction
         curvature = jnp.dot(dx, linalg.matvec(data, pattern.rows, pattern.indices, dx))
         predicted = slope - 0.5 * curvature  # decrease predicted by the undamped quadratic model
         usable = ok & (slope > 0)
 
-        # Backtracking (Armijo) line search on the total potential energy. Near the solution the energy
-        # decrease falls below the roundoff of the energy itself; there a step is judged by the force.
-        roundoff = 1e-12 * (jnp.abs(e) + jnp.abs(jnp.dot(total_load.ravel(), full(x).ravel())))
+        # Backtracking (Armijo) line search on the merit. Near the solution the energy decrease falls below
+        # the roundoff of the energy itself; there a step is judged by the force.
+        roundoff = 1e-12 * (jnp.abs(e) + jnp.abs(jnp.sum((load + f_nc) * full(x))))
         res_now = jnp.linalg.norm(f)
 
-        def sufficient(alpha, e_try):
-            armijo = e_try <= e - 1e-4 * alpha * slope
-            flat = (alpha * slope <= roundoff) & (jnp.abs(e_try - e) <= roundoff)
-            return jnp.isfinite(e_try) & (armijo | (flat & (jnp.linalg.norm(force(x + alpha * dx)) < res_now)))
-
         def ls_cond(s):
-            alpha, e_try, k = s
-            return usable & (k < opts.line_search) & ~sufficient(alpha, e_try)
+            k, done = s[0], s[-1]
+            return usable & (k < opts.line_search) & ~done
 
         def ls_body(s):
-            alpha, _, k = s
-            alpha = 0.5 * alpha
-            return alpha, merit(x + alpha * dx, total_load), k + 1
+            k, alpha, *_ = s
+            alpha = jnp.where(k == 0, 1.0, 0.5 * alpha)
+            e_try, f_try, nc_try = evaluate(x + alpha * dx)
+            m_try = merit(x + alpha * dx, e_try, f_nc)
+            armijo = m_try <= e - 1e-4 * alpha * slope
+            flat = (alpha * slope <= roundoff) & (jnp.abs(m_try - e) <= roundoff) & (jnp.linalg.norm(f_try) < res_now)
+            done = jnp.isfinite(m_try) & jnp.all(jnp.isfinite(f_try)) & (armijo | flat)
+            return k + 1, alpha, m_try, e_try, f_try, nc_try, done
 
-        e1 = jnp.where(usable, merit(x + dx, total_load), jnp.inf)
-        alpha, e_new, k = jax.lax.while_loop(ls_cond, ls_body, (jnp.asarray(1.0), e1, 0))
-        accepted = usable & sufficient(alpha, e_new)
+        first = (jnp.asarray(0), jnp.asarray(1.0), jnp.asarray(jnp.inf), e_stored, f, f_nc, jnp.asarray(False))
+        trials, alpha, m_new, e_try, f_try, nc_try, accepted = jax.lax.while_loop(ls_cond, ls_body, first)
+        accepted = usable & accepted
         x_new = jnp.where(accepted, x + alpha * dx, x)
-        f_new = jnp.where(accepted, force(x_new), f)
-        e_new = jnp.where(accepted, e_new, e)
-        res, st = status_of(it + 1, f_new, e_new)
+        f_new = jnp.where(accepted, f_try, f)
+        e_new = jnp.where(accepted, e_try, e_stored)
+        nc_new = jnp.where(accepted, nc_try, f_nc)
+        res, st = status_of(it + 1, f_new, jnp.where(accepted, m_new, e))
         # Gain ratio of the full step decides the damping (Levenberg-Marquardt, Nielsen's update) ...
-        rho = jnp.where(k == 0, (e - e1) / jnp.maximum(predicted, 1e-300), 0.0)
+        full_step = accepted & (trials == 1)
+        rho = jnp.where(full_step, (e - m_new) / jnp.maximum(predicted, 1e-300), 0.0)
         mu_good = mu * jnp.maximum(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
         # ... and a good step lowers it at least as fast as the residual: mu = O(|F|) near the solution
-        # makes the last steps quadratic (Nielsen's rule alone divides mu by 3 at most: linear).
+        # makes the last steps quadratic (Nielsen's rule alone divides mu by 3 at most: linear); a step
+        # that raises the residual (possible: the energy decides) raises it.
         ratio = res / jnp.maximum(hist[it], 1e-300)
         mu_good = jnp.where(ratio > 1.0, mu_good * jnp.minimum(ratio, 10.0), jnp.minimum(mu_good, mu * ratio))
-        mu_next = jnp.where(accepted & (k == 0) & (rho > 0.25), mu_good, mu * jnp.where(accepted, 2.0, 10.0))
+        mu_next = jnp.where(full_step & (rho > 0.25), mu_good, mu * jnp.where(accepted, 2.0, 10.0))
         mu_next = jnp.clip(mu_next, opts.min_damping, opts.max_damping)
         st = jnp.where((st == RUNNING) & ~accepted & (mu >= opts.max_damping), STALLED, st)
         hist = hist.at[it + 1].set(res)
         if opts.verbose:
             jax.debug.callback(_progress, it + 1, res, mu, jnp.where(accepted, alpha, 0.0), ordered=True)
-        return x_new, f_new, e_new, mu_next, it + 1, st, hist
+        return x_new, f_new, e_new, nc_new, mu_next, it + 1, st, hist
 
-    x, f, e, mu, it, st, hist = jax.lax.while_loop(cond, body, state0)
+    x, f, e_stored, f_nc, mu, it, st, hist = jax.lax.while_loop(cond, body, state0)
     nodal = _nodal_norm(f, pattern, n_nodes)
-    force_full = assemble.nodal_force(full(x), scene, model, load)
+    # the force at every node (fixed ones included: minus the reactions), from the final state
+    force_full = (load - jax.grad(assemble.energy)(full(x), scene, model) + f_nc)
     return Equilibrium(
         x=full(x),
         force=force_full,
@@ -233,7 +236,7 @@ def newton_loop(x0, scene, pattern, model, opts: Newton):
         status=st,
         worst_node=jnp.argmax(nodal),
         history=hist,
-        energy=e,
+        energy=merit(x, e_stored, f_nc),
     )
 
 
