@@ -204,7 +204,7 @@ def nodal_force(x, scene, model, load):
     return f
 
 
-def term_forces(x, scene, model, load=None):
+def term_forces(x, scene, model):
     """Per term, the (N, 3) nodal forces (N) it exerts at positions x: the force breakdown of a result.
 
     Energy terms give -grad of their own energy, load terms their load, force terms their force.

@@ -54,8 +54,12 @@ def forces_by_term(scene, x):
     catch, weight and buoyancy, applied forces) make up, with the reactions, the balance of the net.
     """
     m = model_lib.active_terms(scene)
-    per_term = assemble.term_forces(np.asarray(x), scene, m)
+    per_term = _term_forces(jax.numpy.asarray(x), scene, model=m)
     return {name: np.asarray(f).sum(axis=0) for name, f in per_term.items()}
+
+
+# compiled once per scene shape (evaluated op by op it takes seconds on a large net)
+_term_forces = jax.jit(assemble.term_forces, static_argnames="model")
 
 
 def force_breakdown(scene, x):
@@ -71,10 +75,10 @@ def catch_report(scene, x):
     if c is None or scene.netting is None:
         return None
     net = scene.netting
-    front = catch_lib.catch_front(np.asarray(x), net.vertices, c.axis, c.volume, c.symmetry, sign=net.outward)
+    front = jax.jit(catch_lib.catch_front)(jax.numpy.asarray(x), net.vertices, c.axis, c.volume, c.symmetry, sign=net.outward)
     p = pressure.dynamic_pressure(scene.environment.water_density, c.drag_coefficient, scene.environment.current_speed)
-    summary = catch_lib.catch_summary(np.asarray(x), net.vertices, c.axis, front.position, p, c.symmetry,
-                                      sign=net.outward, center=c.center, up=scene.environment.up)
+    summary = jax.jit(catch_lib.catch_summary)(jax.numpy.asarray(x), net.vertices, c.axis, front.position, p, c.symmetry,
+                                               sign=net.outward, center=c.center, up=scene.environment.up)
     return {
         "front_m": float(front.position),
         "holds_the_volume": bool(front.holds),

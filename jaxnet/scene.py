@@ -362,6 +362,12 @@ def validate(scene: Scene) -> None:
             _check_positive(values, name, culprit, strict=(name == "l0"))
         _check_positive(hexa.diameter, "twine diameter", culprit, strict=False)
         _check_positive(hexa.density, "volumic mass", culprit, strict=False)
+        # say so rather than leave hexagonal netting silently without these loads
+        if env.current_speed > 0:
+            raise SceneError(f"{culprit(0)}: hexagonal netting has no drag model yet; it cannot be put in a current")
+        if has_free_surface(scene):
+            raise SceneError(f"{culprit(0)}: hexagonal netting has no free-surface weight yet; use a scene without a "
+                             "free surface (surface_level NaN)")
         used[tri.ravel()] = True
         edges += [tri[:, [0, 1]], tri[:, [1, 2]]]
     if scene.bars is not None:
