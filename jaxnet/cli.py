@@ -1,7 +1,10 @@
-"""Command line: ``jaxnet run [SCENE] [--scene NAME] [--out DIR]``.
+"""Command line: ``jaxnet run [SCENE] [--scene NAME] [--mesh CASE.mdg] [--out DIR]``.
 
 With no SCENE, solves a built-in scene (``--scene``, default ``cage``: a fish cage in a current; see
-``jaxnet run --help`` for the list).
+``jaxnet run --help`` for the list). SCENE may be a jaxnet scene file (.json, .toml) or a FEMNET case
+(.don, :mod:`jaxnet.io.femnet`); for a FEMNET case ``--mesh CASE.mdg`` solves on FEMNET's own mesh instead
+of jaxnet's, and result.json gets a "femnet" section with FEMNET's summary figures (drag on netting,
+cables and catch, total force on the fixings, catch thickness and diameter).
 Writes DIR/result.json (figures, see README), DIR/net.vtu (ParaView) and DIR/net.png, prints one line
 per Newton iteration and a short summary. Exit status 0 on convergence, 1 on a failed solve, 2 on bad input.
 """
@@ -20,15 +23,30 @@ def _run(args):
     from jaxnet.scenes import BUILT_IN
     from jaxnet.solve.statics import Newton, SolveError, solve
 
+    from jaxnet.io import femnet
+    from jaxnet.scene import SceneError
+
+    femnet_info = None
+    if args.mesh is not None and (args.scene is None or not str(args.scene).endswith(".don")):
+        raise SceneError("--mesh (FEMNET's .mdg mesh) goes with a FEMNET case CASE.don")
     if args.scene is None:
         make, description = BUILT_IN[args.builtin]
         net, solver = make(), Newton()
         label = f"built-in scene '{args.builtin}': {description}"
+        scene = net.build()
+    elif str(args.scene).endswith(".don"):
+        if args.mesh is not None:
+            scene, solver, femnet_info = femnet.read_mdg(args.mesh, args.scene)
+            label = f"FEMNET case {args.scene} on FEMNET's mesh {args.mesh}"
+        else:
+            net, solver, femnet_info = femnet.read_don(args.scene)
+            scene = net.build()
+            label = f"FEMNET case {args.scene}"
     else:
         net, solver = scene_file.read(args.scene)
         label = str(args.scene)
+        scene = net.build()
     overrides = {k: v for k, v in (("tol", args.tol), ("max_iter", args.max_iter)) if v is not None}
-    scene = net.build()
     print(f"jaxnet: {label}")
     print(f"  {scene.n_nodes} nodes, {scene.n_elements} elements, {scene.n_dof} unknowns")
     out = pathlib.Path(args.out)
@@ -39,6 +57,9 @@ def _run(args):
     except SolveError as err:
         failed, eq, timing = err, err.equilibrium, None
     result = figures.summary(scene, eq, timing)
+    if femnet_info is not None:
+        result["femnet"] = femnet.femnet_figures(scene, eq, femnet_info["symmetry_axes"])
+        result["femnet_case"] = femnet_info
     (out / "result.json").write_text(json.dumps(result, indent=2))
     vtk.write_vtu(out / "net.vtu", scene, eq.x)
     plot.save_png(out / "net.png", scene, eq.x, title=label)
@@ -64,7 +85,8 @@ def main(argv=None):
     listing = "; ".join(f"{name}: {text}" for name, (_, text) in BUILT_IN.items())
     run = sub.add_parser("run", help="solve a scene (a built-in scene if no file is given)",
                          description=f"Built-in scenes ({DEFAULT} by default): {listing}.")
-    run.add_argument("scene", nargs="?", help="scene file (.json or .toml)")
+    run.add_argument("scene", nargs="?", help="scene file (.json or .toml) or FEMNET case (.don)")
+    run.add_argument("--mesh", help="with a FEMNET case: solve on FEMNET's mesh (CASE.mdg) instead of jaxnet's")
     run.add_argument("--scene", dest="builtin", choices=sorted(BUILT_IN), default=DEFAULT,
                      help=f"built-in scene to solve when no file is given (default: {DEFAULT})")
     run.add_argument("--out", default="jaxnet-out", help="output directory (default: jaxnet-out)")
