@@ -135,7 +135,7 @@ NETTING_DRAG = {
 }
 
 
-def _netting_drag(x, p, env, state, models):
+def _netting_drag(x, p, env, state, models, shielded):
     c = _water_velocity(x, env)
     total = jnp.zeros((3, 3))
     for code in models:
@@ -143,7 +143,19 @@ def _netting_drag(x, p, env, state, models):
         with jax.named_scope(name):
             f = force(x, p, c, env.water_density)
         total = total + (f if len(models) == 1 else jnp.where(p.drag_model == code, f, 0.0))
+    if shielded:
+        # netting behind the catch front is backed by fish: the water does not flow through it, and the
+        # catch pressure (catch_pressure) replaces its drag, as in FEMNET. The part of the triangle ahead
+        # of the front keeps its drag, spread as the consistent load of that part (continuous as the front
+        # sweeps the element).
+        behind = pressure.clipped_shape_integrals(pressure.front_heights(x, state["front"], state["axis"]))
+        total = total * (1.0 - 3.0 * behind)[:, None]
     return total
+
+
+def _drag_state(x, scene):
+    """The catch front, for the shielding of the netting behind it (None without a catch)."""
+    return None if scene.catch is None else _catch_state(x, scene)
 
 
 def _bar_drag(x, p, env, state):
@@ -257,7 +269,7 @@ def _netting_drag_options(scene):
     codes = np.asarray(net.drag_model)
     twine_drag = (codes == 0) & ((np.asarray(net.cd_normal) != 0) if net.cd_normal is not None else False)
     models = tuple(sorted(set(codes[codes != 0].tolist()) | ({0} if np.any(twine_drag) else set())))
-    return {"models": models} if models else None
+    return {"models": models, "shielded": scene.catch is not None} if models else None
 
 
 def _bar_drag_options(scene):
@@ -289,7 +301,7 @@ TERMS = (
     Term("mesh_opening", "netting", "energy", _opening, _netting_parameter_options("opening_stiffness")),
     Term("knot_contact", "netting", "energy", _knot_contact, _netting_parameter_options("knot_size")),
     Term("twine_bending", "hinges", "energy", _twine_bending, _hinge_options),
-    Term("netting_drag", "netting", "force", _netting_drag, _netting_drag_options),
+    Term("netting_drag", "netting", "force", _netting_drag, _netting_drag_options, state=_drag_state),
     Term("bar_drag", "bars", "force", _bar_drag, _bar_drag_options),
     Term("node_drag", "nodes", "force", _node_drag, _node_drag_options),
     Term("catch_pressure", "netting", "force", _catch_pressure, _catch_options, state=_catch_state),

@@ -168,9 +168,9 @@ def test_c2_on_femnet_mesh_differences_are_named():
     r, per_term = _residual_at(scene, pos)
     # Same catch model: at FEMNET's equilibrium jaxnet's catch pressure has FEMNET's catch drag (978 N)
     assert abs(per_term["catch_pressure"][0] - summary["catch drag (N)"][0]) <= 0.5
-    # Difference 1 (modelling choice): FEMNET puts no twine drag on the netting behind the catch front (the
-    # catch fills it); jaxnet's netting drag does. In front of the front jaxnet's drag is FEMNET's 268 N
-    # (0.2 %); the 410 N on the netting behind it is what jaxnet adds.
+    # Shielding (the model, as FEMNET): the netting behind the catch front carries the catch pressure and no
+    # twine drag. At FEMNET's equilibrium the twine drag ahead of the front is FEMNET's 268 N (0.2 %); the
+    # more than 400 N the netting behind the front would otherwise carry is left out.
     net = scene.netting
     c = jnp.asarray(scene.environment.current_speed * np.asarray(scene.environment.current_direction))
     drag = jax.vmap(lambda x, uv, l0, d, cd, f: femnet_drag(x, uv, l0, d, cd, f, c, scene.environment.water_density))(
@@ -185,15 +185,23 @@ def test_c2_on_femnet_mesh_differences_are_named():
     half = np.arctan2(np.linalg.norm(U - V, axis=1), np.linalg.norm(U + V, axis=1))
     alpha_min = np.arcsin(0.010 / (2 * 0.05765))
     assert np.sum(half > np.pi / 2 - alpha_min) == 267 and np.sum(half < alpha_min) == 0
-    # jaxnet's own answer (knot contact on, drag behind the front on): regression figures
+    # jaxnet's equilibrium against FEMNET's summary
     eq, timing = solve(scene, solver)
     fig = femnet.femnet_figures(scene, eq, info["symmetry_axes"])
     assert fig["catch"]["holds_the_volume"] and fig["catch"]["volume_modelled_m3"] == pytest.approx(0.2, rel=1e-6)
     # balance: the fixings carry the netting drag, the cod line's drag and the catch (no weight: density 1025)
     np.testing.assert_allclose(fig["total_force_N"][0], fig["drag_netting_N"][0] + fig["drag_cables_N"][0]
                                + fig["catch_drag_N"][0], rtol=1e-6)
-    np.testing.assert_allclose(fig["total_force_N"][0], 1426.85, rtol=5e-3)
-    np.testing.assert_allclose([fig["catch"]["thickness_m"], fig["catch"]["diameter_m"]], [0.747, 1.350], rtol=1e-2)
+    # netting drag (ahead of the front) as FEMNET's 268 N within its print rounding and 0.5 %
+    assert abs(fig["drag_netting_N"][0] - summary["surface drag (N)"][0]) <= 0.5 + 5e-3 * 268.0
+    # catch diameter within the issue's 1 % on shape figures
+    np.testing.assert_allclose(fig["catch"]["diameter_m"], summary["maximal catch diameter (m)"][0], rtol=1e-2)
+    # Open difference (not yet traced, see the notes of issue 4): the catch drag and the total are 3-4 % below
+    # FEMNET's (942 N vs 978 N; 1210 N vs 1246.5 N), the thickness 2 % above (0.640 vs 0.628 m); jaxnet's
+    # residual at FEMNET's positions is radial and concentrated near the cod line. Bounded here so that a
+    # change in either direction is seen.
+    assert -0.045 < fig["total_force_N"][0] / summary["forces along X Y and Z axes (N)"][0] - 1.0 < -0.015
+    assert 0.005 < fig["catch"]["thickness_m"] / summary["thickness of the catch (m)"][0] - 1.0 < 0.03
 
 
 def femnet_drag(x, uv, l0, d, cd, f, c, rho):

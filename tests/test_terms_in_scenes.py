@@ -28,6 +28,7 @@ import dataclasses
 import re
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 import pytest
 from scipy.optimize import brentq
@@ -660,3 +661,34 @@ def test_catch_pressure_resultant_is_the_pressure_on_the_faces_that_close_the_ca
     np.testing.assert_allclose(catch[0], report["drag_N"] / 4, rtol=1e-9)
     # the front cuts the cylindrical part, whose section is about the ring's polygon
     assert report["drag_N"] / 4 == pytest.approx(CATCH_P * disk, rel=0.05)
+
+
+def test_catch_shields_the_netting_behind_its_front_from_drag():
+    # the adapter of the netting drag: ahead of the front the twine drag, behind it none (the catch pressure
+    # replaces it), in between the consistent load of the part ahead, continuous as the front sweeps through
+    from jaxnet import model as model_lib
+    from jaxnet.scene import Environment
+    from jaxnet.terms import drag
+
+    env = Environment(current_speed=1.0, current_direction=np.array([1.0, 0.0, 0.0]))
+    x = jnp.array([[0.0, 0.0, 0.0], [0.0, 0.1, 0.0], [0.05, 0.0, 0.1]])
+    uv = jnp.array([[0.0, 0.0], [4.0, -4.0], [4.0, 4.0]])
+
+    class Row:  # one netting row
+        pass
+
+    p = Row()
+    p.uv, p.l0, p.diameter, p.cd_normal, p.tangential_ratio, p.drag_model = uv, 0.025, 2e-3, 1.2, 0.08, 0
+    plain = drag.netting_drag(x, uv, 0.025, 2e-3, 1.2, 0.08 * 1.2, jnp.array([1.0, 0.0, 0.0]), env.water_density)
+
+    def shielded(front):
+        state = {"front": jnp.asarray(front), "axis": jnp.array([1.0, 0.0, 0.0])}
+        return np.asarray(model_lib._netting_drag(x, p, env, state, models=(0,), shielded=True))
+
+    np.testing.assert_allclose(shielded(1.0), plain, rtol=1e-12)   # front downstream of the triangle
+    np.testing.assert_allclose(shielded(-1.0), 0.0, atol=1e-15)    # triangle wholly behind the front
+    partial = shielded(0.025).sum(axis=0)[0] / np.asarray(plain).sum(axis=0)[0]
+    # the part ahead of the plane x = 0.025 is the corner beyond it: 1 - (1/2)^2 of the surface
+    assert partial == pytest.approx(1.0 - 0.25, rel=1e-12)
+    # continuity as the front reaches the vertex at x = 0.05
+    np.testing.assert_allclose(shielded(0.05 - 1e-9), shielded(0.05 + 1e-9), atol=1e-9 * abs(float(plain[0, 0])))
