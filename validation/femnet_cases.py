@@ -1,0 +1,119 @@
+"""FEMNET's worked cases solved by jaxnet, figure by figure, with run times against FEMNET's.
+
+    python validation/femnet_cases.py [--cases nr_netting c2] [--data tests/data/femnet]
+
+Per case and per mesh (FEMNET's own `.mdg` mesh, and jaxnet's mesher from the `.don`): FEMNET's summary
+figure (from its `.sta`), jaxnet's, and the relative difference; then jaxnet's nodes, elements, unknowns,
+Newton iterations, and wall times cold (a fresh process: tracing and compilation included) and warm (a
+second solve of the same scene in that process: the compiled program is reused), against FEMNET's own
+times on this kind of machine (the median of 3 runs given in ../shared/femnet-cases/README.md).
+Each case runs in its own subprocess, so "cold" is really cold.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import pathlib
+import subprocess
+import sys
+import time
+
+#: FEMNET's own run times on this kind of machine (s) and Newton iterations (femnet-cases/README.md)
+FEMNET_TIMES = {"nr_netting": (16.5, 4387), "c2": (6.9, 847)}
+
+
+def one(case, data, mesh):
+    t0 = time.perf_counter()
+    import numpy as np
+
+    from jaxnet.io import femnet
+    from jaxnet.solve.statics import solve
+
+    don = data / f"{case}.don"
+    if mesh:
+        scene, solver, info = femnet.read_mdg(data / f"{case}.mdg", don)
+    else:
+        net, solver, info = femnet.read_don(don)
+        scene = net.build()
+    eq, timing = solve(scene, solver, raise_on_failure=False)
+    cold = time.perf_counter() - t0
+    t1 = time.perf_counter()
+    eq2, _ = solve(scene, solver, raise_on_failure=False)
+    warm = time.perf_counter() - t1
+    fig = femnet.femnet_figures(scene, eq, info["symmetry_axes"])
+    positions, _, _, summary = femnet.read_sta(data / f"{case}.sta", *_mdg_counts(data, case))
+    rows = []
+
+    def add(label, femnet_value, jaxnet_value):
+        rows.append((label, float(femnet_value), float(jaxnet_value)))
+
+    add("surface (netting) drag, x (N)", summary["surface drag (N)"][0], fig["drag_netting_N"][0])
+    add("element (cable) drag, x (N)", summary["element drag (N)"][0], fig["drag_cables_N"][0])
+    total = summary["forces along X Y and Z axes (N)"]
+    for k, axis in enumerate("xyz"):
+        add(f"total force, {axis} (N)", total[k], fig["total_force_N"][k])
+    if "catch drag (N)" in summary and "catch" in fig:
+        add("catch drag (N)", summary["catch drag (N)"][0], fig["catch_drag_N"][0])
+        add("catch thickness (m)", summary["thickness of the catch (m)"][0], fig["catch"]["thickness_m"])
+        add("max catch diameter (m)", summary["maximal catch diameter (m)"][0], fig["catch"]["diameter_m"])
+        add("catch volume, modelled part (m3)", summary["volume of the catch (m3)"][0], fig["catch"]["volume_modelled_m3"])
+    out = {
+        "rows": rows,
+        "nodes": scene.n_nodes,
+        "elements": scene.n_elements,
+        "dof": scene.n_dof,
+        "iterations": int(eq.iterations),
+        "converged": bool(eq.converged),
+        "cold_s": cold,
+        "compile_s": timing.compile_s,
+        "warm_s": warm,
+    }
+    if mesh:  # same nodes in the same order: positions compare directly
+        out["max_position_difference_m"] = float(np.linalg.norm(np.asarray(eq.x) - positions, axis=1).max())
+    return out
+
+
+def _mdg_counts(data, case):
+    from jaxnet.io import femnet
+
+    scene, _, _ = femnet.read_mdg(data / f"{case}.mdg", data / f"{case}.don")
+    return scene.n_nodes, (0 if scene.bars is None else int(scene.bars.ends.shape[0])), int(scene.netting.vertices.shape[0])
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--cases", nargs="*", default=list(FEMNET_TIMES))
+    parser.add_argument("--data", default=str(pathlib.Path(__file__).resolve().parents[1] / "tests" / "data" / "femnet"))
+    parser.add_argument("--one", nargs=2, help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    data = pathlib.Path(args.data)
+    if args.one:
+        case, mesh = args.one
+        print(json.dumps(one(case, data, mesh == "mdg")))
+        return
+    for case in args.cases:
+        for mesh in ("mdg", "don"):
+            out = subprocess.run([sys.executable, __file__, "--data", str(data), "--one", case, mesh],
+                                 capture_output=True, text=True)
+            title = f"{case} on {'FEMNET' if mesh == 'mdg' else 'jaxnet'}'s mesh"
+            if out.returncode != 0:
+                print(f"{title}: failed: {out.stderr.strip().splitlines()[-1] if out.stderr else out.returncode}")
+                continue
+            r = json.loads(out.stdout.strip().splitlines()[-1])
+            print(f"\n{title}: {r['nodes']} nodes, {r['elements']} elements, {r['dof']} unknowns; "
+                  f"{r['iterations']} Newton iterations ({'converged' if r['converged'] else 'NOT converged'})")
+            print(f"  {'figure':36s} {'FEMNET':>12s} {'jaxnet':>12s} {'difference':>11s}")
+            for label, f, j in r["rows"]:
+                diff = f"{(j - f) / abs(f) * 100:+10.2f}%" if abs(f) > 1e-9 else f"{j - f:+11.3g}"
+                print(f"  {label:36s} {f:12.5g} {j:12.5g} {diff}")
+            if "max_position_difference_m" in r:
+                print(f"  {'largest node position difference (m)':36s} {'':12s} {r['max_position_difference_m']:12.4g}")
+            femnet_s, femnet_it = FEMNET_TIMES[case]
+            print(f"  wall time: jaxnet cold {r['cold_s']:.1f} s (compile {r['compile_s']:.1f} s), warm {r['warm_s']:.2f} s; "
+                  f"FEMNET {femnet_s} s ({femnet_it} iterations): {femnet_s / r['cold_s']:.1f}x cold, "
+                  f"{femnet_s / r['warm_s']:.1f}x warm", flush=True)
+
+
+if __name__ == "__main__":
+    main()
