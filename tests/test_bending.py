@@ -308,6 +308,8 @@ def test_degenerate_hinges_stay_finite():
         "collapsed side": x.at[1].set(x[0]),
         "flat triangle": x.at[2].set(0.5 * (x[0] + x[1])),
         "all nodes at one point": jnp.zeros((4, 3)),
+        "p on a": x.at[2].set(x[0]),
+        "q on b": x.at[3].set(x[1]),
     }
     for name, y in cases.items():
         for out in (energy(y.ravel(), uv), force(y.ravel(), uv), stiffness(y.ravel(), uv)):
@@ -318,6 +320,85 @@ def test_degenerate_hinges_stay_finite():
     cu, cv = couples(y, uv_u)
     assert float(cv) == 0.0 and float(cu) > 0.0
     assert np.all(np.isfinite(np.asarray(stiffness(y.ravel(), uv_u))))
+
+
+def reference_energy(x, uv):
+    """The hinge energy (J) transcribed plainly from its definition, for autodiff: x (12,) m.
+
+    theta = atan2((n1 ^ n2) . e / |e|, n1 . n2); sin(phi) = |F ^ e| / (|F| |e|) for each twine vector F of
+    each triangle (geometry.twine_vectors on the positions). Valid away from collapsed hinges, for sides
+    crossed by both families.
+    """
+    x = x.reshape(4, 3)
+    e = x[1] - x[0]
+    n1, n2 = jnp.cross(e, x[2] - x[0]), jnp.cross(-e, x[3] - x[1])
+    theta = jnp.arctan2(jnp.cross(n1, n2) @ e / jnp.sqrt(e @ e), n1 @ n2)
+    swap = lambda a: jnp.stack([a[1], a[0], a[3]])
+    Ua, Va, da = geometry.twine_vectors(x[:3], uv[:3])
+    Ub, Vb, db = geometry.twine_vectors(swap(x), swap(uv))
+
+    def sin_phi(f):
+        c = jnp.cross(f, e)
+        return jnp.sqrt((c @ c) / ((f @ f) * (e @ e)))
+
+    n_u, n_v = jnp.abs(uv[1, 1] - uv[0, 1]), jnp.abs(uv[1, 0] - uv[0, 0])
+    total = n_u**2 * sin_phi(Ua) * sin_phi(Ub) + n_v**2 * sin_phi(Va) * sin_phi(Vb)
+    return 2.0 * EI * theta**2 * total / (L0 * (jnp.abs(da) + jnp.abs(db)))
+
+
+@jax.jit
+def reference_energy_force_stiffness(x, uv):
+    f = lambda y: -jax.grad(reference_energy)(y, uv)
+    return reference_energy(x, uv), f(x), -jax.jacfwd(f)(x)
+
+
+def flat_hinge(clockwise):
+    """A flat hinge distorted in its plane (Ua != Ub): an affine image of the net, q then moved away from
+    the side a-b (so that it cannot cross it: theta stays 0, not pi)."""
+    _, uv = random_hinge(clockwise)
+    x = net_plane(np.asarray(uv)) @ np.diag([1.0 + 0.2 * RNG.uniform(), 1.0 - 0.2 * RNG.uniform(), 1.0])
+    side = (x[1] - x[0]) / np.linalg.norm(x[1] - x[0])
+    away = x[3] - x[0] - np.dot(x[3] - x[0], side) * side
+    x[3] += 0.1 * L0 * (side + away / np.linalg.norm(away))
+    return jnp.asarray(x.ravel()), uv
+
+
+def test_closed_form_stiffness_is_autodiff_of_the_formula():
+    # The assembly's stiffness, jax.jacfwd(jax.grad(hinge_energy)) vmapped over hinges, comes from the
+    # module's closed-form derivatives (custom JVP rules); it and the forces must be autodiff's of the
+    # plainly written formula, to roundoff: random folded, stretched and sheared hinges (both
+    # orientations), flat ones, folds near +-pi.
+    hinges = [random_hinge(clockwise) for clockwise in (False, True) for _ in range(2)]
+    flat = [flat_hinge(clockwise) for clockwise in (False, True)]
+    near_pi = [(jnp.asarray(fold(np.asarray(x).reshape(4, 3), t)).ravel(), uv)
+               for (x, uv), t in zip(flat, (3.0, -3.1))]
+    hinges += flat + near_pi
+    x, uv = jnp.stack([h[0] for h in hinges]), jnp.stack([h[1] for h in hinges])
+    thetas = jax.vmap(bending.fold_angle)(x.reshape(-1, 4, 3))
+    np.testing.assert_allclose(thetas[-4:], [0.0, 0.0, 3.0, -3.1], atol=1e-12)
+    ours = jax.jit(jax.vmap(_energy_force_stiffness))(x, uv)
+    for i, (xi, uvi) in enumerate(hinges):
+        for a, b in zip(ours, reference_energy_force_stiffness(xi, uvi)):
+            a, b = np.asarray(a[i]), np.asarray(b)
+            assert np.all(np.isfinite(a))
+            np.testing.assert_allclose(a, b, rtol=0, atol=1e-10 * np.abs(b).max())
+    assert float(ours[0][4]) == 0.0 and float(ours[0][6]) > 0.0  # flat: no energy; folded: some
+
+
+def test_derivatives_in_twine_coordinates_length_and_stiffness():
+    # Not taken by the solver (the closed forms are in x only; these fall back on autodiff), but the
+    # simulator is differentiable in its parameters: dE/d(uv, l0, EI) against central differences.
+    x, uv = random_hinge()
+    params = (uv, jnp.asarray(L0), jnp.asarray(EI))
+    e = jax.jit(lambda uv, l0, ei: bending.hinge_energy(x.reshape(4, 3), uv, l0, ei))
+    grads = jax.jit(jax.grad(lambda *p: e(*p), argnums=(0, 1, 2)))(*params)
+    np.testing.assert_allclose(grads[2], e(*params) / EI, rtol=1e-12)  # E is linear in EI
+    np.testing.assert_allclose(grads[1], -e(*params) / L0, rtol=1e-12)  # and goes as 1/l0
+    h = 1e-6
+    fd = np.array([(e(uv.at[i, j].add(h), *params[1:]) - e(uv.at[i, j].add(-h), *params[1:])) / (2 * h)
+                   for i in range(4) for j in range(2)]).reshape(4, 2)
+    np.testing.assert_allclose(grads[0], fd, rtol=1e-6, atol=1e-6 * np.abs(fd).max())
+    assert np.abs(fd).max() > 0
 
 
 # ---------------------------------------------------------------- the hinges of a mesh
