@@ -58,8 +58,10 @@ def forces_by_term(scene, x):
     return {name: np.asarray(f).sum(axis=0) for name, f in per_term.items()}
 
 
-# compiled once per scene shape (evaluated op by op it takes seconds on a large net)
+# compiled once per scene shape (evaluated op by op they take seconds on a large net)
 _term_forces = jax.jit(assemble.term_forces, static_argnames="model")
+_catch_front = jax.jit(catch_lib.catch_front)
+_catch_summary = jax.jit(catch_lib.catch_summary)
 
 
 def force_breakdown(scene, x):
@@ -75,9 +77,9 @@ def catch_report(scene, x):
     if c is None or scene.netting is None:
         return None
     net = scene.netting
-    front = jax.jit(catch_lib.catch_front)(jax.numpy.asarray(x), net.vertices, c.axis, c.volume, c.symmetry, sign=net.outward)
+    front = _catch_front(jax.numpy.asarray(x), net.vertices, c.axis, c.volume, c.symmetry, sign=net.outward)
     p = pressure.dynamic_pressure(scene.environment.water_density, c.drag_coefficient, scene.environment.current_speed)
-    summary = jax.jit(catch_lib.catch_summary)(jax.numpy.asarray(x), net.vertices, c.axis, front.position, p, c.symmetry,
+    summary = _catch_summary(jax.numpy.asarray(x), net.vertices, c.axis, front.position, p, c.symmetry,
                                                sign=net.outward, center=c.center, up=scene.environment.up)
     return {
         "front_m": float(front.position),

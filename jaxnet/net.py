@@ -344,9 +344,8 @@ class Net:
         np.add.at(count, ids, 1)
         position /= count[:, None]
 
-        diamond = {k: v for k, v in meshes.items() if not isinstance(self._panels[k].twine, HexTwine)}
         hexagonal = self._hexagonal(meshes, ids)
-        netting = self._netting(diamond, ids)
+        netting = self._netting(meshes, ids)
         bars = self._bars(cable_nodes, ids, position)
         environment = _normalised(self.environment)
         catch, enclosure = self._catch_and_enclosure(environment)
@@ -525,8 +524,6 @@ class Net:
         return hit
 
     def _netting(self, meshes, ids):
-        if not meshes:
-            return None
         columns = {  # Netting field <- Twine field
             "l0": "l0", "ea_traction": "ea", "ea_compression": "ea_compression", "diameter": "diameter",
             "density": "density", "cd_normal": "cd_normal", "tangential_ratio": "tangential_ratio",
@@ -534,38 +531,37 @@ class Net:
             "bending_stiffness": "bending_stiffness",
         }
         rows = {k: [] for k in ("vertices", "uv", "panel", "drag_model", "knot_stiffness", *columns)}
-        for k, p in enumerate(self._panels.values()):
-            if p.name not in meshes:
-                continue
-            m, offset = meshes[p.name]
-            tri = m.triangles
-            e = len(tri)
-            rows["vertices"].append(ids[offset + tri])
-            rows["uv"].append(m.uv[tri])
+        for p, e in self._panel_triangles(meshes, ids, rows, lambda p: not isinstance(p.twine, HexTwine)):
             for key, field in columns.items():
                 rows[key].append(np.full(e, float(getattr(p.twine, field))))
             rows["drag_model"].append(np.full(e, DRAG_MODELS[p.twine.drag_model]))
             rows["knot_stiffness"].append(np.full(e, _knot_stiffness(p.twine)))
-            rows["panel"].append(np.full(e, k))
+        if not rows["vertices"]:
+            return None
         return Netting(**{k: np.concatenate(v) for k, v in rows.items()})
+
+    def _panel_triangles(self, meshes, ids, rows, keep):
+        """For each kept panel, append its triangles' vertices, twine coordinates and panel index to
+        ``rows`` and yield (panel, number of triangles) for the caller's material columns."""
+        for k, p in enumerate(self._panels.values()):
+            if not keep(p):
+                continue
+            m, offset = meshes[p.name]
+            tri = m.triangles
+            rows["vertices"].append(ids[offset + tri])
+            rows["uv"].append(m.uv[tri])
+            rows["panel"].append(np.full(len(tri), k))
+            yield p, len(tri)
 
     def _hexagonal(self, meshes, ids):
         from jaxnet.scene import HexagonalNetting
 
         rows = {k: [] for k in ("vertices", "uv", "l0", "ea_traction", "ea_compression", "diameter", "density", "panel")}
-        for k, p in enumerate(self._panels.values()):
-            if not isinstance(p.twine, HexTwine):
-                continue
-            m, offset = meshes[p.name]
-            tri = m.triangles
-            e = len(tri)
-            rows["vertices"].append(ids[offset + tri])
-            rows["uv"].append(m.uv[tri])
+        for p, e in self._panel_triangles(meshes, ids, rows, lambda p: isinstance(p.twine, HexTwine)):
             for key, field in (("l0", "l0"), ("ea_traction", "ea"), ("ea_compression", "ea_compression")):
                 rows[key].append(np.broadcast_to(p.twine.per_family(field), (e, 3)))
             rows["diameter"].append(np.full(e, float(p.twine.diameter)))
             rows["density"].append(np.full(e, float(p.twine.density)))
-            rows["panel"].append(np.full(e, k))
         if not rows["vertices"]:
             return None
         return HexagonalNetting(**{key: np.concatenate(v) for key, v in rows.items()})

@@ -232,14 +232,27 @@ class Scene(eqx.Module):
 # --------------------------------------------------------------------------------------------------
 
 
-def _panel_name(scene, e):
-    p = int(np.asarray(scene.netting.panel)[e])
-    return scene.panel_names[p] if p < len(scene.panel_names) else f"panel {p}"
-
-
-def _panel_name_of(scene, family, e):
+def _panel_name(scene, family, e):
+    """Name of the panel of element e of a netting family (for messages)."""
     p = int(np.asarray(family.panel)[e])
     return scene.panel_names[p] if p < len(scene.panel_names) else f"panel {p}"
+
+
+def _check_triangles(family, n, culprit, what):
+    """Vertex indices within 0..n-1, finite twine coordinates, d != 0 (eq. 4.7); returns the (E, 3) indices."""
+    tri = np.asarray(family.vertices)
+    if tri.size and (tri.min() < 0 or tri.max() >= n):
+        e = int(np.argwhere((tri < 0) | (tri >= n))[0][0])
+        raise SceneError(f"{culprit(e)}: vertex index outside 0..{n - 1}")
+    uv = np.asarray(family.uv, dtype=float)
+    _check_finite(uv, f"{what} twine coordinates")
+    d = (uv[:, 1, 0] - uv[:, 0, 0]) * (uv[:, 2, 1] - uv[:, 0, 1]) - (uv[:, 2, 0] - uv[:, 0, 0]) * (uv[:, 1, 1] - uv[:, 0, 1])
+    flat = np.flatnonzero(np.abs(d) < 1e-12)
+    if flat.size:
+        e = int(flat[0])
+        raise SceneError(f"{culprit(e)}: collinear twine coordinates (d = {d[e]:.3g}), vertices {tri[e].tolist()} "
+                         f"with (U, V) = {uv[e].tolist()}")
+    return tri
 
 
 def _cable_name(scene, b):
@@ -307,23 +320,8 @@ def validate(scene: Scene) -> None:
     edges = []
     if scene.netting is not None:
         net = scene.netting
-        tri = np.asarray(net.vertices)
-        if tri.size and (tri.min() < 0 or tri.max() >= n):
-            e = int(np.argwhere((tri < 0) | (tri >= n))[0][0])
-            raise SceneError(f"triangle {e} ({_panel_name(scene, e)}): vertex index outside 0..{n - 1}")
-        uv = np.asarray(net.uv, dtype=float)
-        _check_finite(uv, "netting twine coordinates")
-        d = (uv[:, 1, 0] - uv[:, 0, 0]) * (uv[:, 2, 1] - uv[:, 0, 1]) - (uv[:, 2, 0] - uv[:, 0, 0]) * (
-            uv[:, 1, 1] - uv[:, 0, 1]
-        )
-        flat = np.flatnonzero(np.abs(d) < 1e-12)
-        if flat.size:
-            e = int(flat[0])
-            raise SceneError(
-                f"triangle {e} ({_panel_name(scene, e)}): collinear twine coordinates (d = {d[e]:.3g}), "
-                f"vertices {tri[e].tolist()} with (U, V) = {uv[e].tolist()}"
-            )
-        culprit = lambda e: f"triangle {e} ({_panel_name(scene, e)})"  # noqa: E731
+        culprit = lambda e: f"triangle {e} ({_panel_name(scene, net, e)})"  # noqa: E731
+        tri = _check_triangles(net, n, culprit, "netting")
         _check_positive(net.l0, "unstretched twine length l0", culprit)
         _check_positive(net.ea_traction, "traction stiffness EA", culprit, strict=False)
         _check_positive(net.ea_compression, "compression stiffness EA", culprit, strict=False)
@@ -346,17 +344,8 @@ def validate(scene: Scene) -> None:
         edges += [tri[:, [0, 1]], tri[:, [1, 2]]]
     if scene.hexagonal is not None:
         hexa = scene.hexagonal
-        tri = np.asarray(hexa.vertices)
-        culprit = lambda e: f"hexagonal triangle {e} ({_panel_name_of(scene, hexa, e)})"  # noqa: E731
-        if tri.size and (tri.min() < 0 or tri.max() >= n):
-            e = int(np.argwhere((tri < 0) | (tri >= n))[0][0])
-            raise SceneError(f"{culprit(e)}: vertex index outside 0..{n - 1}")
-        uv = np.asarray(hexa.uv, dtype=float)
-        _check_finite(uv, "hexagonal twine coordinates")
-        d = (uv[:, 1, 0] - uv[:, 0, 0]) * (uv[:, 2, 1] - uv[:, 0, 1]) - (uv[:, 2, 0] - uv[:, 0, 0]) * (uv[:, 1, 1] - uv[:, 0, 1])
-        flat = np.flatnonzero(np.abs(d) < 1e-12)
-        if flat.size:
-            raise SceneError(f"{culprit(int(flat[0]))}: collinear twine coordinates (d = {d[flat[0]]:.3g})")
+        culprit = lambda e: f"hexagonal triangle {e} ({_panel_name(scene, hexa, e)})"  # noqa: E731
+        tri = _check_triangles(hexa, n, culprit, "hexagonal")
         for name in ("l0", "ea_traction", "ea_compression"):
             values = np.asarray(getattr(hexa, name), dtype=float).min(axis=1)
             _check_positive(values, name, culprit, strict=(name == "l0"))
