@@ -22,7 +22,7 @@ Known limit. Nets whose equilibrium holds large *slack* regions (twines with EA_
 free sides of a curtain hanging from a rope, which gather and close their meshes) have a degenerate
 minimum — the energy is flat over every arrangement of the slack netting and the last loads are carried by
 twines a few 1e-7 in strain from their slack kink — and converge linearly, in a few hundred iterations
-(issue 2's notes). Well-held nets converge in 5-15 iterations.
+(issue 2's notes). Well-held nets converge in 5-17 iterations (measured up to 10⁵ nodes).
 """
 
 from __future__ import annotations
