@@ -253,10 +253,15 @@ def scatter_hessians(x, scene, pattern, element_energies, element_forces=None, s
     return data[:-1]
 
 
-def tangent(x, scene, model, pattern):
-    """CSR entries (nnz,) of the tangent K = -d force / dx over the free coordinates."""
+def tangent(x, scene, model, pattern, state=None):
+    """CSR entries (nnz,) of the tangent K = -d force / dx over the free coordinates.
+
+    ``state``: the force terms' global states at x (:func:`states`), if already computed (the solver
+    has them from its last evaluation of the force), else computed here.
+    """
     energies = {f: _family_energy(model, f) for f in _families(model, "energy")}
     element_forces = {f: _family_force(model, f) for f in _families(model, "force")}
     # global states (the catch front) are held fixed in the tangent: see the module docstring
-    state = jax.lax.stop_gradient(states(x, scene, model)) if element_forces else None
+    if element_forces:
+        state = jax.lax.stop_gradient(states(x, scene, model) if state is None else state)
     return scatter_hessians(x, scene, pattern, energies, element_forces, state)

@@ -22,7 +22,11 @@ def no_compilation(monkeypatch):
         def lower(self, *a, **k):
             raise AssertionError("the solver was compiled before the bad input was caught")
 
+    def forbidden(*a, **k):
+        raise AssertionError("the solver was compiled before the bad input was caught")
+
     monkeypatch.setattr(statics, "_newton_jit", Forbidden())
+    monkeypatch.setattr(statics, "_compile_pieces", forbidden)
 
 
 def solve_net(net):

@@ -1,6 +1,8 @@
 """`jaxnet run`: the default scene and a scene file, with result.json, VTK and PNG written."""
 
 import json
+import subprocess
+import sys
 
 import meshio
 import numpy as np
@@ -9,7 +11,7 @@ from jaxnet import cli
 
 
 def test_default_scene_is_a_cage_in_current(tmp_path, capsys):
-    assert cli.main(["run", "--out", str(tmp_path)]) == 0
+    assert cli.main(["run", "--out", str(tmp_path), "--no-cache"]) == 0
     printed = capsys.readouterr().out
     assert "newton" in printed and "converged in" in printed and "cage" in printed
     result = json.loads((tmp_path / "result.json").read_text())
@@ -34,7 +36,7 @@ def test_default_scene_is_a_cage_in_current(tmp_path, capsys):
 
 
 def test_hanging_scene_reaction_carries_the_weight(tmp_path):
-    assert cli.main(["run", "--scene", "hanging", "--out", str(tmp_path), "--quiet"]) == 0
+    assert cli.main(["run", "--scene", "hanging", "--out", str(tmp_path), "--quiet", "--no-cache"]) == 0
     result = json.loads((tmp_path / "result.json").read_text())
     # the fixings carry the whole immersed weight (within the residual left on the free nodes)
     assert abs(result["reaction_N"][2] + result["load_N"][2]) <= result["n_nodes"] * 1e-3
@@ -54,10 +56,33 @@ def test_scene_file_and_bad_scene_file(tmp_path, capsys):
     }
     path = tmp_path / "scene.json"
     path.write_text(json.dumps(doc))
-    assert cli.main(["run", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 0
+    assert cli.main(["run", str(path), "--out", str(tmp_path / "out"), "--quiet", "--no-cache"]) == 0
     result = json.loads((tmp_path / "out" / "result.json").read_text())
     np.testing.assert_allclose(result["reaction_N"], [0, 0, 2.0], atol=result["n_nodes"] * 1e-3)
     doc["panels"][0]["stepp"] = 1
     path.write_text(json.dumps(doc))
     assert cli.main(["run", str(path), "--out", str(tmp_path / "bad")]) == 2
     assert "unknown key(s) ['stepp']" in capsys.readouterr().err
+
+
+def test_compiled_programs_are_kept_on_disk_and_reused(tmp_path):
+    """The solver's compiled pieces hold no host callback, so JAX's persistent cache keeps them: a second
+    process solving the same scene finds them there (fewer new cache entries: none) and gives the same
+    answer. Run in subprocesses: the cache is process-wide JAX configuration."""
+    cache = tmp_path / "cache"
+
+    def run(out):
+        cmd = [sys.executable, "-m", "jaxnet.cli", "run", "--scene", "hanging", "--quiet", "--cache", str(cache),
+               "--out", str(tmp_path / out)]
+        subprocess.run(cmd, check=True, capture_output=True)
+        return json.loads((tmp_path / out / "result.json").read_text()), set(p.name for p in cache.iterdir())
+
+    def solver_pieces(entries):
+        return {e for e in entries if e.startswith(("jit__evaluate-", "jit__tangent-", "jit_stiffness-"))}
+
+    first, entries = run("a")
+    assert len(solver_pieces(entries)) == 3  # the evaluation, the tangent and the spring network
+    second, entries_after = run("b")
+    assert solver_pieces(entries_after) == solver_pieces(entries)  # found on disk: nothing new compiled
+    assert second["iterations"] == first["iterations"]
+    np.testing.assert_allclose(second["reaction_N"], first["reaction_N"], rtol=1e-12)

@@ -13,6 +13,14 @@ Newton steps (quadratic convergence). Every step is checked by a backtracking li
 potential energy, which costs energy evaluations only: each iteration is one assembly and one sparse
 factorisation. An optional per-iteration displacement limit (FEMNET's) caps the largest nodal move.
 
+Two drivers run the same iteration (the functions below are shared). :func:`solve` drives it from the
+host: the evaluation of the residual and the tangent are compiled once each (in parallel), and each
+iteration calls the tangent once, factorises on the host (SuperLU, the ordering computed once per solve:
+:class:`jaxnet.linalg.HostSolver`) and calls the evaluation once per line-search trial. Its compiled pieces
+are half the size of the whole loop's program and hold no host callback, so JAX's persistent compilation
+cache can keep them between processes (the command line turns it on). :func:`newton_loop` is the whole
+iteration as one jittable program (the factorisation a host callback), for use inside traced code.
+
 Convergence is judged as in FEMNET on forces: the largest nodal out-of-balance force over the free
 coordinates, in newtons (FEMNET's default threshold is 1e-3 N). A solve stops with a named reason;
 :func:`solve` raises :class:`SolveError` (reason, iteration, worst node) unless asked not to, and never
@@ -27,6 +35,7 @@ twines a few 1e-7 in strain from their slack kink — and converge linearly, in 
 
 from __future__ import annotations
 
+import concurrent.futures
 import dataclasses
 import time
 
@@ -121,57 +130,105 @@ def _progress(it, res, damping, step):
     print(f"  newton {int(it):4d}  residual {float(res):11.4e} N  damping {float(damping):8.1e}  step {float(step):6.3f}")
 
 
-def newton_loop(x0, scene, pattern, model, opts: Newton):
-    """Jittable Newton iteration from free coordinates ``x0``; returns an :class:`Equilibrium`.
+# -- the pieces of one iteration, shared by the two drivers (jitted loop and host loop) ----------------
 
-    ``model`` (active terms) and ``opts`` are static; ``scene`` and ``pattern`` are array arguments.
+
+def _evaluate(x, f_frozen, scene, pattern, model):
+    """At free coordinates x: the residual and what the line search needs, in one traced evaluation.
+
+    Returns (energy, force, f_nc, merit, state): the stored energy (J); the out-of-balance force (N, 3)
+    at every node (at fixed coordinates minus the reactions); the non-conservative nodal forces (N, 3);
+    the merit (J) with the non-conservative forces frozen at ``f_frozen`` (see :func:`_merit`); the force
+    terms' global states (the catch front), reused by the tangent at the same point.
+    """
+    X = assemble.positions(x, scene, pattern)
+    load = assemble.loads(scene, model)
+    e, grad = jax.value_and_grad(assemble.energy)(X, scene, model)
+    if any(t.term.kind == "force" for t in model):
+        state = assemble.states(X, scene, model)
+        f_nc = assemble.forces(X, scene, model, state)
+    else:
+        state, f_nc = {}, jnp.zeros_like(X)
+    return e, load - grad + f_nc, f_nc, _merit(e, X, load + f_frozen), state
+
+
+def _merit(e_stored, X, frozen_load):
+    # Drag and catch pressure have no potential. Each iteration's line search uses the potential energy of
+    # the conservative terms under the loads *plus* these forces frozen at the iterate: its slope along
+    # the step is -F.dx as for a conservative net, and at a fixed point F = 0.
+    return e_stored - jnp.sum(frozen_load * X)
+
+
+def _tangent(x, state, scene, pattern, model):
+    """CSR entries of the tangent K = -dF/dx at free coordinates x (force terms' states given)."""
+    return assemble.tangent(assemble.positions(x, scene, pattern), scene, model, pattern, state)
+
+
+def _accepts(m_try, f_try, e, alpha, slope, roundoff, res_now, xp):
+    """Backtracking (Armijo) test of a trial step on the merit. Near the solution the energy decrease falls
+    below the roundoff of the energy itself; there a step is judged by the force."""
+    armijo = m_try <= e - 1e-4 * alpha * slope
+    flat = (alpha * slope <= roundoff) & (xp.abs(m_try - e) <= roundoff) & (xp.linalg.norm(f_try) < res_now)
+    return xp.isfinite(m_try) & xp.all(xp.isfinite(f_try)) & (armijo | flat)
+
+
+def _next_damping(mu, accepted, trials, e, m_new, predicted, ratio, opts, xp):
+    """Levenberg-Marquardt damping after a step. ``ratio``: new over old largest residual.
+
+    The gain ratio of the full step decides (Nielsen's update); a good step also lowers mu at least as
+    fast as the residual: mu = O(|F|) near the solution makes the last steps quadratic (Nielsen's rule
+    alone divides mu by 3 at most: linear); a step that raises the residual (possible: the energy decides)
+    raises it.
+    """
+    full_step = accepted & (trials == 1)
+    rho = xp.where(full_step, (e - m_new) / xp.maximum(predicted, 1e-300), 0.0)
+    mu_good = mu * xp.maximum(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
+    mu_good = xp.where(ratio > 1.0, mu_good * xp.minimum(ratio, 10.0), xp.minimum(mu_good, mu * ratio))
+    mu_next = xp.where(full_step & (rho > 0.25), mu_good, mu * xp.where(accepted, 2.0, 10.0))
+    return xp.clip(mu_next, opts.min_damping, opts.max_damping)
+
+
+def _status(it, res, e, opts, xp):
+    finite = xp.isfinite(res) & xp.isfinite(e)
+    return xp.where(~finite, NON_FINITE, xp.where(res <= opts.tol, CONVERGED, xp.where(it >= opts.max_iter, MAX_ITERATIONS, RUNNING)))
+
+
+def newton_loop(x0, scene, pattern, model, opts: Newton):
+    """The whole Newton iteration as one jittable program (``jax.lax.while_loop``), from free coordinates
+    ``x0``; returns an :class:`Equilibrium`. ``model`` (active terms) and ``opts`` are static.
+
+    :func:`solve` drives the same iteration from the host instead (:func:`host_loop`): its compiled pieces
+    are smaller and cacheable on disk. This form is for callers who need the solve inside a traced
+    function, and it is what the tests lower to see which terms a scene compiles.
     """
     n_nodes = scene.nodes.position.shape[0]
     load = assemble.loads(scene, model)
+    free = pattern.free
 
-    def full(x):
-        return assemble.positions(x, scene, pattern)
-
-    nonconservative = any(t.term.kind == "force" for t in model)
-    energy_and_gradient = jax.value_and_grad(assemble.energy)
-
-    def evaluate(x):
-        """At free coordinates x: stored energy (J), out-of-balance force on the free coordinates (N) and
-        the non-conservative nodal forces (N, 3). The one place the residual is traced: each copy of it
-        in the program costs compile time, so the loop calls this once per line-search trial."""
-        X = full(x)
-        e, grad = energy_and_gradient(X, scene, model)
-        f_nc = assemble.forces(X, scene, model) if nonconservative else jnp.zeros_like(X)
-        return e, (load - grad + f_nc).ravel()[pattern.free], f_nc
-
-    def merit(x, e_stored, f_nc):
-        # Drag and catch pressure have no potential. Each iteration's line search uses the potential
-        # energy of the conservative terms under the loads *plus* these forces frozen at the iterate:
-        # its slope along the step is -F.dx as for a conservative net, and at a fixed point F = 0.
-        return e_stored - jnp.sum((load + f_nc) * full(x))
+    def evaluate(x, f_frozen):
+        e, force, f_nc, m, state = _evaluate(x, f_frozen, scene, pattern, model)
+        return e, force.ravel()[free], f_nc, m, state
 
     def status_of(it, f, e):
         res = jnp.max(_nodal_norm(f, pattern, n_nodes))
-        finite = jnp.isfinite(res) & jnp.isfinite(e)
-        return res, jnp.where(
-            ~finite, NON_FINITE, jnp.where(res <= opts.tol, CONVERGED, jnp.where(it >= opts.max_iter, MAX_ITERATIONS, RUNNING))
-        )
+        return res, _status(it, res, e, opts, jnp)
 
     springs = spring_network.stiffness(scene, model, pattern)
-    e0, f0, nc0 = evaluate(x0)
+    zero = jnp.zeros_like(load)
+    e0, f0, nc0, m0, s0 = evaluate(x0, zero)
     res0, st0 = status_of(0, f0, e0)
     hist0 = jnp.full(opts.max_iter + 1, jnp.nan).at[0].set(res0)
-    state0 = (x0, f0, e0, nc0, jnp.asarray(opts.damping), jnp.asarray(0), st0, hist0)
+    state0 = (x0, f0, e0, nc0, s0, jnp.asarray(opts.damping), jnp.asarray(0), st0, hist0)
 
     def cond(state):
-        return state[6] == RUNNING
+        return state[7] == RUNNING
 
     def body(state):
-        x, f, e_stored, f_nc, mu, it, _, hist = state
-        e = merit(x, e_stored, f_nc)
-        data = assemble.tangent(full(x), scene, model, pattern)
-        damped = data + mu * springs
-        dx, ok = linalg.solve(damped, f, pattern.indptr, pattern.indices)
+        x, f, e_stored, f_nc, s, mu, it, _, hist = state
+        X = assemble.positions(x, scene, pattern)
+        e = _merit(e_stored, X, load + f_nc)
+        data = _tangent(x, s, scene, pattern, model)
+        dx, ok = linalg.solve(data + mu * springs, f, pattern.indptr, pattern.indices)
         # FEMNET's displacement limit: scale the step so that no node moves more than max_step.
         biggest = jnp.max(_nodal_norm(dx, pattern, n_nodes))
         dx = dx * jnp.minimum(1.0, opts.max_step / jnp.maximum(biggest, 1e-300))
@@ -179,83 +236,166 @@ def newton_loop(x0, scene, pattern, model, opts: Newton):
         curvature = jnp.dot(dx, linalg.matvec(data, pattern.rows, pattern.indices, dx))
         predicted = slope - 0.5 * curvature  # decrease predicted by the undamped quadratic model
         usable = ok & (slope > 0)
-
-        # Backtracking (Armijo) line search on the merit. Near the solution the energy decrease falls below
-        # the roundoff of the energy itself; there a step is judged by the force.
-        roundoff = 1e-12 * (jnp.abs(e) + jnp.abs(jnp.sum((load + f_nc) * full(x))))
+        roundoff = 1e-12 * (jnp.abs(e) + jnp.abs(jnp.sum((load + f_nc) * X)))
         res_now = jnp.linalg.norm(f)
 
-        def ls_cond(s):
-            k, done = s[0], s[-1]
-            return usable & (k < opts.line_search) & ~done
+        def ls_cond(c):
+            return usable & (c[0] < opts.line_search) & ~c[-1]
 
-        def ls_body(s):
-            k, alpha, *_ = s
+        def ls_body(c):
+            k, alpha = c[0], c[1]
             alpha = jnp.where(k == 0, 1.0, 0.5 * alpha)
-            e_try, f_try, nc_try = evaluate(x + alpha * dx)
-            m_try = merit(x + alpha * dx, e_try, f_nc)
-            armijo = m_try <= e - 1e-4 * alpha * slope
-            flat = (alpha * slope <= roundoff) & (jnp.abs(m_try - e) <= roundoff) & (jnp.linalg.norm(f_try) < res_now)
-            done = jnp.isfinite(m_try) & jnp.all(jnp.isfinite(f_try)) & (armijo | flat)
-            return k + 1, alpha, m_try, e_try, f_try, nc_try, done
+            e_try, f_try, nc_try, m_try, s_try = evaluate(x + alpha * dx, f_nc)
+            done = _accepts(m_try, f_try, e, alpha, slope, roundoff, res_now, jnp)
+            return k + 1, alpha, m_try, e_try, f_try, nc_try, s_try, done
 
-        first = (jnp.asarray(0), jnp.asarray(1.0), jnp.asarray(jnp.inf), e_stored, f, f_nc, jnp.asarray(False))
-        trials, alpha, m_new, e_try, f_try, nc_try, accepted = jax.lax.while_loop(ls_cond, ls_body, first)
+        first = (jnp.asarray(0), jnp.asarray(1.0), jnp.asarray(jnp.inf), e_stored, f, f_nc, s, jnp.asarray(False))
+        trials, alpha, m_new, e_try, f_try, nc_try, s_try, accepted = jax.lax.while_loop(ls_cond, ls_body, first)
         accepted = usable & accepted
-        x_new = jnp.where(accepted, x + alpha * dx, x)
-        f_new = jnp.where(accepted, f_try, f)
-        e_new = jnp.where(accepted, e_try, e_stored)
-        nc_new = jnp.where(accepted, nc_try, f_nc)
+        keep = lambda new, old: jax.tree.map(lambda a, b: jnp.where(accepted, a, b), new, old)  # noqa: E731
+        x_new, f_new, e_new, nc_new, s_new = keep((x + alpha * dx, f_try, e_try, nc_try, s_try), (x, f, e_stored, f_nc, s))
         res, st = status_of(it + 1, f_new, jnp.where(accepted, m_new, e))
-        # Gain ratio of the full step decides the damping (Levenberg-Marquardt, Nielsen's update) ...
-        full_step = accepted & (trials == 1)
-        rho = jnp.where(full_step, (e - m_new) / jnp.maximum(predicted, 1e-300), 0.0)
-        mu_good = mu * jnp.maximum(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
-        # ... and a good step lowers it at least as fast as the residual: mu = O(|F|) near the solution
-        # makes the last steps quadratic (Nielsen's rule alone divides mu by 3 at most: linear); a step
-        # that raises the residual (possible: the energy decides) raises it.
-        ratio = res / jnp.maximum(hist[it], 1e-300)
-        mu_good = jnp.where(ratio > 1.0, mu_good * jnp.minimum(ratio, 10.0), jnp.minimum(mu_good, mu * ratio))
-        mu_next = jnp.where(full_step & (rho > 0.25), mu_good, mu * jnp.where(accepted, 2.0, 10.0))
-        mu_next = jnp.clip(mu_next, opts.min_damping, opts.max_damping)
+        mu_next = _next_damping(mu, accepted, trials, e, m_new, predicted, res / jnp.maximum(hist[it], 1e-300), opts, jnp)
         st = jnp.where((st == RUNNING) & ~accepted & (mu >= opts.max_damping), STALLED, st)
         hist = hist.at[it + 1].set(res)
         if opts.verbose:
             jax.debug.callback(_progress, it + 1, res, mu, jnp.where(accepted, alpha, 0.0), ordered=True)
-        return x_new, f_new, e_new, nc_new, mu_next, it + 1, st, hist
+        return x_new, f_new, e_new, nc_new, s_new, mu_next, it + 1, st, hist
 
-    x, f, e_stored, f_nc, mu, it, st, hist = jax.lax.while_loop(cond, body, state0)
+    x, f, e_stored, f_nc, _, mu, it, st, hist = jax.lax.while_loop(cond, body, state0)
     nodal = _nodal_norm(f, pattern, n_nodes)
-    # the force at every node (fixed ones included: minus the reactions), from the final state
-    force_full = (load - jax.grad(assemble.energy)(full(x), scene, model) + f_nc)
+    X = assemble.positions(x, scene, pattern)
     return Equilibrium(
-        x=full(x),
-        force=force_full,
+        x=X,
+        force=load - jax.grad(assemble.energy)(X, scene, model) + f_nc,
         residual_N=jnp.max(nodal),
         iterations=it,
         status=st,
         worst_node=jnp.argmax(nodal),
         history=hist,
-        energy=merit(x, e_stored, f_nc),
+        energy=_merit(e_stored, X, load + f_nc),
     )
 
 
 _newton_jit = jax.jit(newton_loop, static_argnames=("model", "opts"))
 
-#: compiled Newton programs, keyed by what identifies them: the active terms and their options, the solver
-#: options, and the structure, shapes and dtypes of the arguments. A second solve of a scene of the same
-#: shape (another load, another panel cut, another start) reuses the program and compiles nothing.
-_compiled: dict = {}
+
+# -- the host loop: the same iteration driven from Python, its pieces compiled once --------------------
+
+_evaluate_jit = jax.jit(_evaluate, static_argnames=("model",))
+_tangent_jit = jax.jit(_tangent, static_argnames=("model",))
+_springs_jit = jax.jit(spring_network.stiffness, static_argnames=("model",))
+
+#: shapes already compiled, keyed by what identifies a program: the active terms and their options, and
+#: the structure, shapes and dtypes of the arguments. A second solve of a scene of the same shape (another
+#: load, another panel cut, another start) reuses the programs (``jax.jit``'s own cache) and compiles nothing.
+_compiled: set = set()
 
 
-def _compiled_newton(start, scene, pattern, model, opts):
-    leaves, treedef = jax.tree.flatten((start, scene, pattern))
-    key = (model, opts, treedef, tuple((np.shape(a), np.asarray(a).dtype.str if not hasattr(a, "dtype") else a.dtype.str) for a in leaves))
-    program = _compiled.get(key)
-    if program is None:
-        program = _newton_jit.lower(start, scene, pattern, model=model, opts=opts).compile()
-        _compiled[key] = program
-    return program
+def _signature(args):
+    leaves, treedef = jax.tree.flatten(args)
+    return treedef, tuple((np.shape(a), jnp.result_type(a).str) for a in leaves)
+
+
+def _compile_pieces(start, scene, pattern, model):
+    """Compile the evaluation, the tangent and the spring network for this scene's shape, in parallel
+    threads (XLA compiles without the GIL), by calling them once. The loop then calls the same ``jax.jit``
+    functions (their C++ dispatch costs microseconds, where an AOT executable's Python call costs a
+    millisecond for a scene's many leaves). The pieces hold no host callback, so JAX's persistent
+    compilation cache, when on, keeps them on disk for the next process."""
+    key = (model, _signature((start, scene, pattern)))
+    if key in _compiled:
+        return
+    zero = jnp.zeros(scene.nodes.position.shape)
+    state = jax.tree.map(lambda s: jnp.zeros(s.shape, s.dtype),
+                         jax.eval_shape(lambda: _evaluate(start, zero, scene, pattern, model)[-1]))
+    calls = (lambda: _evaluate_jit(start, zero, scene, pattern, model=model),
+             lambda: _tangent_jit(start, state, scene, pattern, model=model),
+             lambda: _springs_jit(scene, model, pattern))
+    with concurrent.futures.ThreadPoolExecutor(len(calls)) as pool:
+        for out in pool.map(lambda call: call(), calls):
+            jax.block_until_ready(out)
+    _compiled.add(key)
+
+
+def host_loop(start, scene, pattern, model, opts: Newton):
+    """The Newton iteration of :func:`newton_loop`, driven from Python: each iteration calls the compiled
+    tangent once, factorises on the host (SuperLU) and calls the compiled evaluation once per line-search
+    trial. Same rules (shared functions), same result; prints progress as it goes when verbose."""
+    n_nodes = scene.n_nodes
+    free = np.asarray(pattern.free)
+    indptr, indices = np.asarray(pattern.indptr), np.asarray(pattern.indices)
+    factor = linalg.HostSolver(indptr, indices)
+    springs = np.asarray(_springs_jit(scene, model, pattern))
+    load = np.asarray(assemble.loads(scene, model))
+    X0 = np.asarray(scene.nodes.position, dtype=float).ravel()
+
+    def nodal(v):
+        full = np.zeros(3 * n_nodes)
+        full[free] = v
+        return np.sqrt(np.sum(full.reshape(-1, 3) ** 2, axis=1))
+
+    def positions(x):
+        X = X0.copy()
+        X[free] = x
+        return X.reshape(-1, 3)
+
+    def run(x, f_frozen):
+        e, force, f_nc, m, state = _evaluate_jit(x, f_frozen, scene, pattern, model=model)
+        return float(e), np.asarray(force), np.asarray(f_nc), float(m), state
+
+    x = np.asarray(start, dtype=float)
+    e_stored, force, f_nc, _, state = run(x, np.zeros_like(load))
+    f = force.ravel()[free]
+    hist = np.full(opts.max_iter + 1, np.nan)
+    res = nodal(f).max()
+    hist[0] = res
+    it, mu = 0, opts.damping
+    st = int(_status(0, res, e_stored, opts, np))
+    while st == RUNNING:
+        X = positions(x)
+        e = e_stored - float(np.sum((load + f_nc) * X))
+        data = np.asarray(_tangent_jit(x, state, scene, pattern, model=model))
+        dx, ok = factor.solve(data + mu * springs, f)
+        biggest = nodal(dx).max()
+        dx = dx * min(1.0, opts.max_step / max(biggest, 1e-300))
+        slope = float(f @ dx)
+        curvature = float(dx @ linalg.host_matvec(data, indptr, indices, dx))
+        predicted = slope - 0.5 * curvature
+        usable = bool(ok) and slope > 0
+        roundoff = 1e-12 * (abs(e) + abs(float(np.sum((load + f_nc) * X))))
+        res_now = np.linalg.norm(f)
+        trials, alpha, accepted, m_new = 0, 1.0, False, np.inf
+        while usable and trials < opts.line_search and not accepted:
+            alpha = 1.0 if trials == 0 else 0.5 * alpha
+            e_try, force_try, nc_try, m_new, s_try = run(x + alpha * dx, f_nc)
+            f_try = force_try.ravel()[free]
+            accepted = bool(_accepts(m_new, f_try, e, alpha, slope, roundoff, res_now, np))
+            trials += 1
+        if accepted:
+            x, f, e_stored, force, f_nc, state = x + alpha * dx, f_try, e_try, force_try, nc_try, s_try
+        res = nodal(f).max()
+        st = int(_status(it + 1, res, m_new if accepted else e, opts, np))
+        mu_next = float(_next_damping(mu, accepted, trials, e, m_new, predicted,
+                                      res / max(hist[it], 1e-300), opts, np))
+        if st == RUNNING and not accepted and mu >= opts.max_damping:
+            st = STALLED
+        hist[it + 1] = res
+        if opts.verbose:
+            _progress(it + 1, res, mu, alpha if accepted else 0.0)
+        it, mu = it + 1, mu_next
+    nodal_f = nodal(f)
+    X = positions(x)
+    return Equilibrium(
+        x=jnp.asarray(X),
+        force=jnp.asarray(force),
+        residual_N=jnp.asarray(nodal_f.max()),
+        iterations=jnp.asarray(it),
+        status=jnp.asarray(st),
+        worst_node=jnp.asarray(int(np.argmax(nodal_f))),
+        history=jnp.asarray(hist),
+        energy=jnp.asarray(e_stored - float(np.sum((load + f_nc) * X))),
+    )
 
 
 @dataclasses.dataclass
@@ -283,10 +423,9 @@ def solve(scene, solver: Newton | None = None, x0=None, raise_on_failure=True, *
     pattern = assemble.build_pattern(scene, model)
     start = np.asarray(scene.nodes.position if x0 is None else x0, dtype=float).ravel()[np.asarray(pattern.free)]
     t0 = time.perf_counter()
-    compiled = _compiled_newton(jnp.asarray(start), scene, pattern, model, solver)
+    _compile_pieces(jnp.asarray(start), scene, pattern, model)
     t1 = time.perf_counter()
-    eq = compiled(jnp.asarray(start), scene, pattern)
-    eq = jax.block_until_ready(eq)
+    eq = host_loop(start, scene, pattern, model, solver)
     t2 = time.perf_counter()
     timing = Timing(compile_s=t1 - t0, wall_s=t2 - t0)
     if raise_on_failure and not eq.converged:
