@@ -78,3 +78,45 @@ def test_failed_solve_names_the_reason_and_the_node():
     free = ~np.asarray(scene.nodes.fixed)
     nodal = np.linalg.norm(np.where(free, np.asarray(eq.force), 0.0), axis=1)
     assert nodal[worst] == pytest.approx(float(eq.residual_N))
+
+
+def test_host_factorisation_with_its_ordering_reused_solves_changing_nonsymmetric_matrices():
+    # One sparsity, several matrices (the tangents of a Newton solve): the ordering computed at the first
+    # factorisation serves the later ones, whose values and pivots differ. A zero diagonal entry makes
+    # the later matrices need an off-diagonal pivot.
+    import scipy.sparse as sp
+
+    from jaxnet import linalg
+
+    rng = np.random.default_rng(3)
+    n = 300
+    a = sp.random(n, n, density=0.02, random_state=4) + sp.eye(n)
+    pattern = (a + a.T).tocsr()
+    pattern.sort_indices()
+    solver = linalg.HostSolver(pattern.indptr, pattern.indices)
+    b = rng.normal(size=n)
+    for k in range(4):
+        data = rng.normal(size=pattern.nnz) + (pattern.indices == np.repeat(np.arange(n), np.diff(pattern.indptr))) * 4.0
+        if k == 3:
+            data[pattern.indptr[5] + np.flatnonzero(pattern.indices[pattern.indptr[5]:pattern.indptr[6]] == 5)] = 0.0
+        x, ok = solver.solve(data, b)
+        A = sp.csr_matrix((data, pattern.indices, pattern.indptr), shape=(n, n))
+        assert ok and np.abs(A @ x - b).max() <= 1e-10 * np.abs(b).max() * np.abs(data).max() * n
+        np.testing.assert_allclose(x, sp.linalg.spsolve(A.tocsc(), b), rtol=1e-8, atol=1e-10)
+
+
+def test_host_loop_and_jitted_loop_are_the_same_iteration():
+    # solve() drives the Newton from the host; newton_loop is the same iteration as one jitted program.
+    # Same rules, same arithmetic: same iterates up to roundoff.
+    from jaxnet import assemble, model as model_lib
+    from jaxnet.solve import statics
+
+    scene = framed_panel(meshes=12, step=0.1, sinker_kg=2.0).build()
+    host, _ = jn.solve(scene, tol=1e-8)
+    model = model_lib.active_terms(scene)
+    pattern = assemble.build_pattern(scene, model)
+    start = np.asarray(scene.nodes.position).ravel()[np.asarray(pattern.free)]
+    jitted = statics._newton_jit(start, scene, pattern, model=model, opts=statics.Newton(tol=1e-8))
+    assert int(jitted.iterations) == int(host.iterations) and bool(jitted.converged)
+    np.testing.assert_allclose(np.asarray(jitted.x), np.asarray(host.x), atol=1e-9)
+    np.testing.assert_allclose(np.asarray(jitted.force), np.asarray(host.force), atol=1e-6)
