@@ -15,11 +15,12 @@ from jaxnet.terms import cable, pressure, tension
 FORCE_GROUPS = {
     "drag_netting_N": ("netting_drag",),
     "drag_cables_N": ("bar_drag",),
-    "drag_nodes_N": ("node_drag",),
+    "drag_nodes_N": ("node_drag", "node_box_drag"),
     "catch_N": ("catch_pressure",),
     "weight_and_buoyancy_N": ("netting_weight", "bar_weight", "node_weight", "netting_gravity_at_surface",
                               "bar_gravity_at_surface", "node_gravity_at_surface"),
     "external_N": ("node_force",),
+    "bottom_N": ("bottom_contact", "bottom_friction"),
 }
 
 

@@ -26,8 +26,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxnet import catch as catch_lib, current, geometry
-from jaxnet.terms import bending, cable, drag, gravity, hexagonal, knot, opening, pressure, screen, surface, tension
+from jaxnet import catch as catch_lib, current, geometry, scene as scene_lib
+from jaxnet.terms import bending, bottom, cable, drag, gravity, hexagonal, knot, opening, pressure, screen, surface, tension
 
 
 @dataclasses.dataclass(frozen=True)
@@ -167,6 +167,23 @@ def _node_drag(x, p, env, state):
     return drag.node_drag(p.drag_area, _water_velocity(x, env), env.water_density)[None, :]
 
 
+def _node_box_drag(x, p, env, state, floating):
+    c = _water_velocity(x, env)
+    # only with a free surface can a body be partly immersed; without one it is wholly under water
+    f = drag.box_immersed_fraction(jnp.dot(x[0], env.up), p.drag_length[2], env.surface_level) if floating else 1.0
+    return drag.box_drag(p.drag_length, p.drag_coefficient, c, env.water_density, f)[None, :]
+
+
+def _bottom_contact(x, p, env):
+    return bottom.contact_energy(x[0], p.limit, p.limit_sense, env.bottom_stiffness, env.bottom_band)
+
+
+def _bottom_friction(x, p, env, state, axis, floor):
+    t = bottom.sliding_direction(env.current_direction, axis)
+    return bottom.friction_force(x[0], p.limit, p.limit_sense, env.bottom_stiffness, env.bottom_band,
+                                 env.bottom_friction, t, axis, floor)[None, :]
+
+
 def _catch_state(x, scene):
     """The catch front (abscissa along the axis, m) for positions x, with the pressure and axis."""
     c, env = scene.catch, scene.environment
@@ -284,6 +301,38 @@ def _node_drag_options(scene):
     return {} if _current(scene) and n.drag_area is not None and _any(n.drag_area) else None
 
 
+def _node_box_drag_options(scene):
+    n = scene.nodes
+    if not _current(scene) or n.drag_length is None or n.drag_coefficient is None:
+        return None
+    length, cd = np.abs(np.asarray(n.drag_length, dtype=float)), np.asarray(n.drag_coefficient, dtype=float)
+    # Cd times the area of each face (the vertical one counts when it has any size)
+    faces = np.stack([length[:, 1] * length[:, 2], length[:, 0] * length[:, 2], length[:, 0] * length[:, 1]], axis=1)
+    return {"floating": _floating(scene)} if _any(cd * faces) else None
+
+
+def _limits(scene):
+    n = scene.nodes
+    return n.limit is not None and n.limit_sense is not None and _any(n.limit_sense)
+
+
+def _bottom_contact_options(scene):
+    return {} if _limits(scene) and scene.environment.bottom_stiffness > 0 else None
+
+
+def _bottom_friction_options(scene):
+    env = scene.environment
+    if _bottom_contact_options(scene) is None or not env.bottom_friction > 0 or not _current(scene):
+        return None
+    where = scene_lib.bottom_axis(env)
+    if where is None:
+        return None  # validate() names the problem
+    axis, floor = where
+    on_floor = np.any(np.asarray(scene.nodes.limit_sense)[:, axis] == floor)
+    sliding = np.any(np.delete(np.asarray(env.current_direction, dtype=float), axis) != 0)
+    return {"axis": axis, "floor": floor} if on_floor and sliding else None
+
+
 #: The registry: one line per physical term.
 TERMS = (
     Term("netting_tension", "netting", "energy", _netting_tension, _tension_options("netting")),
@@ -304,6 +353,9 @@ TERMS = (
     Term("netting_drag", "netting", "force", _netting_drag, _netting_drag_options, state=_drag_state),
     Term("bar_drag", "bars", "force", _bar_drag, _bar_drag_options),
     Term("node_drag", "nodes", "force", _node_drag, _node_drag_options),
+    Term("node_box_drag", "nodes", "force", _node_box_drag, _node_box_drag_options),
+    Term("bottom_contact", "nodes", "energy", _bottom_contact, _bottom_contact_options),
+    Term("bottom_friction", "nodes", "force", _bottom_friction, _bottom_friction_options),
     Term("catch_pressure", "netting", "force", _catch_pressure, _catch_options, state=_catch_state),
 )
 

@@ -12,7 +12,9 @@ Element families:
     parameter an array so that panels of different netting share one vmapped family.
   * :class:`Bars` — straight cable bars (ropes), one row per bar.
   * :class:`Hinges` — pairs of neighbouring triangles, for twine bending (built from the netting).
-Nodes carry fixity per axis, lumped mass and displaced volume (sinkers, floats) and an external force.
+Nodes carry fixity per axis, lumped mass and displaced volume (sinkers, floats) and an external force;
+optionally the box-shaped body of FEMNET's node types (anisotropic node drag) and limits per axis (the
+sea bed, a ceiling).
 
 :func:`validate` checks a scene and raises :class:`SceneError` naming the culprit (node, element, cable,
 parameter) — always before anything is compiled.
@@ -42,6 +44,18 @@ class Nodes(eqx.Module):
     drag_area: (N,) drag area Cd·A of what is attached (m²): node drag ½ρ Cd A |c| c; None for none.
     size: (N,) vertical size of what is attached (m): the band over which a float crossing the free
       surface goes from immersed to emerged; None where the scene has no free surface.
+  Optional, FEMNET's node types (None: the term is absent; see :mod:`jaxnet.terms.drag` and
+  :mod:`jaxnet.terms.bottom`):
+    drag_length: (N, 3) size (m) along x, y, z of a box-shaped body at the node (FEMNET "Length X,Y,Z"),
+      for the node drag along each axis. The z size is the body's height along ``up``; its sign says on
+      which side of the node the body lies (> 0 above it: a float, < 0 below it: a sinker), which matters
+      only for the part immersed under a free surface. x and y sizes are >= 0.
+    drag_coefficient: (N, 3) drag coefficient (dimensionless) along x, y, z (FEMNET "Drag coefficient
+      X,Y,Z"): the drag along x is ½ ρ Cd_x (L_y h) |c| c_x, h the immersed height, and so on.
+    limit: (N, 3) limit coordinate (m) along x, y, z (FEMNET "Limits X,Y,Z"), for ``limit_sense`` != 0.
+    limit_sense: (N, 3) int, which side of the limit is forbidden (FEMNET "Limits sense X,Y,Z"): +1 the
+      coordinate must stay >= the limit (a floor: the sea bed when along up), -1 it must stay <= the limit
+      (a ceiling), 0 no limit. Penetration is resisted by ``Environment.bottom_stiffness``.
     """
 
     position: np.ndarray
@@ -51,6 +65,10 @@ class Nodes(eqx.Module):
     force: np.ndarray
     drag_area: np.ndarray | None = None
     size: np.ndarray | None = None
+    drag_length: np.ndarray | None = None
+    drag_coefficient: np.ndarray | None = None
+    limit: np.ndarray | None = None
+    limit_sense: np.ndarray | None = None
 
 
 class Netting(eqx.Module):
@@ -185,6 +203,16 @@ class Environment(eqx.Module):
       increasing; linear in between, constant beyond; empty: uniform). See :mod:`jaxnet.current`.
     surface_level: height of the free surface along ``up`` (m); NaN (default) for none: everything is
       fully immersed and weight is a constant load.
+    bottom_stiffness: stiffness (N/m) of the penetration of a node beyond its limit (``Nodes.limit``):
+      FEMNET's "stiffness of the insertion in the sea bottom".
+    bottom_friction: friction coefficient mu (dimensionless) of the sea bed *sliding under the net* in the
+      current's direction (FEMNET's "wearing coefficient" with ``input moving_bottom``: a towed gear on
+      the bottom); 0 for a still bottom, which in FEMNET's statics exerts no friction at all.
+    bottom_band: width (m) of the band of penetration over which the contact stiffness rises from 0 to
+      ``bottom_stiffness`` (a C² penalty, :mod:`jaxnet.terms.bottom`); beyond it the contact force is
+      FEMNET's k p exactly; 0 for FEMNET's plain penalty (stiffness jumps at contact). The default 1 mm
+      moves a lightly loaded node (load < k b) less than 1 mm deeper than FEMNET's and spares Newton the
+      chatter of nodes hovering at the sea bed.
     """
 
     gravity: float = 9.81
@@ -195,6 +223,9 @@ class Environment(eqx.Module):
     profile_depth: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
     profile_factor: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
     surface_level: float = float("nan")
+    bottom_stiffness: float = 0.0
+    bottom_friction: float = 0.0
+    bottom_band: float = 1e-3
 
 
 class Scene(eqx.Module):
@@ -276,6 +307,90 @@ def _check_positive(values, what, culprit, strict=True):
         raise SceneError(f"{culprit(i)}: {what} must be {sign}, got {values[i]!r}")
 
 
+def _per_axis(nodes, name, n):
+    """The nodes' field ``name`` as an (N, 3) float array (per node, along x, y, z), or a SceneError."""
+    arr = np.asarray(getattr(nodes, name), dtype=float)
+    if arr.shape != (n, 3):
+        raise SceneError(f"nodes: {name} must have shape ({n}, 3) (per node, along x, y, z), got {arr.shape}")
+    return arr
+
+
+def _axis_culprit(arr_index):
+    node, axis = divmod(int(arr_index), 3)
+    return f"node {node}", "xyz"[axis]
+
+
+def _check_node_bodies(nodes, n):
+    """Box-shaped node bodies (FEMNET node types): both fields or none, finite, sizes and Cd >= 0."""
+    length, cd = nodes.drag_length, nodes.drag_coefficient
+    if (length is None) != (cd is None):
+        missing = "drag_coefficient" if cd is None else "drag_length"
+        raise SceneError(f"nodes: drag_length and drag_coefficient go together (node drag of a box-shaped "
+                         f"body); {missing} is missing")
+    if length is None:
+        return
+    for name, allow_negative_z in (("drag_length", True), ("drag_coefficient", False)):
+        arr = _per_axis(nodes, name, n)
+        bad = np.flatnonzero(~np.isfinite(arr))
+        if bad.size:
+            node, axis = _axis_culprit(bad[0])
+            raise SceneError(f"{node}: {name} along {axis} is not finite ({arr.ravel()[bad[0]]!r})")
+        negative = arr < 0
+        if allow_negative_z:  # a body below its node (a sinker) has a negative height, as in FEMNET
+            negative[:, 2] = False
+        bad = np.flatnonzero(negative)
+        if bad.size:
+            node, axis = _axis_culprit(bad[0])
+            what = "size" if name == "drag_length" else "drag coefficient"
+            raise SceneError(f"{node}: {name} ({what}) along {axis} must be >= 0, got {arr.ravel()[bad[0]]!r}")
+
+
+def _check_limits(scene, n):
+    """Limits per axis (sea bed): both fields or none, senses in {-1, 0, 1}, finite limits where used, and
+    an environment that makes them act (stiffness > 0; friction needs a coordinate axis as vertical)."""
+    nodes, env = scene.nodes, scene.environment
+    for name in ("bottom_stiffness", "bottom_friction", "bottom_band"):
+        value = getattr(env, name)
+        if not (np.isfinite(value) and value >= 0):
+            raise SceneError(f"environment: {name} must be finite and >= 0, got {value!r}")
+    limit, sense = nodes.limit, nodes.limit_sense
+    if (limit is None) != (sense is None):
+        missing = "limit_sense" if sense is None else "limit"
+        raise SceneError(f"nodes: limit and limit_sense go together (a floor or ceiling per axis); {missing} is missing")
+    if limit is None:
+        return
+    sense_arr = _per_axis(nodes, "limit_sense", n)
+    bad = np.flatnonzero(~np.isin(sense_arr, (-1.0, 0.0, 1.0)))
+    if bad.size:
+        node, axis = _axis_culprit(bad[0])
+        raise SceneError(f"{node}: limit_sense along {axis} must be +1 (floor: stay above the limit), -1 "
+                         f"(ceiling: stay below) or 0 (none), got {sense_arr.ravel()[bad[0]]!r}")
+    limit_arr = _per_axis(nodes, "limit", n)
+    bad = np.flatnonzero((sense_arr != 0) & ~np.isfinite(limit_arr))
+    if bad.size:
+        node, axis = _axis_culprit(bad[0])
+        raise SceneError(f"{node}: limit along {axis} is not finite ({limit_arr.ravel()[bad[0]]!r}) but its sense is "
+                         f"{int(sense_arr.ravel()[bad[0]])}")
+    used = np.flatnonzero(sense_arr != 0)
+    if used.size and not env.bottom_stiffness > 0:
+        node, axis = _axis_culprit(used[0])
+        raise SceneError(f"{node}: a limit along {axis} needs environment bottom_stiffness > 0 (N/m) to act, got "
+                         f"{env.bottom_stiffness!r}")
+    if used.size and env.bottom_friction > 0 and env.current_speed > 0 and bottom_axis(env) is None:
+        raise SceneError(f"environment: sea-bed friction (bottom_friction {env.bottom_friction!r}) needs 'up' along a "
+                         f"coordinate axis (the sea bed is a limit along one axis), got {env.up!r}")
+
+
+def bottom_axis(env):
+    """(axis, floor sense) of the sea bed: the coordinate axis along ``up`` and the limit sense that forbids
+    going down along it (+1 when up is +z, as in FEMNET); None when ``up`` is along no coordinate axis."""
+    up = np.asarray(env.up, dtype=float)
+    axis = int(np.argmax(np.abs(up)))
+    if abs(abs(up[axis]) - 1.0) > 1e-12:
+        return None
+    return axis, int(np.sign(up[axis]))
+
+
 def has_free_surface(scene) -> bool:
     """Whether the scene has a free surface (``environment.surface_level`` not NaN)."""
     return bool(np.isfinite(scene.environment.surface_level))
@@ -315,6 +430,8 @@ def validate(scene: Scene) -> None:
     for name in ("drag_area", "size"):
         if getattr(nodes, name) is not None:
             _check_positive(getattr(nodes, name), name, lambda i: f"node {i}", strict=False)
+    _check_node_bodies(nodes, n)
+    _check_limits(scene, n)
 
     used = np.zeros(n, dtype=bool)
     edges = []

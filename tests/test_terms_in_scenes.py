@@ -137,6 +137,15 @@ def hex_twine(**changes):
     return HexTwine(**{**dict(l0=HEX_TWINE, ea=1000.0, diameter=1e-3, density=RHO), **changes})
 
 
+def node_types(scene, environment=None, **fields):
+    """The scene with FEMNET's per-node fields (one (3,) row for every node) and environment changes."""
+    n = scene.n_nodes
+    nodes = dataclasses.replace(scene.nodes, **{k: np.tile(np.asarray(v), (n, 1)) for k, v in fields.items()})
+    return dataclasses.replace(scene, nodes=nodes, environment=dataclasses.replace(scene.environment, **(environment or {})))
+
+
+BOX = dict(drag_length=(0.1, 0.1, 0.2), drag_coefficient=(1.0, 1.0, 1.0))  # a body at every node
+SEA_BED = dict(limit=(0.0, 0.0, -10.0), limit_sense=(0, 0, 1))  # a floor 10 m down under every node
 SINKER = dict(mass=1.0, volume=1.0 / 11340.0)  # 1 kg of lead
 #: per term: (scene with its parameters present and non-zero, the same scene with them zero or absent)
 ON_OFF = {
@@ -154,6 +163,13 @@ ON_OFF = {
                  lambda: small_scene(twine(cd_normal=0.0), rope=rope(cd_normal=0.0), current=0.5)),
     "node_drag": (lambda: small_scene(twine(cd_normal=0.0), current=0.5, drag_area=0.01),
                   lambda: small_scene(twine(cd_normal=0.0), current=0.5)),
+    "node_box_drag": (lambda: node_types(small_scene(twine(cd_normal=0.0), current=0.5), **BOX),
+                      lambda: node_types(small_scene(twine(cd_normal=0.0), current=0.5), **dict(BOX, drag_coefficient=(0, 0, 0)))),
+    "bottom_contact": (lambda: node_types(small_scene(), {"bottom_stiffness": 1e6}, **SEA_BED),
+                       lambda: node_types(small_scene(), {"bottom_stiffness": 1e6}, **dict(SEA_BED, limit_sense=(0, 0, 0)))),
+    "bottom_friction": (lambda: node_types(small_scene(twine(cd_normal=0.0), current=0.5),
+                                           {"bottom_stiffness": 1e6, "bottom_friction": 0.5}, **SEA_BED),
+                        lambda: node_types(small_scene(twine(cd_normal=0.0), current=0.5), {"bottom_stiffness": 1e6}, **SEA_BED)),
     "catch_pressure": (lambda: small_scene(twine(cd_normal=0.0), current=0.5, catch=True),
                        lambda: small_scene(twine(cd_normal=0.0), current=0.5)),
     # with a free surface (1 m above everything) even neutral netting weighs where it emerges: only a

@@ -42,6 +42,31 @@ Conventions and choices:
   :func:`jaxnet.current.current_velocity`); in dynamics the current minus the element's velocity. The
   force is along the relative velocity's components, i.e. it drags the net *with* the water.
 
+Bodies at nodes. A float or sinker is either given a drag area Cd·A, whose drag ½ ρ (Cd A) |c| c is
+along the current whatever its direction (:func:`node_drag`), or, as FEMNET's node types, the sizes
+(L_x, L_y, L_z) of a box with a drag coefficient per axis (:func:`box_drag`). FEMNET (statics,
+``unix_2004/traineecourant2.c``; data "Length X,Y,Z" and "Drag coefficient X,Y,Z" per node type,
+``chargement_don.c``) loads each node with
+
+    F_x = ½ ρ Cd_x (L_y h) U² cos θ,     F_y = ½ ρ Cd_y (L_x h) U² sin θ,
+
+U the current's speed, θ its heading from x towards y, h the immersed height of the box: the drag along
+x is that of the box's face normal to x, of width L_y and wetted height h, with the x component of the
+velocity; along y the face of width L_x. Since U² cos θ = |c| c_x, this is F_i = ½ ρ Cd_i A_i |c| c_i:
+each axis is its own Morison drag, so the force is not along the current unless the faces are alike.
+The box stands on its node along the vertical: above it for L_z > 0 (a float), below it for L_z < 0 (a
+sinker, FEMNET's "lest"); with the free surface at s, h = clip(s - z_bottom, 0, |L_z|), z_bottom = z +
+min(L_z, 0), which is FEMNET's four cases (floating, flooded, emerged float; floating, flooded, emerged
+sinker; FEMNET's surface is z = 0). Without a free surface the box is wholly immersed, h = |L_z|. FEMNET
+has no vertical drag (its current is horizontal, and ``cdz`` is read but unused in statics); here a
+vertical current meets the box's horizontal section, F_z = ½ ρ Cd_z (L_x L_y f) |c| c_z with f = h/|L_z|
+the immersed fraction (a flat plate, L_z = 0, counts as immersed when its node is under the surface):
+zero for FEMNET's horizontal current. h is piecewise linear in the node's height, as in FEMNET: the drag
+of a body crossing the surface has a kink where it just emerges or submerges, a discontinuity of its
+(small) stiffness, not of the force. FEMNET's stiffness of this term is that of h (its
+``affectation_ze_rang(3*zi-1, 3*zi, ...)`` entries); its pardiso variant writes L_y for L_x in the y
+entry of the floating sinker, an error there only.
+
 These are forces (N), not energies: drag is not conservative. Its tangent -d force/dx (book 4.136-4.210)
 is obtained by ``jax.jacfwd`` of these functions and is not symmetric; when the current depends on depth
 the caller composes :func:`jaxnet.current.current_velocity` inside the differentiated function so that
@@ -148,3 +173,39 @@ def node_drag(drag_area, water_velocity, water_density):
       water_density: ρ (kg/m³).
     """
     return (0.5 * water_density * drag_area * geometry.safe_norm(water_velocity)) * water_velocity
+
+
+def box_immersed_fraction(height, vertical_length, surface_level):
+    """Immersed fraction f in [0, 1] of the height of a box standing on its node (FEMNET's node body).
+
+    The box spans heights [z + min(L_z, 0), z + max(L_z, 0)]: above the node for L_z > 0 (a float),
+    below it for L_z < 0 (a sinker). Its immersed height is h = clip(s - z_bottom, 0, |L_z|) and
+    f = h / |L_z|; a flat box (L_z = 0) is immersed (f = 1) when the node is under the surface.
+
+    Args:
+      height: height z of the node along ``up`` (m).
+      vertical_length: L_z, signed height of the box (m).
+      surface_level: height s of the free surface (m), finite.
+    """
+    size = jnp.abs(vertical_length)
+    depth_of_bottom = surface_level - (height + jnp.minimum(vertical_length, 0.0))
+    flat = size == 0.0
+    immersed = jnp.clip(depth_of_bottom, 0.0, size)
+    return jnp.where(flat, (depth_of_bottom > 0.0).astype(float), immersed / jnp.where(flat, 1.0, size))
+
+
+def box_drag(length, drag_coefficient, water_velocity, water_density, immersed_fraction=1.0):
+    """Drag (3,) in N on a box-shaped body at a node (FEMNET's node types), one Morison drag per axis:
+    F_i = ½ ρ Cd_i A_i |c| c_i, with A_x = L_y h, A_y = L_x h, A_z = L_x L_y f and h = f |L_z|.
+
+    Args:
+      length: (3,) sizes (L_x, L_y, L_z) of the box (m); L_z may be negative (a box below its node).
+      drag_coefficient: (3,) Cd along x, y, z (dimensionless).
+      water_velocity: (3,) velocity of the water relative to the body (m/s).
+      water_density: ρ (kg/m³).
+      immersed_fraction: f in [0, 1], the immersed part of the box's height (1: wholly immersed; see
+        :func:`box_immersed_fraction`).
+    """
+    lx, ly, lz = length[0], length[1], jnp.abs(length[2])
+    area = immersed_fraction * jnp.stack([ly * lz, lx * lz, lx * ly])
+    return (0.5 * water_density * geometry.safe_norm(water_velocity)) * drag_coefficient * area * water_velocity
