@@ -75,8 +75,16 @@ def _opening(x, p, env):
     return opening.opening_energy(x, p.uv, p.opening_stiffness, p.rest_angle)
 
 
-def _knot_contact(x, p, env):
-    return knot.knot_contact_energy(x, p.uv, p.l0, p.knot_size, p.knot_stiffness)
+#: knot contact laws (``Netting.knot_form`` codes)
+KNOT_FORMS = {0: "book", 1: "femnet"}
+
+
+def _knot_contact(x, p, env, forms):
+    total = 0.0
+    for code in forms:
+        e = knot.knot_contact_energy(x, p.uv, p.l0, p.knot_size, p.knot_stiffness, form=KNOT_FORMS[code])
+        total = total + (e if len(forms) == 1 else jnp.where(p.knot_form == code, e, 0.0))
+    return total
 
 
 def _twine_bending(x, p, env):
@@ -265,6 +273,14 @@ def _netting_parameter_options(name):
     return options
 
 
+def _knot_options(scene):
+    net = scene.netting
+    if net is None or net.knot_size is None or not _any(net.knot_size):
+        return None
+    codes = np.zeros(1, int) if net.knot_form is None else np.asarray(net.knot_form)
+    return {"forms": tuple(sorted(set(codes.tolist())))}
+
+
 def _hinge_options(scene):
     return {} if scene.hinges is not None and _any(scene.hinges.stiffness) else None
 
@@ -348,7 +364,7 @@ TERMS = (
     Term("hexagonal_tension", "hexagonal", "energy", _hexagonal_tension, _tension_options("hexagonal")),
     Term("hexagonal_weight", "hexagonal", "load", _hexagonal_weight, _weight_options("hexagonal", lambda f: f.diameter, at_surface=None)),
     Term("mesh_opening", "netting", "energy", _opening, _netting_parameter_options("opening_stiffness")),
-    Term("knot_contact", "netting", "energy", _knot_contact, _netting_parameter_options("knot_size")),
+    Term("knot_contact", "netting", "energy", _knot_contact, _knot_options),
     Term("twine_bending", "hinges", "energy", _twine_bending, _hinge_options),
     Term("netting_drag", "netting", "force", _netting_drag, _netting_drag_options, state=_drag_state),
     Term("bar_drag", "bars", "force", _bar_drag, _bar_drag_options),

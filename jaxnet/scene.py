@@ -89,6 +89,9 @@ class Netting(eqx.Module):
     opening_stiffness: (E,) mesh opening stiffness H (N·m/rad, eqs 4.211-4.219); rest_angle: (E,) rest
       half opening angle α0 (rad).
     knot_size: (E,) knot size (m, eq. 4.278); knot_stiffness: (E,) contact stiffness (N·m/rad, default 4.280).
+    knot_form: (E,) int, the knot contact law (:mod:`jaxnet.terms.knot`): 0 the book's (4.278-4.280, with a
+      stiffness ramp), 1 FEMNET's (``fermeture2``: contact at atan(k / 2 l0), couple 2 H cos α (α - α_c));
+      None for 0 everywhere.
     bending_stiffness: (E,) flexural stiffness EI of one twine (N·m², eqs 4.220-4.245): makes hinges.
     outward: (E,) +1 where 12 ^ 13 points out of the volume the net encloses (cod-end, cage), -1 where
       it points in; set with a catch or an enclosure, from the start shape.
@@ -109,6 +112,7 @@ class Netting(eqx.Module):
     rest_angle: np.ndarray | None = None
     knot_size: np.ndarray | None = None
     knot_stiffness: np.ndarray | None = None
+    knot_form: np.ndarray | None = None
     bending_stiffness: np.ndarray | None = None
     outward: np.ndarray | None = None
 
@@ -457,6 +461,12 @@ def validate(scene: Scene) -> None:
             bad = np.flatnonzero(~np.isin(m, (0, 1, 2)))
             if bad.size:
                 raise SceneError(f"{culprit(int(bad[0]))}: drag model code must be 0, 1 or 2, got {m[bad[0]]!r}")
+        if net.knot_form is not None:
+            m = np.asarray(net.knot_form)
+            bad = np.flatnonzero(~np.isin(m, (0, 1)))
+            if bad.size:
+                raise SceneError(f"{culprit(int(bad[0]))}: knot contact form code must be 0 (book) or 1 (FEMNET), "
+                                 f"got {m[bad[0]]!r}")
         used[tri.ravel()] = True
         edges += [tri[:, [0, 1]], tri[:, [1, 2]]]
     if scene.hexagonal is not None:

@@ -1,4 +1,5 @@
-"""Knot contact (eqs 4.278-4.280): contact angle, zero above it, 4.280 stiffness below, C² onset, Newton."""
+"""Knot contact (eqs 4.278-4.280): contact angle, zero above it, 4.280 stiffness below, C² onset, Newton;
+and FEMNET's form (atan contact angle, H / 5, couple 2 H cos α (α - α_c)), by hand and by finite differences."""
 
 import jax
 import jax.numpy as jnp
@@ -238,3 +239,162 @@ def test_damped_newton_crosses_onset_without_chatter(load):
     balance = 4 * H_OPEN * (alphas[-1] - ALPHA0) + contact + 4 * load * L0 * np.cos(alphas[-1])
     np.testing.assert_allclose(balance, 0.0, atol=1e-12)
     assert (s >= BAND) == (load == 5.0)  # the two loads end below the band and inside it
+
+
+# -- FEMNET's form (form="femnet"): its contact angle, stiffness and force, as fermeture2.c computes them --
+
+H_FEMNET = L0**2 * EA / (500.0 * KNOT)  # FEMNET: l0² EA / (1000 k/2), N·m/rad
+ALPHA_C = np.arctan(KNOT / (2 * L0))  # FEMNET's contact half angle (atan, not arcsin)
+ONE_TWINE = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])  # d = 1: x = (A, A + U, A + V)
+
+
+def _femnet_energy(x, uv):
+    return knot.knot_contact_energy(x.reshape(3, 3), uv, L0, KNOT, ea=EA, form="femnet")
+
+
+@jax.jit
+def _femnet_evaluate(x, uv):
+    """Energy, forces -∇E, jacfwd stiffness of the femnet form, and FEMNET's own force, flat (9,)."""
+    own = knot.femnet_contact_force(x.reshape(3, 3), uv, L0, KNOT, ea=EA).ravel()
+    return _femnet_energy(x, uv), -jax.grad(_femnet_energy)(x, uv), jax.jacfwd(jax.grad(_femnet_energy))(x, uv), own
+
+
+def femnet_evaluate(x, uv):
+    return [np.asarray(a) for a in _femnet_evaluate(np.asarray(x, float).ravel(), np.asarray(uv, float))]
+
+
+def test_femnet_contact_angle_and_stiffness():
+    np.testing.assert_allclose(knot.femnet_contact_half_angle(L0, KNOT), np.arctan(0.06), rtol=1e-15)
+    np.testing.assert_allclose(knot.femnet_knot_stiffness(L0, KNOT, EA), 5.0 / 3.0, rtol=1e-14)  # 0.05² 2000 / 3
+    np.testing.assert_allclose(knot.femnet_knot_stiffness(L0, KNOT, EA), H_BOOK / 5, rtol=1e-14)
+    assert float(knot.femnet_knot_stiffness(L0, 0.0, EA)) == 0.0
+    # onset exactly at atan(k / 2 l0) and at π/2 minus it, and only there: between atan (0.059928) and
+    # arcsin (0.060036) the book form is in contact, FEMNET's is not
+    assert ALPHA_C < ALPHA_MIN
+    for alpha, touching in ((ALPHA_C + 1e-9, False), (ALPHA_C - 1e-6, True), (0.5 * (ALPHA_C + ALPHA_MIN), False),
+                            (np.pi / 2 - ALPHA_C - 1e-9, False), (np.pi / 2 - ALPHA_C + 1e-6, True), (np.pi / 4, False)):
+        e = femnet_evaluate(lattice_positions(ONE_MESH, alpha, L0, random_rotation()), ONE_MESH)[0]
+        assert (float(e) > 0.0) == touching, alpha
+    assert along_path(0.5 * (ALPHA_C + ALPHA_MIN), band=0.0) > 0.0
+
+
+@pytest.mark.parametrize("alpha", [0.04, np.pi / 2 - 0.04])
+def test_femnet_force_on_one_twine_pair_by_hand(alpha):
+    # d = 1, U = l (cos α, sin α, 0), V = l (cos α, -sin α, 0), x = (0, U, V). FEMNET's force is
+    # F_i = d H (α - α_0) (∂c/∂x_i) / (2 sin α), c = cos 2α. Moving the tip of U by δ along
+    # e = (-sin α, cos α, 0) turns U away from V by δ / l: 2α grows by δ / l, c = cos 2α by
+    # -sin(2α) δ / l, so F_2 = -d H (α - α_0) (sin 2α / (2 l sin α)) e = -H (α - α_0) cos α e / l,
+    # F_3 its mirror image, F_1 = -F_2 - F_3. (The printed 4.216 with the true ∂α/∂x_2 = e / (2 l)
+    # would give H (α - α_0) e / (2 l): FEMNET's is 2 cos α times that.)
+    rest = ALPHA_C if alpha < np.pi / 4 else np.pi / 2 - ALPHA_C
+    s, c = np.sin(alpha), np.cos(alpha)
+    x = np.array([[0.0, 0.0, 0.0], [L0 * c, L0 * s, 0.0], [L0 * c, -L0 * s, 0.0]])
+    coefficient = -H_FEMNET * (alpha - rest) * c / L0
+    f2, f3 = coefficient * np.array([-s, c, 0.0]), coefficient * np.array([-s, -c, 0.0])
+    expected = np.concatenate([-(f2 + f3), f2, f3])
+    e, force, _, own = femnet_evaluate(x, ONE_TWINE)
+    np.testing.assert_allclose(own, expected, rtol=1e-9, atol=1e-12 * np.abs(expected).max())
+    np.testing.assert_allclose(force, expected, rtol=1e-9, atol=1e-12 * np.abs(expected).max())
+    # the numbers (H = 5/3 N·m/rad, α_c = atan 0.06): 0.6637 N at the tip of U at α = 0.04, opening the
+    # mesh; at the other closure the same depth gives tan(0.04) = 4 % of it, closing it back from U = -V
+    magnitude = {0.04: 0.663740, np.pi / 2 - 0.04: 0.0265638}[alpha]
+    np.testing.assert_allclose(np.linalg.norm(force[3:6]), magnitude, rtol=1e-5)
+    np.testing.assert_allclose(np.sign(force[4]), 1.0 if alpha < np.pi / 4 else -1.0)
+    # the energy itself: (|d|/2) H φ(α), φ = 4 [(α - α_0) sin α + cos α - cos α_0]
+    np.testing.assert_allclose(e, 0.5 * H_FEMNET * 4 * ((alpha - rest) * s + c - np.cos(rest)), rtol=1e-7)
+
+
+@pytest.mark.parametrize("closure", ["alpha to 0", "alpha to pi/2"])
+def test_femnet_couple_per_knot_along_the_closing_path(closure):
+    # per knot the couple does work 2 C dα, |d|/2 knots: C = (dE/dα) / |d| = 2 H cos α (α - α_0)
+    twist = random_rotation()
+    h = 1e-6
+    depth = (0.3, 0.9) if closure == "alpha to 0" else (-0.3, -0.9)
+    rest = ALPHA_C if closure == "alpha to 0" else np.pi / 2 - ALPHA_C
+    for fraction in depth:
+        alpha = rest - fraction * ALPHA_C
+        e = [float(femnet_evaluate(lattice_positions(ONE_MESH, alpha + t, L0, twist), ONE_MESH)[0]) for t in (-h, h)]
+        couple = (e[1] - e[0]) / (2 * h) / 4.0
+        np.testing.assert_allclose(couple, 2 * H_FEMNET * np.cos(alpha) * (alpha - rest), rtol=1e-6)
+
+
+@pytest.mark.parametrize("clockwise", [False, True])
+def test_femnet_forces_and_stiffness_by_finite_differences(clockwise):
+    for closure in (0.0, np.pi / 2):
+        uv = RNG.uniform(-4, 4, size=(3, 2))
+        if (geometry.twine_determinant(uv) < 0) != clockwise:
+            uv = uv[[0, 2, 1]]
+        depth = RNG.uniform(0.2, 0.9) * ALPHA_C
+        alpha = ALPHA_C - depth if closure == 0.0 else np.pi / 2 - ALPHA_C + depth
+        x = lattice_positions(uv, alpha, L0, random_rotation()) * RNG.uniform(0.95, 1.05, size=3)
+        x = x.ravel() + RNG.normal(size=9) * 1e-5
+        e, f, K, own = femnet_evaluate(x, uv)
+        assert float(e) > 0.0
+        h = 1e-8
+        fd = -np.array([(femnet_evaluate(x + h * STEP[i], uv)[0] - femnet_evaluate(x - h * STEP[i], uv)[0]) / (2 * h)
+                        for i in range(9)])
+        np.testing.assert_allclose(f, fd, rtol=1e-5, atol=1e-6 * np.abs(fd).max())
+        fdK = -np.stack([(femnet_evaluate(x + h * STEP[i], uv)[1] - femnet_evaluate(x - h * STEP[i], uv)[1]) / (2 * h)
+                         for i in range(9)], axis=1)
+        np.testing.assert_allclose(K, fdK, rtol=1e-4, atol=1e-5 * np.abs(fdK).max())
+        np.testing.assert_allclose(K, K.T, atol=1e-10 * np.abs(K).max())
+        # FEMNET's own force is -∇E on its (d > 0) triangles; it carries the signed d, so on a
+        # clockwise triangle it is +∇E: it would push the mesh further closed
+        sign = -1.0 if clockwise else 1.0
+        np.testing.assert_allclose(own, sign * f, rtol=1e-9, atol=1e-12 * np.abs(f).max())
+
+
+def test_femnet_form_options_and_degenerate_meshes():
+    x = lattice_positions(ONE_MESH, 0.5 * ALPHA_C)
+    explicit = jax.jit(lambda y: knot.knot_contact_energy(y, ONE_MESH, L0, KNOT, H_FEMNET, form="femnet"))
+    np.testing.assert_allclose(explicit(x), femnet_evaluate(x, ONE_MESH)[0], rtol=1e-14)
+    # FEMNET has contact on both diagonals; both_diagonals=False keeps only the α -> 0 one
+    near_half_pi = lattice_positions(ONE_MESH, np.pi / 2 - 0.5 * ALPHA_C)
+    one_sided = jax.jit(lambda y: knot.knot_contact_energy(y, ONE_MESH, L0, KNOT, ea=EA, form="femnet",
+                                                           both_diagonals=False))
+    assert float(one_sided(near_half_pi)) == 0.0 and float(femnet_evaluate(near_half_pi, ONE_MESH)[0]) > 0.0
+    with pytest.raises(ValueError, match="band"):
+        knot.knot_contact_energy(x, ONE_MESH, L0, KNOT, ea=EA, band=0.01, form="femnet")
+    with pytest.raises(ValueError, match="form"):
+        knot.knot_contact_energy(x, ONE_MESH, L0, KNOT, ea=EA, form="FEMNET")
+    with pytest.raises(ValueError, match="ea"):
+        knot.knot_contact_energy(x, ONE_MESH, L0, KNOT, form="femnet")
+    closed = [lattice_positions(ONE_MESH, a).ravel() for a in (0.0, np.pi / 2)]
+    closed += [np.zeros(9), np.array([0.0, 0, 0, 0.1, 0, 0, 0.1, 0, 0])]
+    for y in closed:
+        e, f, K, _ = femnet_evaluate(y, ONE_MESH)
+        assert np.isfinite(e) and np.isfinite(f).all() and np.isfinite(K).all()
+    # fully closed (α = 0): φ(0) = 4 (1 - cos α_c), |d|/2 = 2 knots
+    np.testing.assert_allclose(femnet_evaluate(closed[0], ONE_MESH)[0], 2 * H_FEMNET * 4 * (1 - np.cos(ALPHA_C)),
+                               rtol=1e-12)
+
+
+def test_scene_knot_form_codes_select_the_law_per_triangle():
+    # Netting.knot_form: 0 the book's law, 1 FEMNET's; a scene mixing both sums each triangle's own law.
+    import dataclasses
+
+    from jaxnet import assemble, model
+    from jaxnet.net import Net, Twine
+
+    net = Net()
+    p = net.panel("p", [(0, 0, 0, 0, 0), (0.3, 0, 0, 10, -10), (0.3, 0, 0.3, 20, 0), (0, 0, 0.3, 10, 10)],
+                  Twine(l0=0.02, ea=1000.0, diameter=1e-3, knot_size=0.008), 0.1)
+    net.fix(p.side(2))
+    scene = net.build()
+    rng = np.random.default_rng(5)
+    # squeeze the panel along z so that its meshes close past the contact angle
+    x = np.asarray(scene.nodes.position) * np.array([1.0, 1.0, 0.15]) + rng.normal(0, 1e-3, (scene.n_nodes, 3))
+    e_count = scene.netting.vertices.shape[0]
+    codes = np.arange(e_count) % 2
+    mixed = dataclasses.replace(scene, netting=dataclasses.replace(scene.netting, knot_form=codes))
+    terms = tuple(t for t in model.active_terms(mixed) if t.name == "knot_contact")
+    assert terms[0].kwargs()["forms"] == (0, 1)
+    total = float(assemble.energy(jnp.asarray(x), mixed, terms))
+    net_ = scene.netting
+    expected = 0.0
+    for e in range(e_count):
+        form = "femnet" if codes[e] else "book"
+        expected += float(knot.knot_contact_energy(jnp.asarray(x[np.asarray(net_.vertices[e])]), net_.uv[e], net_.l0[e],
+                                                   net_.knot_size[e], net_.knot_stiffness[e], form=form))
+    assert expected > 0
+    np.testing.assert_allclose(total, expected, rtol=1e-12)
