@@ -140,7 +140,14 @@ NETTING_DRAG = {
                                                              p.tangential_ratio * p.cd_normal, c, rho)),
     1: ("loland_screen", lambda x, p, c, rho: screen.loland_force(x, p.uv, p.l0, p.diameter, c, rho)),
     2: ("kristiansen_faltinsen_screen", lambda x, p, c, rho: screen.kristiansen_faltinsen_force(x, p.uv, p.l0, p.diameter, c, rho)),
+    # FEMNET's drag of netting ahead of a catch (trainee_front -> trainee_fil): the twine drag along the
+    # current, the U twines' cross-flow part turned onto the V twines' (drag.netting_drag_femnet_catch)
+    3: ("femnet_catch_drag", lambda x, p, c, rho: drag.netting_drag_femnet_catch(
+        x, p.uv, p.l0, p.diameter, p.cd_normal, p.tangential_ratio * p.cd_normal, c, rho)),
 }
+
+#: the netting drag models made of twine drags (Cd, f): present only where some Cd is not zero
+TWINE_DRAG_MODELS = (0, 3)
 
 
 def _netting_drag(x, p, env, state, models, shielded):
@@ -300,8 +307,10 @@ def _netting_drag_options(scene):
     if net is None or not _current(scene) or net.drag_model is None:
         return None
     codes = np.asarray(net.drag_model)
-    twine_drag = (codes == 0) & ((np.asarray(net.cd_normal) != 0) if net.cd_normal is not None else False)
-    models = tuple(sorted(set(codes[codes != 0].tolist()) | ({0} if np.any(twine_drag) else set())))
+    has_cd = (np.asarray(net.cd_normal) != 0) if net.cd_normal is not None else np.zeros(codes.shape, bool)
+    screens = set(codes[~np.isin(codes, TWINE_DRAG_MODELS)].tolist())
+    twines = {m for m in TWINE_DRAG_MODELS if np.any((codes == m) & has_cd)}
+    models = tuple(sorted(screens | twines))
     return {"models": models, "shielded": scene.catch is not None} if models else None
 
 

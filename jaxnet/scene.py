@@ -85,7 +85,9 @@ class Netting(eqx.Module):
     cd_normal: (E,) normal drag coefficient Cd of a twine; tangential_ratio: (E,) f, the tangential drag
       as a fraction of Cd (tangential drag f ½ρ Cd D l0 (c cos α)², eqs 4.114-4.115).
     drag_model: (E,) int, how the current loads the netting: 0 twine drag (Morison per twine, the book),
-      1 Løland screen model, 2 Kristiansen-Faltinsen screen model.
+      1 Løland screen model, 2 Kristiansen-Faltinsen screen model, 3 FEMNET's twine drag of cases with a
+      catch (``trainee_fil``: the U twines' cross-flow drag turned along the V twines' cross-flow
+      direction; :func:`jaxnet.terms.drag.netting_drag_femnet_catch`), for reproducing FEMNET only.
     opening_stiffness: (E,) mesh opening stiffness H (N·m/rad, eqs 4.211-4.219); rest_angle: (E,) rest
       half opening angle α0 (rad).
     knot_size: (E,) knot size (m, eq. 4.278); knot_stiffness: (E,) contact stiffness (N·m/rad, default 4.280).
@@ -458,9 +460,9 @@ def validate(scene: Scene) -> None:
                 raise SceneError(f"{culprit(int(bad[0]))}: rest half opening angle must be in (0, pi/2] rad, got {a[bad[0]]!r}")
         if net.drag_model is not None:
             m = np.asarray(net.drag_model)
-            bad = np.flatnonzero(~np.isin(m, (0, 1, 2)))
+            bad = np.flatnonzero(~np.isin(m, (0, 1, 2, 3)))
             if bad.size:
-                raise SceneError(f"{culprit(int(bad[0]))}: drag model code must be 0, 1 or 2, got {m[bad[0]]!r}")
+                raise SceneError(f"{culprit(int(bad[0]))}: drag model code must be 0, 1, 2 or 3, got {m[bad[0]]!r}")
         if net.knot_form is not None:
             m = np.asarray(net.knot_form)
             bad = np.flatnonzero(~np.isin(m, (0, 1)))

@@ -359,3 +359,150 @@ def test_drag_in_a_sheared_current_sees_dc_dz():
     expected = uniform.copy()
     expected[:, 2::3] += shear[:, None]
     np.testing.assert_allclose(jx, expected, rtol=1e-12, atol=1e-14)
+
+
+# ----------------------------------------------------------------------------------------------------
+# FEMNET's drag of netting ahead of a catch (trainee_fil): netting_drag_femnet_catch, model code 3
+
+
+def femnet_catch(x, uv, c):
+    return drag.netting_drag_femnet_catch(x, uv, L0, D, CN, CT, c, RHO)
+
+
+femnet_catch_jit = jax.jit(femnet_catch)
+femnet_jac_x = jax.jit(jax.jacfwd(femnet_catch, argnums=0))
+femnet_jac_c = jax.jit(jax.jacfwd(femnet_catch, argnums=2))
+
+
+def twine_pair_element(U, V, clockwise=False):
+    """Element whose U and V twine vectors are exactly U and V, |d| = 1 (half a U and half a V twine)."""
+    uv = jnp.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    if clockwise:  # d = -1: vertex 2 is then at V, vertex 3 at U; same twine vectors
+        uv = uv[jnp.array([0, 2, 1])]
+    x = jnp.array([0.1, 0.2, -3.0]) + uv[:, :1] * U + uv[:, 1:] * V
+    U_, V_, d = geometry.twine_vectors(x, uv)
+    np.testing.assert_allclose(U_, U, atol=1e-15)
+    np.testing.assert_allclose(V_, V, atol=1e-15)
+    assert abs(d) == 1.0 and (d < 0) == clockwise
+    return x, uv
+
+
+@pytest.mark.parametrize("clockwise", [False, True])
+@pytest.mark.parametrize("a_deg, b_deg, v_upstream", [(30.0, 50.0, False), (30.0, 50.0, True), (70.0, 20.0, True)])
+def test_femnet_catch_closed_form(a_deg, b_deg, v_upstream, clockwise):
+    # c = |c| x; U = l (cos a, sin a, 0) in the xy plane (ê_U = y), V = l (±cos b, 0, sin b) in the xz
+    # plane (ê_V = z). Per twine (k = |c|²): along x  K_n sin³ + K_t cos³ for each twine; across, U gives
+    # k cos a sin a (K_t cos a - K_n sin a) along ê_U, V gives ±k cos b sin b (K_t cos b - K_n sin b)
+    # along ê_V (+ downstream V, - upstream V). FEMNET sends U's part along ê_V: F_y = 0.
+    a, b, speed, l = np.radians(a_deg), np.radians(b_deg), 1.7, 0.03
+    sv = -1.0 if v_upstream else 1.0
+    U = l * jnp.array([np.cos(a), np.sin(a), 0.0])
+    V = l * jnp.array([sv * np.cos(b), 0.0, np.sin(b)])
+    x, uv = twine_pair_element(U, V, clockwise)
+    c = jnp.array([speed, 0.0, 0.0])
+    k = speed**2
+    along = k * (KN * (np.sin(a)**3 + np.sin(b)**3) + KT * (np.cos(a)**3 + np.cos(b)**3))
+    across_u = k * np.cos(a) * np.sin(a) * (KT * np.cos(a) - KN * np.sin(a))
+    across_v = sv * k * np.cos(b) * np.sin(b) * (KT * np.cos(b) - KN * np.sin(b))
+    per_vertex = 0.5 / 3.0  # |d|/2 twines of each kind, one third per vertex
+    f = np.asarray(femnet_catch_jit(x, uv, c))
+    np.testing.assert_allclose(f, np.broadcast_to(per_vertex * np.array([along, 0.0, across_u + across_v]), (3, 3)),
+                               rtol=1e-12, atol=1e-15 * k * KN)
+    # the exact twine drag has the same x part but U's cross part along y where it belongs
+    exact = np.asarray(netting_jit(x, uv, c))
+    np.testing.assert_allclose(exact, np.broadcast_to(per_vertex * np.array([along, across_u, across_v]), (3, 3)),
+                               rtol=1e-12, atol=1e-15 * k * KN)
+    assert abs(across_u) > 1e-3 * along  # so that the two forms do differ
+
+
+def test_femnet_catch_cod_end_twines_lose_the_cross_flow():
+    # a cod-end panel at 25° to the current, meshed along its axis as FEMNET does (u = U + V, v = V - U):
+    # U runs downstream, V upstream, each at 35° to the axis. FEMNET's form keeps only the drag along c;
+    # the exact form has the panel's lift (along the normal's component across c), of the same order
+    tilt, half = np.radians(25.0), np.radians(35.0)
+    axis = np.array([np.cos(tilt), 0.0, np.sin(tilt)])  # in the panel, the panel's normal in the xz plane
+    around = np.array([0.0, 1.0, 0.0])
+    l = 0.05
+    U = jnp.asarray(l * (np.cos(half) * axis + np.sin(half) * around))
+    V = jnp.asarray(l * (-np.cos(half) * axis + np.sin(half) * around))
+    x, uv = twine_pair_element(U, V)
+    c = jnp.array([1.9, 0.0, 0.0])
+    f, exact = np.asarray(femnet_catch_jit(x, uv, c)).sum(0), np.asarray(netting_jit(x, uv, c)).sum(0)
+    np.testing.assert_allclose(f[0], exact[0], rtol=1e-13)
+    np.testing.assert_allclose(f[1:], 0.0, atol=1e-14 * f[0])
+    assert np.abs(exact[1]) < 1e-14 * exact[0] and abs(exact[2]) > 0.1 * exact[0]
+
+
+def test_femnet_catch_along_the_current_and_frame():
+    # random elements and currents: the part along c is the exact drag's; only the cross part differs;
+    # the form is a vector function of the element and c (turning both turns the force)
+    differs = 0
+    for clockwise in (False, True):
+        for _ in range(4):
+            x, uv = random_element(clockwise)
+            c = jnp.asarray(RNG.normal(size=3))
+            f, exact = femnet_catch_jit(x, uv, c), netting_jit(x, uv, c)
+            np.testing.assert_allclose(f @ c, exact @ c, rtol=1e-12, atol=1e-14 * np.abs(exact).max())
+            differs += np.abs(f - exact).max() > 1e-3 * np.abs(exact).max()
+            R = random_rotation()
+            np.testing.assert_allclose(femnet_catch_jit(x @ R.T, uv, R @ c), f @ R.T, rtol=1e-11,
+                                       atol=1e-13 * np.abs(f).max())
+    assert differs == 8
+
+
+@pytest.mark.parametrize("clockwise", [False, True])
+def test_femnet_catch_stiffness_equals_finite_differences(clockwise):
+    for _ in range(4):
+        x, uv = random_element(clockwise)
+        c = jnp.asarray(RNG.normal(size=3))
+        jx = np.asarray(femnet_jac_x(x, uv, c)).reshape(9, 9)
+        fd = central_differences(lambda y: femnet_catch_jit(y.reshape(3, 3), uv, c).ravel(), x.ravel(), 1e-7)
+        np.testing.assert_allclose(jx, fd, rtol=1e-5, atol=1e-6 * np.abs(fd).max())
+        jc = np.asarray(femnet_jac_c(x, uv, c)).reshape(9, 3)
+        fdc = central_differences(lambda w: femnet_catch_jit(x, uv, w).ravel(), c, 1e-6)
+        np.testing.assert_allclose(jc, fdc, rtol=1e-6, atol=1e-8 * np.abs(fdc).max())
+
+
+@pytest.mark.parametrize("case", ["u_along_c", "v_along_c", "v_against_c", "still_water", "collapsed"])
+def test_femnet_catch_degenerate_cases_are_finite(case):
+    l, speed = 0.04, 1.1
+    U, V = l * jnp.array([0.6, 0.8, 0.0]), l * jnp.array([0.6, 0.0, 0.8])
+    c = speed * jnp.array([1.0, 0.0, 0.0])
+    if case == "u_along_c":
+        U = l * jnp.array([1.0, 0.0, 0.0])
+    if case in ("v_along_c", "v_against_c"):
+        V = l * jnp.array([1.0 if case == "v_along_c" else -1.0, 0.0, 0.0])
+    if case == "still_water":
+        c = jnp.zeros(3)
+    x, uv = twine_pair_element(U, V)
+    if case == "collapsed":
+        x = jnp.ones((3, 3)) * 0.4
+    f, jx, jc = femnet_catch_jit(x, uv, c), femnet_jac_x(x, uv, c), femnet_jac_c(x, uv, c)
+    for a in (f, jx, jc):
+        assert np.isfinite(a).all()
+    exact = netting_jit(x, uv, c)
+    if case in ("u_along_c", "collapsed", "still_water"):
+        # U's drag has no cross part (or there is no drag): the two forms agree
+        np.testing.assert_allclose(f, exact, rtol=1e-13, atol=1e-30)
+    if case in ("v_along_c", "v_against_c"):
+        # ê_V has no direction: U's cross part is dropped, its part along c kept. U at cos a = 0.6 to c:
+        # along c, K_n sin³a + K_t cos³a per twine; V all tangential, K_t; |d|/2 = 1/2 twine of each
+        expected = 0.5 * speed**2 * (KT + KN * 0.8**3 + KT * 0.6**3) * jnp.array([1.0, 0.0, 0.0])
+        np.testing.assert_allclose(f.sum(0), expected, rtol=1e-12, atol=1e-16)
+    if case == "still_water":
+        np.testing.assert_array_equal(jx, 0.0)
+        np.testing.assert_array_equal(jc, 0.0)
+
+
+def test_model_code_3_is_femnet_catch():
+    # the model's code 3 passes Ct = f Cd, as the twine drag (code 0)
+    from types import SimpleNamespace
+
+    from jaxnet import model
+
+    x, uv = random_element()
+    c = jnp.asarray(RNG.normal(size=3))
+    p = SimpleNamespace(uv=uv, l0=L0, diameter=D, cd_normal=CN, tangential_ratio=CT / CN)
+    name, force = model.NETTING_DRAG[3]
+    assert name == "femnet_catch_drag" and 3 in model.TWINE_DRAG_MODELS
+    np.testing.assert_allclose(force(x, p, c, RHO), femnet_catch_jit(x, uv, c), rtol=1e-13)

@@ -67,6 +67,36 @@ of a body crossing the surface has a kink where it just emerges or submerges, a 
 ``affectation_ze_rang(3*zi-1, 3*zi, ...)`` entries); its pardiso variant writes L_y for L_x in the y
 entry of the floating sinker, an error there only.
 
+FEMNET's netting drag ahead of a catch (:func:`netting_drag_femnet_catch`). FEMNET's statics (main
+loop in ``unix_2004/unix.c``) loads diamond netting in one of two ways. Without a catch it calls
+``filethydro4_sta``, which gives each U and each V twine ``basic_bar_drag1``: exactly the Morison form
+above (normal ½ ρ Cd D l0 |c|² sin²α along c_n, tangential f ½ ρ Cd D l0 |c|² cos²α along ±U, l0 the
+unstretched twine, |d|/2 twines of each kind, one third per vertex), i.e. :func:`netting_drag`. With a
+catch (its volume above the "accuracy on this volume" of the .don, and no ``catch_gravity`` input) it calls
+``catch_hexa`` and ``trainee_front`` instead: the netting behind the front gets no drag, a triangle
+astride it the consistent load of its part ahead, and the drag of a triangle is ``trainee_fil``'s. That
+routine works each twine in a frame of its own (``rota1`` then a turn about z): c on +x, the twine in the
+xy plane with a positive y component. There the U twine's drag is (F_U.ĉ, F_U.ê_U, 0), its in-line part
+and its part across the flow, ê_U the unit vector of U's component normal to c (with U's orientation).
+The V twine is then worked the same way, but the two in-frame forces are *summed* and the sum is turned
+back with the V twine's rotations only. The in-line parts come back along the current; U's cross part
+comes back along ê_V instead of ê_U:
+
+    F_femnet = (|d|/2) [ F_V + (F_U.ĉ) ĉ + (F_U.ê_U) ê_V ]     (exact: (|d|/2) [ F_V + F_U ]),
+
+F_U, F_V one twine's drag (4.114-4.117). FEMNET's twine coordinates from a panel's mesh coordinates
+(U, V) are u = U + V, v = V - U (``etirement5``, as :mod:`jaxnet.io.femnet`): in a cod-end meshed along
+its axis the U twines run downstream and the V twines upstream on the same side of the axis, so
+ê_U ≈ ê_V while F_U.ê_U ≈ -F_V.ê_V. The two cross parts then cancel along ê_V, and the netting keeps only
+its drag along the current: the lift of the netting's cone across the flow, which the exact form gives
+(on FEMNET's quarter cod-end ``c2``, -47 N along y and along z for 268 N along x), is lost (0.25 N left). On a flat panel in a current (FEMNET's ``nr_netting``, no catch) the
+exact form applies. Two more details of ``trainee_fil`` are not reproduced: the V twine sees the current
+as left by the U twine's rotation, |c| along +x, and the in-line parts return along +x: the same as the
+form above when the current is along x (FEMNET's current direction 0, as in its cod-end cases), not
+otherwise; and a twine exactly normal to c is given θ = π/4 (its ``atan`` guard). Where ê_V has no
+direction (V along c) FEMNET's ``rota1`` picks an arbitrary normal; here U's cross part is then dropped,
+so this force has a discontinuity on that set, as FEMNET's has.
+
 These are forces (N), not energies: drag is not conservative. Its tangent -d force/dx (book 4.136-4.210)
 is obtained by ``jax.jacfwd`` of these functions and is not symmetric; when the current depends on depth
 the caller composes :func:`jaxnet.current.current_velocity` inside the differentiated function so that
@@ -144,6 +174,45 @@ def netting_drag(x, uv, l0, diameter, cd_normal, cd_tangential, water_velocity, 
     """
     parts = netting_drag_parts(x, uv, l0, diameter, cd_normal, cd_tangential, water_velocity, water_density)
     total = parts["u_normal"] + parts["u_tangential"] + parts["v_normal"] + parts["v_tangential"]
+    return jnp.broadcast_to(total / 3.0, (3, 3))
+
+
+def _unit_across(axis, water_velocity, inv_c2):
+    """Unit vector (3,) of the component of ``axis`` normal to the water velocity; 0 where there is none
+    (axis along c, or a zero axis). ``inv_c2`` is 1/|c|² (0 in still water)."""
+    across = axis - (jnp.dot(axis, water_velocity) * inv_c2) * water_velocity
+    sq = jnp.dot(across, across)
+    # relative threshold: an axis along c leaves a rounding residue whose direction is noise
+    has = sq > 1e-24 * jnp.dot(axis, axis)
+    return across * jnp.where(has, 1.0 / jnp.sqrt(jnp.where(has, sq, 1.0)), 0.0)
+
+
+def netting_drag_femnet_catch(x, uv, l0, diameter, cd_normal, cd_tangential, water_velocity, water_density):
+    """Per-vertex drag (3, 3) in N on one diamond-mesh triangle as FEMNET loads netting ahead of a catch
+    (``trainee_front`` -> ``trainee_fil``): each twine's in-line drag along the current, but the U twines'
+    drag across the flow turned onto the V twines' cross direction (module docstring):
+
+        F = (|d|/2) [ F_V + (F_U.ĉ) ĉ + (F_U.ê_U) ê_V ],   one third per vertex,
+
+    with F_U, F_V the Morison drag of one U and one V twine (4.114-4.117, as :func:`netting_drag`) and
+    ê_U, ê_V the unit vectors of the components of U and V normal to c. The drag along the current is
+    that of :func:`netting_drag`; only the part across the flow differs.
+
+    Same arguments as :func:`netting_drag` (x (3, 3) m; uv (3, 2) twines; l0, diameter m; cd_normal and
+    cd_tangential = f Cd dimensionless; water_velocity (3,) m/s; water_density kg/m³). The result depends
+    on which twine family is U and on their orientations (FEMNET's u = U + V, v = V - U).
+    """
+    U, V, _ = geometry.twine_vectors(x, uv)
+    parts = netting_drag_parts(x, uv, l0, diameter, cd_normal, cd_tangential, water_velocity, water_density)
+    force_u = parts["u_normal"] + parts["u_tangential"]
+    force_v = parts["v_normal"] + parts["v_tangential"]
+    c = water_velocity
+    c2 = jnp.dot(c, c)
+    still = c2 == 0.0
+    inv_c2 = jnp.where(still, 0.0, 1.0 / jnp.where(still, 1.0, c2))
+    in_line_u = (jnp.dot(force_u, c) * inv_c2) * c
+    across_u = jnp.dot(force_u, _unit_across(U, c, inv_c2))
+    total = force_v + in_line_u + across_u * _unit_across(V, c, inv_c2)
     return jnp.broadcast_to(total / 3.0, (3, 3))
 
 
