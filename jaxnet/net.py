@@ -602,6 +602,22 @@ def _knot_stiffness(twine):
     return twine.l0**2 * twine.ea / (100.0 * twine.knot_size)
 
 
+def knot_stiffness(twine: Twine) -> float:
+    """Knot contact stiffness (N·m/rad) that :meth:`Net.build` gives the triangles of a diamond-mesh panel of
+    material ``twine``: ``twine.knot_stiffness`` when given, else the default of eq. 4.280,
+    H = l0² EA / (100 knot_size), and 0 without knots (knot_size 0). Public for readers that fill a
+    :class:`~jaxnet.scene.Netting` themselves (FEMNET's ``.mdg`` mesh, :func:`jaxnet.io.femnet.read_mdg`)."""
+    return _knot_stiffness(twine)
+
+
+def outward(position, triangles, center) -> np.ndarray:
+    """(E,) ``Netting.outward`` of triangles ``triangles`` (E, 3) (node indices into ``position`` (N, 3), m):
+    +1 where the triangle's 12 ^ 13 points away from ``center`` (a point on the axis of the net, m), -1
+    otherwise. This is how :meth:`Net.build` orients netting for a catch or an enclosure (the catch pushes
+    outwards); public for readers that build the :class:`~jaxnet.scene.Netting` themselves."""
+    return _outward(np.asarray(position, dtype=float), np.asarray(triangles), np.asarray(center, dtype=float))
+
+
 def _hinges(netting):
     """Bending hinges (pairs of triangles of one panel sharing an edge) where the twines have an EI."""
     if netting is None or not np.any(np.asarray(netting.bending_stiffness) > 0):

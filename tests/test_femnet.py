@@ -95,9 +95,13 @@ def _line_of(text, needle):
     ("Traction stiffness (N):\t\t\t6000.000000", "Traction stiffness (N):\t\t\t-6000.000000", "-6000", "must be >= 0"),
     ("L: 1.97", "L: 0.0", "L: 0.0", "must be > 0"),
     ("Wave height (m):                    0.000000", "Wave height (m):                    1.5", "1.5", "waves"),
-    ("Added mass X,Y,Z (kg):        0.000000  0.000000  0.000000\nLength X,Y,Z (m):        0.000000  0.000000  0.000000\nDrag coefficient X,Y,Z:        1.200000  1.200000  1.200000\nExternal forces X,Y,Z (N):    0.000000  0.000000  0.000000\nDisplacement X,Y,Z:        0 0 0",
-     "Added mass X,Y,Z (kg):        0.000000  0.000000  2.000000\nLength X,Y,Z (m):        0.000000  0.000000  0.000000\nDrag coefficient X,Y,Z:        1.200000  1.200000  1.200000\nExternal forces X,Y,Z (N):    0.000000  0.000000  0.000000\nDisplacement X,Y,Z:        0 0 0",
-     "2.000000\nLength", "added mass"),
+    # a node length makes FEMNET's node a floating box with drag (flotteur2.c, traineecourant2.c): refused
+    ("Length X,Y,Z (m):        0.000000  0.000000  0.000000\nDrag coefficient X,Y,Z:        1.200000  1.200000  1.200000\nExternal forces X,Y,Z (N):    0.000000  0.000000  0.000000\nDisplacement X,Y,Z:        0 0 0",
+     "Length X,Y,Z (m):        0.000000  0.000000  0.300000\nDrag coefficient X,Y,Z:        1.200000  1.200000  1.200000\nExternal forces X,Y,Z (N):    0.000000  0.000000  0.000000\nDisplacement X,Y,Z:        0 0 0",
+     "0.300000\nDrag", "length 0.3 m is not supported"),
+    # an active sea-bed limit (sense 1: a floor) is refused; a limit with sense 0 is no limit (fond.c)
+    ("Limits sens X,Y,Z:        0  0  0\nSymetry X,Y,Z:            0  0  0\n\nNUMERIC", "Limits sens X,Y,Z:        0  0  1\nSymetry X,Y,Z:            0  0  0\n\nNUMERIC",
+     "0  0  1\nSymetry X,Y,Z:            0  0  0\n\nNUMERIC", "sea-bed limits"),
     ("input water_density 1000", "input wind_speed 10", "wind_speed", "unknown input"),
     ("4    1.695000    -0.735000    -1.000000    0.000000    120.000000", "4    1.695000    -0.735000    -1.000000    80.000000    120.000000",
      "3    1.695000    0.730000", "same (U, V)"),
@@ -220,3 +224,216 @@ def test_cli_runs_a_femnet_case_on_its_mesh(tmp_path):
     assert abs(result["femnet"]["drag_netting_N"][0] - 138) <= 0.5
     assert result["femnet_case"]["water_density"] == 1000.0
     assert cli.main(["run", str(DATA / "c2.mdg"), "--mesh", str(DATA / "c2.mdg"), "--out", str(out)]) == 2
+
+
+# -- links, hexagonal panels, node types (synthetic cases in tests/data/femnet) --------------------------------
+#
+# links_hub.don: a square of netting (10 x 10 meshes, twines stretched 5 %, square meshes) written as four
+# triangular panels around a hub at its centre, joined by five links (the hub: four corners; each outer
+# corner: two) whose consecutive corners sew the four diagonals; every outer side is held (node type 1), the
+# hub and the diagonals are free. Each panel draws the hub at a different point, off the centre and 3 cm off
+# the plane; their mean starts 7 cm from the centre. links_hub_single.don: the same net as one panel.
+# links_cable.don: two panels of 10 and 8 meshes across sewn on one border, and a cable (6 bars, meshed
+# first) linked to the lower panel's bottom corners from ends drawn 2 cm outside them.
+# hexagonal.don: one hexagonal panel (8 x 6 base meshes) hanging from its top side, 0.5 N on every node of
+# its bottom side.
+
+
+def _node_uv(scene):
+    """Twine coordinates of every node, from the triangles (one panel's, where panels share a node)."""
+    uv = np.zeros((scene.n_nodes, 2))
+    tri = np.asarray(scene.netting.vertices)
+    uv[tri.ravel()] = np.asarray(scene.netting.uv).reshape(-1, 2)
+    return uv
+
+
+def test_links_make_one_node_and_sew_the_sides_between_them():
+    from jaxnet.mesh.panel import mesh_panel
+
+    net, solver, info = femnet.read_don(DATA / "links_hub.don")
+    scene = net.build()
+    case = femnet.parse_don(DATA / "links_hub.don")
+    # each panel alone: its nodes, and the division of its diagonals (all four have one length in (U, V))
+    meshes = [mesh_panel(femnet._twine_coordinates(p.corners[:, 3:5]), p.corners[:, :3], p.material["step"].value,
+                         p.material["l0"].value) for p in case.panels]
+    d = {len(m.side_nodes[s]) - 1 for m in meshes for s in (1, 2)}
+    assert len(d) == 1
+    d = d.pop()
+    # one node per link: the hub's 4 corners make 1 node (-3), each outer corner's 2 make 1 (-4), and the
+    # d - 1 nodes inside each of the 4 sewn diagonals are shared by two panels (-4 (d - 1))
+    assert scene.n_nodes == sum(len(m.uv) for m in meshes) - 3 - 4 - 4 * (d - 1)
+    tri, panel = np.asarray(scene.netting.vertices), np.asarray(scene.netting.panel)
+    nodes = [set(np.unique(tri[panel == k])) for k in range(4)]
+    hub = set.intersection(*nodes)
+    assert len(hub) == 1
+    # a sewn diagonal: d + 1 nodes shared by its two panels, none by the panels across the hub
+    assert len(nodes[0] & nodes[1]) == d + 1 and nodes[0] & nodes[2] == hub
+    # FEMNET's joined node starts at the mean of the linked corners' start positions (numerotation.c)
+    drawn = np.array([p.corners[2, :3] for p in case.panels])
+    np.testing.assert_allclose(scene.nodes.position[hub.pop()], drawn.mean(axis=0), atol=1e-12)
+    assert info["seams"] == ["panel 1 side 2 = panel 2 side 3", "panel 1 side 3 = panel 4 side 2",
+                             "panel 2 side 2 = panel 3 side 3", "panel 3 side 2 = panel 4 side 3"]
+    assert ["panel 1 corner 3", "panel 2 corner 3", "panel 3 corner 3", "panel 4 corner 3"] in info["joined"]
+
+
+def test_linked_panels_reach_the_equilibrium_of_the_one_panel_net():
+    # Patch test: the outer sides are held where the affine map of (U, V) puts them and every twine is in
+    # traction, so the equilibrium is that affine map whatever the triangles (each element is in equilibrium
+    # under a uniform strain) and unique (the energy is strictly convex in the free nodes). The one-panel net
+    # starts there; the linked one starts 7 cm away (the hub). The same equilibrium to 1e-9 m: Newton stops at
+    # 1e-9 N against stiffnesses of order EA / l0 = 2e4 N/m (axial) and T / l = 1e3 N/m (transverse).
+    single, solver, _ = femnet.read_don(DATA / "links_hub_single.don")
+    single = single.build()
+    eq1, _ = solve(single, solver)
+    x1, uv1 = np.asarray(eq1.x), _node_uv(single)
+    X1 = np.c_[uv1, np.ones(len(uv1))]
+    affine, *_ = np.linalg.lstsq(X1, x1, rcond=None)
+    assert np.abs(X1 @ affine - x1).max() < 1e-9
+    linked, solver, _ = femnet.read_don(DATA / "links_hub.don")
+    linked = linked.build()
+    X2 = np.c_[_node_uv(linked), np.ones(linked.n_nodes)]
+    assert np.abs(X2 @ affine - np.asarray(linked.nodes.position)).max() > 0.05
+    eq2, _ = solve(linked, solver)
+    assert eq2.converged
+    np.testing.assert_allclose(np.asarray(eq2.x), X2 @ affine, rtol=0, atol=1e-9)
+
+
+def test_a_linked_cable_divides_the_side_and_seams_join_different_mesh_counts():
+    from jaxnet.mesh.panel import side_divisions
+
+    net, solver, info = femnet.read_don(DATA / "links_cable.don")
+    scene = net.build()
+    case = femnet.parse_don(DATA / "links_cable.don")
+    upper, lower = case.panels
+    # the cable, meshed first, keeps its 6 bars and the lower panel's bottom side takes them
+    assert len(scene.bars.ends) == 6 and info["cables_sewn_along_sides"] == {"cable 1": "panel 2 side 1"}
+    tri, panel = np.asarray(scene.netting.vertices), np.asarray(scene.netting.panel)
+    lower_nodes = np.unique(tri[panel == 1])
+    assert set(np.unique(scene.bars.ends)) <= set(lower_nodes)
+    # its ends are joined to the corners, at the mean of their start positions
+    start = np.array([case.cables[0].ends[0], lower.corners[0, :3]]).mean(axis=0)
+    assert np.min(np.linalg.norm(scene.nodes.position - start, axis=1)) < 1e-12
+    # the seam joins 10 meshes to 8: both sides take one division (jaxnet: the larger default; FEMNET: that
+    # of the panel meshed first) and each panel keeps its own twine coordinates on the shared nodes
+    div = [side_divisions(femnet._twine_coordinates(p.corners[:, 3:5]), p.material["step"].value,
+                          p.material["l0"].value) for p in case.panels]
+    seam = np.intersect1d(np.unique(tri[panel == 0]), lower_nodes)
+    assert div[0][0] != div[1][2] and len(seam) == max(div[0][0], div[1][2]) + 1
+    corner = seam[np.argmax(scene.nodes.position[seam, 0])]
+    uv = np.asarray(scene.netting.uv)
+    at = {k: {tuple(uv[e][list(tri[e]).index(corner)]) for e in np.flatnonzero((panel == k) & (tri == corner).any(axis=1))}
+          for k in (0, 1)}
+    assert at == {0: {(10.0, -10.0)}, 1: {(13.0, -3.0)}}  # (U, V) = (10, 0) and (8, 5): u = U + V, v = V - U
+
+
+def _edit(tmp_path, case, edits, name=None):
+    text = (DATA / f"{case}.don").read_text()
+    for old, new in edits:
+        assert text.count(old) >= 1, old
+        text = text.replace(old, new, 1)
+    path = tmp_path / f"{name or case}.don"
+    path.write_text(text)
+    return path, text
+
+
+_SECOND_CABLE = """
+Cable: 7
+Extremities no x y z type:
+1  0.000000  -1.350000  -1.000000  1
+2  0.000000  -0.735000  -1.000000  2
+Kt: 50000.000000  Kc: 0.000000  L: 0.817500  Vm: 1140.000000  D:0.005000  Cd: 1.200000  f: 0.080000  Nb: 3  Ty: 2
+"""
+
+
+@pytest.mark.parametrize("case, edits, needle, words", [
+    ("links_cable", [("pa: 2\tnd: 4", "pa: 3\tnd: 4")], "pa: 3\tnd: 4", "there is no panel 3"),
+    ("links_cable", [("pa: 2\tnd: 4", "pa: 2\tnd: 5")], "pa: 2\tnd: 5", "panel 2 has no corner 5"),
+    ("links_cable", [("el: 1\tnd: 1", "co: 1\tnd: 1")], "co: 1\tnd: 1", "sliding cable"),
+    ("links_cable", [("nb_pt :2\tel: 1\tnd: 1\tpa: 2\tnd: 1", "nb_pt :2\tel: 1\tnd: 1\tpa: 1\tnd: 1")],
+     "el: 1\tnd: 1\tpa: 1\tnd: 1", "already in the link of line"),
+    ("links_cable", [("pa: 1\tnd: 1\tpa: 2\tnd: 4", "pa: 1\tnd: 1\tpa: 1\tnd: 3")],
+     "3    0.707107    0.000000    0.000000", "joined to itself"),
+    ("nr_netting", [("Cables number: 6", "Cables number: 7"), ("\nSliding cables", _SECOND_CABLE + "\nSliding cables"),
+                    ("el:     4 el:     6", "el:     4 el:     6 el:     7")],
+     "1  0.000000  -1.350000  -1.000000  1\n2  0.000000  -0.735000  -1.000000  2\nKt: 50000.000000  Kc: 0.000000  "
+     "L: 0.817500  Vm: 1140.000000  D:0.005000  Cd: 1.200000  f: 0.080000  Nb: 3", "threads it on that cable's nodes"),
+])
+def test_link_errors_name_the_line(tmp_path, case, edits, needle, words):
+    path, text = _edit(tmp_path, case, edits)
+    with pytest.raises(SceneError) as err:
+        femnet.read_don(path)
+    message = str(err.value)
+    assert words in message and f"{case}.don:{_line_of(text, needle)}:" in message, message
+
+
+def test_a_hexagonal_panel_keeps_femnet_coordinates_counts_its_twines_and_hangs_in_balance():
+    net, solver, info = femnet.read_don(DATA / "hexagonal.don")
+    scene = net.build()
+    hexa = scene.hexagonal
+    assert scene.netting is None and hexa is not None
+    # FEMNET's hexagonal (U, V) count base meshes as jaxnet's do (etirement_hexa.c: the knot's neighbours at
+    # 0, (U + V)/2 and V, as jaxnet.terms.hexagonal): the corners keep them, not (U + V, V - U)
+    tri, uv = np.asarray(hexa.vertices), np.asarray(hexa.uv)
+    corner = int(np.argmin(np.linalg.norm(scene.nodes.position - [0.504, 0.0, 0.0], axis=1)))
+    assert {tuple(uv[e][list(tri[e]).index(corner)]) for e in np.flatnonzero((tri == corner).any(axis=1))} == {(8.0, 6.0)}
+    # the contour holds 8 x 6 = 48 base meshes: sum |d|/2 over the triangles, |d| twines of each family each
+    d = np.asarray(jax.vmap(geometry.twine_determinant)(hexa.uv))
+    np.testing.assert_allclose(np.abs(d).sum(), 2 * 48.0, rtol=1e-12)
+    np.testing.assert_array_equal(hexa.l0[0], [0.02, 0.02, 0.024])
+    np.testing.assert_array_equal(hexa.ea_traction[0], [1000.0, 1000.0, 1200.0])
+    # one diameter with the weight of FEMNET's three (jaxnet's hexagonal netting has no drag)
+    dl = 0.01**2 * 0.02 + 0.012**2 * 0.02 + 0.01**2 * 0.024
+    np.testing.assert_allclose(hexa.diameter[0] ** 2 * 0.064, dl, rtol=1e-12)
+    eq, _ = solve(scene, solver)
+    assert eq.converged
+    pulled = int(np.sum(np.asarray(scene.nodes.force)[:, 2] == -0.5))
+    env = scene.environment
+    weight = 96.0 * np.pi / 4 * dl * (1140.0 - env.water_density) * env.gravity
+    np.testing.assert_allclose(eq.reaction(scene).sum(axis=0), [0, 0, weight + 0.5 * pulled], atol=scene.n_nodes * 1e-6)
+    assert pulled >= 3 and info["hexagonal_twine_diameter_m"]["hexagonal panel 1"] == pytest.approx(hexa.diameter[0])
+
+
+@pytest.mark.parametrize("edits, needle, words", [
+    ([("Current speed (m/s):                    0.000000", "Current speed (m/s):                    0.5")],
+     "Current speed", "no drag model for hexagonal netting"),
+    # FEMNET skips the line after the last corner of a hexagonal panel: a field there would be lost to it
+    ([("                                        l            m            n\n", "")],
+     "Traction stiffness l m n", "FEMNET skips the line after the last corner"),
+    ([("Meshing type:				2", "Meshing type:				3")], "Meshing type", "twines as bar elements"),
+])
+def test_hexagonal_errors_name_the_line(tmp_path, edits, needle, words):
+    path, text = _edit(tmp_path, "hexagonal", edits)
+    with pytest.raises(SceneError) as err:
+        femnet.read_don(path)
+    message = str(err.value)
+    assert words in message and f"hexagonal.don:{_line_of(text, needle)}:" in message, message
+
+
+def test_added_mass_is_recorded_and_limits_without_sense_are_no_limits(tmp_path):
+    plain, _, info = femnet.read_don(DATA / "nr_netting.don")
+    assert info["added_mass"] == {1: [0.0, 0.0, 0.0], 2: [0.0, 0.0, 0.0]}
+    # type 2 (every free node) with an added mass (dynamics only) and a limit whose sense is 0 (none)
+    block = ("Added mass X,Y,Z (kg):        0.000000  0.000000  0.000000\nLength X,Y,Z (m):        0.000000  0.000000  "
+             "0.000000\nDrag coefficient X,Y,Z:        1.200000  1.200000  1.200000\nExternal forces X,Y,Z (N):    "
+             "0.000000  0.000000  0.000000\nDisplacement X,Y,Z:        0 0 0\nLimits X,Y,Z (m):        0.000000  "
+             "0.000000  0.000000")
+    edited = block.replace("Added mass X,Y,Z (kg):        0.000000  0.000000  0.000000",
+                           "Added mass X,Y,Z (kg):        1.500000  2.000000  0.250000").replace(
+                           "Limits X,Y,Z (m):        0.000000  0.000000  0.000000",
+                           "Limits X,Y,Z (m):        0.000000  0.000000  -2.000000")
+    path, _ = _edit(tmp_path, "nr_netting", [(block, edited)])
+    net, _, info = femnet.read_don(path)
+    assert info["added_mass"] == {1: [0.0, 0.0, 0.0], 2: [1.5, 2.0, 0.25]}
+    a, b = plain.build(), net.build()
+    for field in ("position", "fixed", "mass", "volume", "force"):
+        np.testing.assert_array_equal(getattr(a.nodes, field), getattr(b.nodes, field))
+    json.dumps(info)
+
+
+def test_meshing_order_shorthand(tmp_path):
+    # FEMNET's 'a...' meshes the cables first (the cod line's 7 bars divide the side), 'b...' the panels first
+    # (the cable takes the side's division, 18 segments of jaxnet's mesher)
+    for word, bars in (("all", 7), ("bll", 18)):
+        path, _ = _edit(tmp_path, "c2", [("Meshing order:\nel:1    pa:     1  ", f"Meshing order: {word}")])
+        net, _, _ = femnet.read_don(path)
+        assert len(net.build().bars.ends) == bars

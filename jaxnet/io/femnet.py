@@ -29,11 +29,47 @@ Conventions established from the files (see ``tests/test_femnet.py``):
   symmetry plane normal to that axis, so that coordinate is held too (the plane is a mirror: the
   node's out-of-plane displacement is zero by symmetry). FEMNET reports no reaction there and zeroes
   the total force along symmetry axes; :func:`femnet_figures` does the same.
-* **Cables along panel sides.** A cable whose two ends are two consecutive corners of a panel is sewn
-  along that side (FEMNET's mesher makes the side nodes the cable nodes): if the cable is meshed
-  before the panel ("Meshing order") its number of bars divides the side, otherwise the side's own
-  division is used and the cable's "number of bars" is ignored, as FEMNET does (``nr_netting``'s
-  one-bar cables 3, 4, 6 become 11, 16 and 16 bars in its ``.mdg``).
+* **Links** ("Links number", phobos ``chargement_don.c``): one line per link, ``nb_pt: N`` then N
+  points ``pa: k nd: c`` (corner c of diamond panel k), ``ha: k nd: c`` (hexagonal panel) or ``el: k
+  nd: e`` (end e of cable k); FEMNET goes by the first letter, ``c`` and ``w`` being sliding cables and
+  winches (refused here). The points of a link are one node; so are, with ``input link d``, all the
+  points closer than d m (FEMNET's automatic links), and here also points at one place (jaxnet's
+  :class:`~jaxnet.net.Net` joins them). The joined node starts at the mean of the points' start
+  positions, as FEMNET's ``numerotation.c`` places it: the reader moves the joined corners and cable
+  ends there before meshing. Sewing (``liaison_maille`` and ``maillage_contour_panneau2`` in
+  ``maillage_panneau*.c``): a panel side whose two corners are joined to the two corners of another
+  panel's side, or to the two ends of a cable, is sewn to it: the later-meshed part takes the number
+  of nodes of the part meshed first, at the same proportions along the side, its nodes are linked to
+  those, and each panel keeps its own twine coordinates there (interpolated along its own side). Here
+  the sides become :meth:`~jaxnet.net.Net.seam` pairs and the cables ``Net.cable(along=side)``; the
+  division of sewn sides is the cable's number of bars when a cable is meshed first ("Meshing order"),
+  as FEMNET's (``nr_netting``'s one-bar cables 3, 4, 6, meshed after the panel, become 11, 16 and 16
+  bars in its ``.mdg``; ``c2``'s cod line, meshed first, keeps its 7), and otherwise jaxnet's (the
+  largest default division of the sewn sides; FEMNET's is the first-meshed panel's, whose side nodes
+  sit where its twines cross the side: jaxnet's mesher differs from FEMNET's anyway). FEMNET does not
+  sew a panel to itself; the reader refuses a panel (or cable) two of whose corners (ends) are joined,
+  a point in two links, and a cable joined at both ends to a cable of several bars (FEMNET threads it
+  on that cable's nodes). A joined node whose points have different node types is refused (FEMNET
+  warns and keeps one).
+* **Hexagonal panels** ("hexagonal panels number"; ``chargement_don.c``): laid out as diamond panels,
+  but after the corners FEMNET skips one whole line (a field written there is lost to FEMNET; refused
+  here), then reads three values (twine families l, m, n) for traction stiffness (N), compression
+  stiffness (N), unstretched length (m) and hydrodynamic diameter (m), then volumic mass, normal Cd,
+  tangential Cd, meshing step, type of internal nodes and meshing type (1, 2: triangles; 3: twines as
+  bars, refused); no opening stiffness and no knot size. Their (U, V) count *base meshes* exactly as
+  jaxnet's :mod:`jaxnet.terms.hexagonal` does, so they are passed unchanged (not turned into U + V,
+  V - U): FEMNET's solver (unix ``etirement_hexa.c``, ``calcul_lmn_hexa``) takes the triangle's
+  vectors U = dx/dU, V = dx/dV from the corners' (U, V) (``.mdg``, read into ``lon`` by
+  ``lectureDo4.c``) and puts the three neighbours of a knot at 0 (twine m), (U + V)/2 (n) and V (l),
+  which are jaxnet's P_m, P_n = P_m + (U + V)/2, P_l = P_m + V (book 4.83-4.84), with forces
+  (T_l - T_m, -T_n) on (U, V) as jaxnet's. jaxnet's hexagonal netting has one twine diameter and no
+  drag: the diameter D with FEMNET's three's weight, D² sum l0_i = sum d_i² l0_i, and a current with
+  hexagonal panels is refused. jaxnet meshes a hexagonal panel with step / (3 mean l0) base meshes.
+* **Added mass** acts in dynamics only (``lectureDo4.c``: "n'intervient qu'en dynamique"): read, kept
+  in ``info["added_mass"]`` per node type, without effect here. A node **length** X,Y,Z makes the node a
+  box that floats and takes drag (``flotteur2.c``, ``traineecourant2.c``) and a **limit** acts where its
+  **sense** is 1 (floor) or -1 (ceiling) (``fond.c``, the sea bed): both refused (a limit with sense 0 is
+  no limit, and read).
 * **Catch.** FEMNET's catch volume is that of the *modelled* part (``c2``, a quarter model, asks for
   and reports 0.2 m³); jaxnet's :class:`~jaxnet.scene.Catch` takes the whole cod-end's volume and the
   number of copies (2 per symmetry plane used by the nodes): volume = 0.2 × 4 for ``c2``. The axis is
@@ -45,18 +81,25 @@ Conventions established from the files (see ``tests/test_femnet.py``):
   water_density`` says otherwise, g = 9.81 m/s². The current direction (deg) turns from x towards y.
   The free surface is not modelled (both cases lie well below z = 0).
 
-Strictness. FEMNET skips to the next colon and reads numbers, whatever the text before the colon;
-this reader checks each label against the field it expects (the long and the short spellings found in
+Strictness. FEMNET skips to the next colon and reads numbers, whatever the text before the colon; this
+reader checks each label against the field it expects (the long and the short spellings found in
 FEMNET's cases), and raises :class:`~jaxnet.scene.SceneError` naming the file, the LINE and the field
-for: a misspelt label, a missing or non-numeric value (truncated file), NaN/inf, a negative stiffness
-or length, a zero-length cable, a panel whose (U, V) contour has no area, and every FEMNET feature it
-does not model when it is used (waves, added mass, node drag lengths, sea-bed limits, hexagonal
-panels, links, sliding cables, dynamics, anisotropic node mass, unknown ``input`` commands, ...).
+for: a misspelt label, a missing or non-numeric value (truncated file; numbers as C's scanf reads them),
+NaN/inf, a negative stiffness or length, a zero-length cable, a panel whose (U, V) contour has no area,
+positions beyond 1e5 m, meshes of more than 50000 nodes per panel or cables of more than 5000 bars
+(FEMNET's own limits are 20000 nodes and 5000 bars in all), a link to a part that does not exist, and
+every FEMNET feature it does not model when it is used (waves, node lengths, sea-bed limits, hexagonal
+netting in a current, twines meshed as bars, sliding cables, winches, dynamics, anisotropic node mass,
+unknown ``input`` commands, ...). :func:`read_don` also builds the net it returns, so that errors of
+meshing and of the scene (a net held nowhere, ...) come named with the file and a line too. "Meshing
+order" may be FEMNET's shorthand: a word beginning with ``a`` (cables, then panels, then hexagonal
+panels) or ``b`` (panels, hexagonal panels, cables).
 """
 
 from __future__ import annotations
 
 import bisect
+import contextlib
 import dataclasses
 import math
 import pathlib
@@ -64,7 +107,7 @@ import re
 
 import numpy as np
 
-from jaxnet.net import Net, Rope, Side, Twine, _knot_stiffness, _outward
+from jaxnet.net import HexTwine, Net, Rope, Side, Twine, knot_stiffness, outward
 from jaxnet.scene import Bars, Catch, Environment, Netting, Nodes, Scene, SceneError, validate
 from jaxnet.solve.statics import Newton
 
@@ -108,14 +151,21 @@ L = {
     "inner_type": _lab(r"type of internal nodes", r"ty"),
     "mesh_type": _lab(r"meshing type"),
     "hexa": _lab(r"hexagonal panels number"),
+    "hexa_ea": _lab(r"traction stiffness( l,? ?m,? ?n)?( \(n\))?", r"kt"),
+    "hexa_eac": _lab(r"compression stiffness( l,? ?m,? ?n)?( \(n\))?", r"kc"),
+    "hexa_l0": _lab(r"unstretched lengths?( l,? ?m,? ?n)?( \(m\))?", r"l"),
+    "hexa_diameter": _lab(r"hydrodynamic diameters?( l,? ?m,? ?n)?( \(m\))?", r"d"),
     "cables": _lab(r"cables number"),
     "cable": _lab(r"cable"),
     "ends": _lab(r"extremities no x y z type"),
     "n_bars": _lab(r"bars number", r"nb"),
     "sliding": _lab(r"sliding cables number"),
     "links": _lab(r"links number"),
+    "link": _lab(r"nb_? ?pts?", r"number of (points|corners)", r"link( \d+)?"),
+    "link_item": _lab(r"pa", r"panel", r"ha", r"he", r"hexa", r"el", r"element", r"co", r"wi", r"winch"),
+    "link_corner": _lab(r"nd", r"no", r"node", r"corner", r"extremity"),
     "order": _lab(r"meshing order"),
-    "order_item": _lab(r"el", r"pa", r"ha"),
+    "order_item": _lab(r"el", r"pa", r"ha", r"he"),
     "types": _lab(r"number of types of nodes"),
     "type": _lab(r"no du type", r"type"),
     "mass": _lab(r"mass x,y,z( \(kg\))?"),
@@ -158,6 +208,18 @@ L = {
     "show_surface": _lab(r"filt(e|ra)ted surface display"),
     "show_speed": _lab(r"speed display"),
 }
+
+
+#: the most nodes a panel may get: larger meshes are surely a mistake (and take long to make)
+MAX_PANEL_NODES = 50_000
+#: the most bars of a cable (FEMNET's phobos.h: NBMAXBARRE 5000 in all); a cable sewn along a side divides it
+MAX_BARS = 5_000
+#: positions (m) and panel coordinates U, V (meshes) beyond these are surely mistakes
+MAX_COORDINATE = 1e5
+MAX_MESHES = 1e7
+
+#: a decimal number as C's scanf reads it
+_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -209,12 +271,18 @@ class _Reader:
 
     def number(self, what, check=None):
         tok, line = self.token(what)
-        try:
-            v = float(tok)
-        except ValueError:
-            raise self.error(f"'{what}': expected a number, found {tok!r}", line) from None
+        if tok.lower().lstrip("+-") in ("nan", "inf", "infinity"):
+            raise self.error(f"'{what}': {tok!r} is not a finite number", line)
+        # a decimal number as C's scanf reads it (Python's float() would also take "1_000" or "0x1p3")
+        if not _NUMBER.fullmatch(tok):
+            raise self.error(f"'{what}': expected a number, found {tok!r}", line)
+        v = float(tok)
         if not math.isfinite(v):
             raise self.error(f"'{what}': {tok!r} is not a finite number", line)
+        if check == "position" and not abs(v) <= MAX_COORDINATE:
+            raise self.error(f"'{what}': {v!r} m is out of range (a net within {MAX_COORDINATE:g} m of the origin)", line)
+        if check == "meshes" and not abs(v) <= MAX_MESHES:
+            raise self.error(f"'{what}': {v!r} meshes is out of range (at most {MAX_MESHES:g})", line)
         if check == ">=0" and v < 0:
             raise self.error(f"'{what}' must be >= 0, got {v!r}", line)
         if check == ">0" and not v > 0:
@@ -238,11 +306,13 @@ class _Reader:
 
 @dataclasses.dataclass
 class _Panel:
-    corners: np.ndarray   # (C, 5) x y z U V as in the file (U, V: meshes along the diagonals)
+    corners: np.ndarray   # (C, 5) x y z U V as in the file (diamond: meshes along the diagonals; hexagonal:
+                          # base meshes)
     corner_type: list
     side_type: list
-    material: dict        # name -> Value
+    material: dict        # name -> Value (hexagonal: ea, eac, l0, diameter -> [Value l, m, n])
     line: int
+    hexagonal: bool = False
 
 
 @dataclasses.dataclass
@@ -260,6 +330,16 @@ class _NodeType:
     fixed: list
     symmetry: list
     line: int
+    added_mass: list = dataclasses.field(default_factory=lambda: [0.0, 0.0, 0.0])
+
+
+@dataclasses.dataclass
+class _Link:
+    """A link: panel corners and cable ends that are one node. members: [(kind, index, corner, line)] with kind
+    "pa" (diamond panel), "ha" (hexagonal panel) or "el" (cable), 0-based index and corner (cable end 0 or 1)."""
+
+    members: list
+    line: int
 
 
 @dataclasses.dataclass
@@ -269,13 +349,15 @@ class Case:
     path: str
     panels: list
     cables: list
-    order: list           # [("el" | "pa", index 1-based)]
+    order: list           # [("el" | "pa" | "ha", index 1-based)]
     types: dict           # type number -> _NodeType
     numeric: dict
     ocean: dict
     catch: dict
     inputs: dict
     outputs: list
+    hexagonal: list = dataclasses.field(default_factory=list)   # hexagonal panels (_Panel, hexagonal=True)
+    links: list = dataclasses.field(default_factory=list)       # _Link
 
 
 def _twine_coordinates(UV):
@@ -298,37 +380,9 @@ def parse_don(path) -> Case:
         raise r.error(f"design in the plane normal to axis {orientation.value}: only 3 (x y z as written) is supported",
                       orientation.line)
     n_panels = r.field("panels", "panels number", integer=True, minimum=0)
-    panels = []
-    for k in range(n_panels.value):
-        r.label("panel", f"panel {k + 1}")
-        r.integer(f"panel {k + 1} number")
-        nc = r.field("corners", f"panel {k + 1}: number of nodes around", integer=True, minimum=3)
-        r.label("contour", f"panel {k + 1}: nodes of the contour")
-        rows, ctype, stype, lines = [], [], [], []
-        for c in range(nc.value):
-            what = f"panel {k + 1} corner {c + 1}"
-            r.integer(f"{what} number")
-            vals = [r.number(f"{what} {name}") for name in ("x", "y", "z", "U", "V")]
-            rows.append([v.value for v in vals])
-            lines.append(vals[0].line)
-            ctype.append(r.integer(f"{what} node type", 1))
-            stype.append(r.integer(f"{what} following side type", 1))
-        mat = {}
-        for key, what, check in (("ea", "traction stiffness", ">=0"), ("eac", "compression stiffness", ">=0"),
-                                 ("opening", "mesh opening stiffness", ">=0"), ("l0", "unstretched length", ">0"),
-                                 ("density", "volumic mass", ">=0"), ("diameter", "hydrodynamic diameter", ">=0"),
-                                 ("knot", "knot size", ">=0"), ("cd", "normal Cd", ">=0"), ("f", "tangential Cd", ">=0"),
-                                 ("step", "meshing step", ">0")):
-            mat[key] = r.field(key, f"panel {k + 1}: {what}", check)
-        mat["inner_type"] = r.field("inner_type", f"panel {k + 1}: type of internal nodes", integer=True, minimum=1)
-        mat["mesh_type"] = r.field("mesh_type", f"panel {k + 1}: meshing type", integer=True)
-        corners = np.array(rows)
-        _check_contour(r, corners, lines, k + 1)
-        panels.append(_Panel(corners, ctype, stype, mat, nc.line))
+    panels = [_parse_panel(r, k, hexagonal=False) for k in range(n_panels.value)]
     n_hexa = r.field("hexa", "hexagonal panels number", integer=True, minimum=0)
-    if n_hexa.value:
-        raise r.error(f"hexagonal panels number {n_hexa.value}: hexagonal panels of FEMNET's .don are not supported "
-                      "(their l, m, n coordinates are not mapped onto jaxnet's HexTwine)", n_hexa.line)
+    hexagonal = [_parse_panel(r, k, hexagonal=True) for k in range(n_hexa.value)]
     n_cables = r.field("cables", "cables number", integer=True, minimum=0)
     cables = []
     for k in range(n_cables.value):
@@ -339,7 +393,7 @@ def parse_don(path) -> Case:
         for e in range(2):
             what = f"cable {k + 1} end {e + 1}"
             r.integer(f"{what} number")
-            ends.append([r.number(f"{what} {name}").value for name in "xyz"])
+            ends.append([r.number(f"{what} {name}", "position").value for name in "xyz"])
             etype.append(r.integer(f"{what} node type", 1))
         mat = {}
         for key, what, check in (("ea", "traction stiffness", ">=0"), ("eac", "compression stiffness", ">=0"),
@@ -347,24 +401,19 @@ def parse_don(path) -> Case:
                                  ("diameter", "hydrodynamic diameter", ">=0"), ("cd", "normal Cd", ">=0"),
                                  ("f", "tangential Cd", ">=0")):
             mat[key] = r.field(key, f"cable {k + 1}: {what}", check)
-        mat["n_bars"] = r.field("n_bars", f"cable {k + 1}: number of bars", integer=True, minimum=1)
+        mat["n_bars"] = nb = r.field("n_bars", f"cable {k + 1}: number of bars", integer=True, minimum=1)
+        if nb.value > MAX_BARS:
+            raise r.error(f"cable {k + 1}: {nb.value} bars (limit {MAX_BARS}, FEMNET's own)", nb.line)
         mat["inner_type"] = r.field("inner_type", f"cable {k + 1}: type of internal nodes", integer=True, minimum=1)
         cables.append(_Cable(np.array(ends), etype, mat, etype[0].line))
-    for key, what in (("sliding", "sliding cables number"), ("links", "links number")):
-        n = r.field(key, what, integer=True, minimum=0)
-        if n.value:
-            raise r.error(f"{what} {n.value}: {what.split(' number')[0]} are not supported by this reader", n.line)
-    r.label("order", "meshing order")
-    order, seen = [], set()
-    for _ in range(n_panels.value + n_cables.value):
-        kind = r.label("order_item", "meshing order entry (el: or pa:)")
-        idx = r.integer(f"meshing order {kind}", 1)
-        count = n_cables.value if kind == "el" else n_panels.value
-        if kind == "ha" or idx.value > count or (kind, idx.value) in seen:
-            raise r.error(f"meshing order: '{kind}: {idx.value}' is not a {'cable' if kind == 'el' else 'panel'} of the "
-                          "case, or is listed twice", idx.line)
-        seen.add((kind, idx.value))
-        order.append((kind, idx.value))
+    n = r.field("sliding", "sliding cables number", integer=True, minimum=0)
+    if n.value:
+        raise r.error(f"sliding cables number {n.value}: sliding cables are not supported by this reader", n.line)
+    counts = {"pa": [len(p.corners) for p in panels], "ha": [len(p.corners) for p in hexagonal],
+              "el": [2] * len(cables)}
+    n_links = r.field("links", "links number", integer=True, minimum=0)
+    links = [_parse_link(r, k, counts) for k in range(n_links.value)]
+    order = _parse_order(r, counts)
     n_types = r.field("types", "number of types of nodes", integer=True, minimum=1)
     types = {}
     for t in range(n_types.value):
@@ -377,23 +426,33 @@ def parse_don(path) -> Case:
         force = r.triple("force", f"node type {number.value}: external force")
         r.label("fixed", f"node type {number.value}: displacement")
         fixed = [_flag(r, f"node type {number.value}: displacement {a}") for a in "XYZ"]
-        limits = r.triple("limits", f"node type {number.value}: limits")
+        r.triple("limits", f"node type {number.value}: limits")
         r.label("limits_sense", f"node type {number.value}: limits sense")
         sense = [r.integer(f"node type {number.value}: limits sense {a}") for a in "XYZ"]
         r.label("symmetry", f"node type {number.value}: symmetry")
         symmetry = [_flag(r, f"node type {number.value}: symmetry {a}") for a in "XYZ"]
-        for name, values in (("added mass", added), ("length (node drag)", length), ("limits", limits),
-                             ("limits sense", sense)):
-            bad = [v for v in values if v.value != 0]
-            if bad:
-                raise r.error(f"node type {number.value}: {name} {bad[0].value!r} is not supported (only 0: no "
-                              f"{'sea-bed limit' if 'limit' in name else name})", bad[0].line)
+        # added mass only acts in dynamics (FEMNET's lectureDo4.c): kept in the info, no effect in statics.
+        # A length makes the node a box that floats (buoyancy) and takes drag (flotteur2.c, traineecourant2.c);
+        # a limit acts only where its sense is -1 or 1 (the sea bed, fond.c): neither is modelled here.
+        bad = [v for v in length if v.value != 0]
+        if bad:
+            raise r.error(f"node type {number.value}: length {bad[0].value!r} m is not supported (FEMNET makes such a "
+                          "node a box with buoyancy and drag; only 0)", bad[0].line)
+        for v in sense:
+            if v.value not in (-1, 0, 1):
+                raise r.error(f"node type {number.value}: limits sense must be -1 (ceiling), 0 (none) or 1 (floor), "
+                              f"got {v.value}", v.line)
+        bad = [v for v in sense if v.value != 0]
+        if bad:
+            raise r.error(f"node type {number.value}: limits sense {bad[0].value}: sea-bed limits are not supported "
+                          "(only 0: no limit)", bad[0].line)
         if len({m.value for m in mass}) > 1:
             raise r.error(f"node type {number.value}: anisotropic mass {[m.value for m in mass]} is not supported "
                           "(give the same mass along X, Y and Z)", mass[0].line)
         if number.value in types:
             raise r.error(f"node type {number.value} is described twice", number.line)
-        types[number.value] = _NodeType([m.value for m in mass], [f.value for f in force], fixed, symmetry, number.line)
+        types[number.value] = _NodeType([m.value for m in mass], [f.value for f in force], fixed, symmetry, number.line,
+                                        [a.value for a in added])
     numeric = {}
     for key, what, check in (("divisor", "divisor", None), ("threshold", "convergence threshold", ">0"),
                              ("max_step", "displacement limit for each iteration", ">0")):
@@ -431,7 +490,7 @@ def parse_don(path) -> Case:
                       ("show_surface", "filtrated surface display"), ("show_speed", "speed display")):
         r.field(key, what, integer=True)
     inputs, outputs = _commands(r)
-    return Case(str(path), panels, cables, order, types, numeric, ocean, catch, inputs, outputs)
+    return Case(str(path), panels, cables, order, types, numeric, ocean, catch, inputs, outputs, hexagonal, links)
 
 
 def _flag(r, what):
@@ -441,18 +500,148 @@ def _flag(r, what):
     return v
 
 
-def _check_contour(r, corners, lines, k):
+def _check_contour(r, corners, lines, name):
     """The panel's contour in twine coordinates must enclose an area (no repeated corner, not collinear)."""
     uv = _twine_coordinates(corners[:, 3:5])
     nxt = np.roll(uv, -1, axis=0)
     for c in range(len(uv)):
         if np.allclose(uv[c], nxt[c], rtol=0, atol=1e-12):
-            raise r.error(f"panel {k}: corners {c + 1} and {(c + 1) % len(uv) + 1} have the same (U, V)", lines[c])
+            raise r.error(f"{name}: corners {c + 1} and {(c + 1) % len(uv) + 1} have the same (U, V)", lines[c])
     area = 0.5 * np.sum(uv[:, 0] * nxt[:, 1] - nxt[:, 0] * uv[:, 1])
     scale = np.ptp(uv, axis=0).max() ** 2
-    if abs(area) <= 1e-9 * max(scale, 1e-300):
-        raise r.error(f"panel {k}: the (U, V) contour of its corners is collinear (no area): "
+    if not abs(area) > 1e-9 * max(scale, 1e-300):
+        raise r.error(f"{name}: the (U, V) contour of its corners is collinear (no area): "
                       f"{corners[:, 3:5].tolist()}", lines[0])
+
+
+def _parse_panel(r, k, hexagonal):
+    """One diamond or hexagonal panel (phobos ``chargement_don.c``): corners, then the material fields; a
+    hexagonal panel has three values (twine families l, m, n) for the stiffnesses, lengths and diameters, and
+    neither opening stiffness nor knot size."""
+    name = f"{'hexagonal ' if hexagonal else ''}panel {k + 1}"
+    r.label("panel", name)
+    r.integer(f"{name} number")
+    nc = r.field("corners", f"{name}: number of nodes around", integer=True, minimum=3)
+    r.label("contour", f"{name}: nodes of the contour")
+    rows, ctype, stype, lines = [], [], [], []
+    for c in range(nc.value):
+        what = f"{name} corner {c + 1}"
+        r.integer(f"{what} number")
+        vals = [r.number(f"{what} {coord}", "position" if coord in "xyz" else "meshes")
+                for coord in ("x", "y", "z", "U", "V")]
+        rows.append([v.value for v in vals])
+        lines.append(vals[0].line)
+        ctype.append(r.integer(f"{what} node type", 1))
+        stype.append(r.integer(f"{what} following side type", 1))
+    mat = {}
+    if hexagonal:
+        # FEMNET reads the rest of the last corner's line, then skips one whole line (two fgets) before the
+        # fields: a field written on that line would be lost to FEMNET, so it must hold none
+        skipped = stype[-1].line + 1
+        if skipped <= len(r.starts):
+            text = r.text[r.starts[skipped - 1]:r.starts[skipped] if skipped < len(r.starts) else len(r.text)]
+            if ":" in text:
+                raise r.error(f"{name}: FEMNET skips the line after the last corner of a hexagonal panel, but it holds "
+                              f"a field ({text.strip()!r}); leave a line (blank or a comment without ':') there",
+                              skipped)
+        for key, what, check in (("hexa_ea", "traction stiffness l m n", ">=0"),
+                                 ("hexa_eac", "compression stiffness l m n", ">=0"),
+                                 ("hexa_l0", "unstretched length l m n", ">0"),
+                                 ("hexa_diameter", "hydrodynamic diameter l m n", ">=0")):
+            r.label(key, f"{name}: {what}")
+            mat[key[5:]] = [r.number(f"{name}: {what[:-6]} {family}", check) for family in "lmn"]
+        fields = (("density", "volumic mass", ">=0"), ("cd", "normal Cd", ">=0"), ("f", "tangential Cd", ">=0"),
+                  ("step", "meshing step", ">0"))
+    else:
+        fields = (("ea", "traction stiffness", ">=0"), ("eac", "compression stiffness", ">=0"),
+                  ("opening", "mesh opening stiffness", ">=0"), ("l0", "unstretched length", ">0"),
+                  ("density", "volumic mass", ">=0"), ("diameter", "hydrodynamic diameter", ">=0"),
+                  ("knot", "knot size", ">=0"), ("cd", "normal Cd", ">=0"), ("f", "tangential Cd", ">=0"),
+                  ("step", "meshing step", ">0"))
+    for key, what, check in fields:
+        mat[key] = r.field(key, f"{name}: {what}", check)
+    mat["inner_type"] = r.field("inner_type", f"{name}: type of internal nodes", integer=True, minimum=1)
+    mat["mesh_type"] = t = r.field("mesh_type", f"{name}: meshing type", integer=True)
+    # FEMNET meshes netting into triangles with types 1 and 2; higher types model the twines as bars
+    # (maillage.c: 3 and 4 for diamond panels, 3 for hexagonal ones), another model
+    bars = (3,) if hexagonal else (3, 4)
+    if t.value in bars:
+        raise r.error(f"{name}: meshing type {t.value} (twines as bar elements) is not supported (only 1 or 2: "
+                      "triangular netting elements)", t.line)
+    if t.value not in (1, 2):
+        raise r.error(f"{name}: meshing type must be 1 or 2, got {t.value}", t.line)
+    corners = np.array(rows)
+    _check_contour(r, corners, lines, name)
+    # jaxnet meshes with a step of h twines (base meshes for hexagonal netting): refuse a mesh too large to be
+    # meant (FEMNET's own limit is 20000 nodes in all, phobos.h NBMAXNOEUD) before trying to make it
+    if hexagonal:
+        uv, h = corners[:, 3:5], mat["step"].value / (3.0 * np.mean([v.value for v in mat["l0"]]))
+    else:
+        uv, h = _twine_coordinates(corners[:, 3:5]), mat["step"].value / mat["l0"].value
+    nxt = np.roll(uv, -1, axis=0)
+    area = 0.5 * abs(np.sum(uv[:, 0] * nxt[:, 1] - nxt[:, 0] * uv[:, 1]))
+    with np.errstate(all="ignore"):  # a step that underflows h to 0 estimates inf nodes, refused below
+        estimate = area / (h * h * math.sqrt(3.0) / 2.0) + np.hypot(*(nxt - uv).T).sum() / h
+    if not estimate <= MAX_PANEL_NODES:
+        raise r.error(f"{name}: meshing step {mat['step'].value!r} m gives about {estimate:.3g} nodes (limit "
+                      f"{MAX_PANEL_NODES}); use a larger step", mat["step"].line)
+    return _Panel(corners, ctype, stype, mat, nc.line, hexagonal)
+
+
+def _parse_link(r, k, counts):
+    """One link (``chargement_don.c``): its number of points, then per point the structure (pa: diamond panel,
+    ha: hexagonal panel, el: cable; FEMNET goes by the first letter) and its corner or end (nd:)."""
+    names = {"pa": "panel", "ha": "hexagonal panel", "el": "cable"}
+    r.label("link", f"link {k + 1}")
+    n = r.integer(f"link {k + 1}: number of points", 1)
+    members, seen = [], set()
+    for i in range(n.value):
+        what = f"link {k + 1} point {i + 1}"
+        label = r.label("link_item", f"{what}: structure (pa:, ha: or el:)")
+        if label[0] in "cw":
+            raise r.error(f"{what}: '{label}:' links a {'sliding cable' if label[0] == 'c' else 'winch'}, not supported",
+                          r.line(r.pos - 1))
+        kind = {"p": "pa", "h": "ha", "e": "el"}[label[0]]
+        idx = r.integer(f"{what}: {names[kind]} number", 1)
+        if idx.value > len(counts[kind]):
+            raise r.error(f"{what}: there is no {names[kind]} {idx.value} (the case has {len(counts[kind])})", idx.line)
+        r.label("link_corner", f"{what}: corner (nd:)")
+        corner = r.integer(f"{what}: corner of {names[kind]} {idx.value}", 1)
+        if corner.value > counts[kind][idx.value - 1]:
+            raise r.error(f"{what}: {names[kind]} {idx.value} has no {'end' if kind == 'el' else 'corner'} {corner.value} "
+                          f"(it has {counts[kind][idx.value - 1]})", corner.line)
+        key = (kind, idx.value - 1, corner.value - 1)
+        if key in seen:
+            raise r.error(f"{what}: {names[kind]} {idx.value} corner {corner.value} is listed twice in link {k + 1}",
+                          corner.line)
+        seen.add(key)
+        members.append((*key, corner.line))
+    return _Link(members, n.line)
+
+
+def _parse_order(r, counts):
+    """The meshing order: ``el: k``, ``pa: k``, ``ha: k`` entries, every cable and panel once; or FEMNET's
+    shorthand, a word beginning with 'a' (cables, then panels, then hexagonal panels, each in number order)
+    or 'b' (panels, hexagonal panels, then cables)."""
+    r.label("order", "meshing order")
+    words = re.compile(r"\s*(\S+)").match(r.text, r.pos)
+    if words and words.group(1)[0].lower() in "ab" and ":" not in words.group(1):
+        r.pos = words.end()
+        entries = {kind: [(kind, j + 1) for j in range(len(counts[kind]))] for kind in counts}
+        first = words.group(1)[0].lower() == "a"
+        return entries["el"] + entries["pa"] + entries["ha"] if first else entries["pa"] + entries["ha"] + entries["el"]
+    names = {"pa": "panel", "ha": "hexagonal panel", "el": "cable"}
+    order, seen = [], set()
+    for _ in range(sum(len(v) for v in counts.values())):
+        kind = r.label("order_item", "meshing order entry (el:, pa: or ha:)")
+        kind = "ha" if kind == "he" else kind
+        idx = r.integer(f"meshing order {kind}", 1)
+        if idx.value > len(counts[kind]) or (kind, idx.value) in seen:
+            raise r.error(f"meshing order: '{kind}: {idx.value}' is not a {names[kind]} of the case, or is listed twice",
+                          idx.line)
+        seen.add((kind, idx.value))
+        order.append((kind, idx.value))
+    return order
 
 
 def _commands(r):
@@ -500,6 +689,29 @@ def _twine(p: _Panel) -> Twine:
                  cd_normal=m["cd"], tangential_ratio=m["f"], opening_stiffness=m["opening"], knot_size=m["knot"])
 
 
+def _hextwine(p: _Panel) -> HexTwine:
+    m = p.material
+    l0 = np.array([v.value for v in m["l0"]])
+    d = np.array([v.value for v in m["diameter"]])
+    return HexTwine(l0=tuple(l0.tolist()), ea=tuple(v.value for v in m["ea"]), diameter=_hexagonal_diameter(l0, d),
+                    ea_compression=tuple(v.value for v in m["eac"]), density=m["density"].value)
+
+
+def _hexagonal_diameter(l0, d):
+    """jaxnet's hexagonal netting has one twine diameter, used only for the twines' weight (it has no drag
+    model): the one with the weight of FEMNET's three families, pi/4 sum d_i² l0_i = pi/4 D² sum l0_i (m)."""
+    d, l0 = np.asarray(d, dtype=float), np.asarray(l0, dtype=float)
+    scale = d.max()  # scaled, so that no square overflows for any finite diameters
+    return float(scale * np.sqrt(np.sum((d / scale) ** 2 * l0) / np.sum(l0))) if scale > 0 else 0.0
+
+
+def _panels(case: Case):
+    """Every panel of the case as (kind, index, panel, jaxnet name), diamond panels first: the order in which
+    :func:`_describe` adds them to the Net, so the position is the ``panel`` index in the scene."""
+    return ([("pa", k, p, f"panel {k + 1}") for k, p in enumerate(case.panels)]
+            + [("ha", k, p, f"hexagonal panel {k + 1}") for k, p in enumerate(case.hexagonal)])
+
+
 def _rope(c: _Cable) -> Rope:
     m = {k: v.value for k, v in c.material.items()}
     return Rope(ea=m["ea"], diameter=m["diameter"], ea_compression=m["eac"], density=m["density"], cd_normal=m["cd"],
@@ -520,9 +732,11 @@ def _solver(case: Case) -> Newton:
 
 
 def _check_types(case: Case):
-    used = [(t, f"panel {k + 1} corner {c + 1}") for k, p in enumerate(case.panels) for c, t in enumerate(p.corner_type)]
-    used += [(t, f"panel {k + 1} side {c + 1}") for k, p in enumerate(case.panels) for c, t in enumerate(p.side_type)]
-    used += [(p.material["inner_type"], f"panel {k + 1} internal nodes") for k, p in enumerate(case.panels)]
+    used = []
+    for kind, k, p, name in _panels(case):
+        used += [(t, f"{name} corner {c + 1}") for c, t in enumerate(p.corner_type)]
+        used += [(t, f"{name} side {c + 1}") for c, t in enumerate(p.side_type)]
+        used += [(p.material["inner_type"], f"{name} internal nodes")]
     used += [(t, f"cable {k + 1} end {e + 1}") for k, c in enumerate(case.cables) for e, t in enumerate(c.end_type)]
     used += [(c.material["inner_type"], f"cable {k + 1} internal nodes") for k, c in enumerate(case.cables)]
     for t, what in used:
@@ -531,21 +745,171 @@ def _check_types(case: Case):
                              f"{sorted(case.types)})")
 
 
-def _sewn_side(case: Case, cable: _Cable, tol=1e-9):
-    """(panel index, side index) when the cable's ends are two consecutive corners of a panel, else None."""
-    for k, p in enumerate(case.panels):
-        xyz = p.corners[:, :3]
-        n = len(xyz)
-        hit = [int(np.flatnonzero(np.linalg.norm(xyz - e, axis=1) <= tol)[0]) if np.any(np.linalg.norm(xyz - e, axis=1) <= tol)
-               else None for e in cable.ends]
-        if None in hit:
+def _check_supported(case: Case):
+    """What a case may read but jaxnet cannot model: said with the line that asks for it."""
+    speed = case.ocean["current_speed"]
+    if case.hexagonal and speed.value > 0:
+        raise SceneError(f"{case.path}:{speed.line}: current speed {speed.value!r} m/s with hexagonal panels (hexagonal "
+                         f"panel 1 at line {case.hexagonal[0].line}): jaxnet has no drag model for hexagonal netting yet")
+
+
+#: corners and cable ends closer than this (m) at the start are one node (jaxnet's Net joins them)
+MERGE_TOLERANCE = 1e-6
+
+
+@dataclasses.dataclass
+class _Plan:
+    """How the case's parts are joined (see the module docstring, "Links"): start positions after joining,
+    panel sides sewn together, cables sewn along panel sides, the bars of the other cables."""
+
+    corners: dict        # (kind, index) -> (C, 3) start positions of a panel's corners (m)
+    ends: list           # per cable: (2, 3) start positions of its ends (m)
+    seams: list          # [(Side, Side)]
+    along: dict          # cable index -> (Side, number of bars or None: the side's division)
+    n_bars: list         # per cable: number of bars when it is not sewn along a side
+    joined: list         # [[point names]]: the points made one node, groups of two or more
+
+
+def _point_names(case: Case):
+    """Every panel corner and cable end: [((kind, index, corner), name, line)]."""
+    out = []
+    for kind, k, p, name in _panels(case):
+        out += [((kind, k, c), f"{name} corner {c + 1}", p.corner_type[c].line) for c in range(len(p.corners))]
+    for k, c in enumerate(case.cables):
+        out += [(("el", k, e), f"cable {k + 1} end {e + 1}", c.end_type[e].line) for e in range(2)]
+    return out
+
+
+def _plan(case: Case) -> _Plan:
+    """Join the case's parts as FEMNET's mesher does (phobos ``chargement_don.c``, ``maillage*.c``,
+    ``numerotation.c``):
+
+    * the points of a link, those closer than ``input link`` d (FEMNET's automatic links) and those at one
+      place (jaxnet joins them anyway) are one node, which starts at the mean of their start positions;
+    * a panel side whose two corners are joined to the two corners of another panel's side, or to the two
+      ends of a cable, is sewn to it; the division of a sewn side is that of the part meshed first when it
+      is a cable (its number of bars); otherwise jaxnet's (the largest default of the sewn sides);
+    * cables joined at both ends to the ends of another cable would share its nodes: only when that one has
+      a single bar (then they are parallel bars), otherwise refused.
+    """
+    points = _point_names(case)
+    index = {key: i for i, (key, _, _) in enumerate(points)}
+    xyz = np.array([(_panel_of(case, key).corners[key[2], :3] if key[0] != "el" else case.cables[key[1]].ends[key[2]])
+                    for key, _, _ in points], dtype=float).reshape(-1, 3)
+    parent = list(range(len(points)))
+
+    def find(i):
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    owner = {}
+    for link in case.links:
+        ids = [index[m[:3]] for m in link.members]
+        for m, i in zip(link.members, ids):
+            if i in owner:
+                raise SceneError(f"{case.path}:{m[3]}: {points[i][1]} is already in the link of line {owner[i]}: a point "
+                                 "belongs to one link (list all the points that are one node in that link)")
+            owner[i] = link.line
+        for i in ids[1:]:
+            parent[find(i)] = find(ids[0])
+    radius = MERGE_TOLERANCE
+    if "link" in case.inputs:
+        radius = max(radius, float(case.inputs["link"].value))
+    if len(xyz) > 1:
+        from scipy.spatial import cKDTree
+
+        for i, j in cKDTree(xyz).query_pairs(radius):
+            parent[find(i)] = find(j)
+    group = [find(i) for i in range(len(points))]
+    members = {}
+    for i, g in enumerate(group):
+        members.setdefault(g, []).append(i)
+    for ids in members.values():
+        seen = {}
+        for i in ids:
+            part = points[i][0][:2]
+            if part in seen:
+                a, b = points[seen[part]], points[i]
+                raise SceneError(f"{case.path}:{b[2]}: {a[1]} and {b[1]} are joined (by a link, or closer than the "
+                                 f"automatic link distance {radius:g} m): a panel or cable cannot be joined to itself")
+            seen[part] = i
+    # FEMNET's joined node starts at the mean of the joined points (numerotation.c); moving them there before
+    # meshing makes jaxnet's Net join them by position, and the sides to sew end at the same two points
+    moved = xyz.copy()
+    for ids in members.values():
+        moved[ids] = xyz[ids].mean(axis=0)
+    reps = list(members)
+    if len(reps) > 1:
+        from scipy.spatial import cKDTree
+
+        close = sorted(cKDTree(moved[reps]).query_pairs(MERGE_TOLERANCE))
+        if close:
+            a, b = points[reps[close[0][0]]], points[reps[close[0][1]]]
+            raise SceneError(f"{case.path}:{b[2]}: {b[1]} is not joined to {a[1]} but starts at the same place (after "
+                             "joining linked points at the mean of their positions): they would be one node")
+    # sides and cables by the pair of nodes at their ends
+    rank = {item: i for i, item in enumerate(case.order)}
+    names = {kind: name for kind, name in (("pa", "panel"), ("ha", "hexagonal panel"))}
+    ends = {}
+    for kind, k, p, name in _panels(case):
+        n = len(p.corners)
+        for s in range(n):
+            pair = frozenset((group[index[(kind, k, s)]], group[index[(kind, k, (s + 1) % n)]]))
+            ends.setdefault(pair, []).append((rank.get((kind, k + 1), 0), kind, k, s))
+    for k in range(len(case.cables)):
+        pair = frozenset((group[index[("el", k, 0)]], group[index[("el", k, 1)]]))
+        ends.setdefault(pair, []).append((rank.get(("el", k + 1), 0), "el", k, None))
+    seams, along = [], {}
+    n_bars = [c.material["n_bars"].value for c in case.cables]
+    for items in ends.values():
+        if len(items) < 2:
             continue
-        a, b = hit
-        if b == (a + 1) % n:
-            return k, a
-        if a == (b + 1) % n:
-            return k, b
-    return None
+        items.sort()
+        sides = [it for it in items if it[1] != "el"]
+        cables = [it for it in items if it[1] == "el"]
+        if sides:
+            base = sides[0]
+            side = Side(f"{names[base[1]]} {base[2] + 1}", base[3])
+            seams += [(side, Side(f"{names[it[1]]} {it[2] + 1}", it[3])) for it in sides[1:]]
+            for it in cables:
+                # meshed before every side: its bars divide them; after: it follows the side's division
+                along[it[2]] = (side, n_bars[it[2]] if it is cables[0] and it[0] < base[0] else None)
+        else:
+            first = cables[0][2]
+            for it in cables[1:]:
+                k = it[2]
+                if n_bars[first] > 1:
+                    raise SceneError(f"{case.path}:{case.cables[k].line}: cable {k + 1} is joined at both ends to the ends "
+                                     f"of cable {first + 1}, meshed before it with {n_bars[first]} bars: FEMNET threads "
+                                     "it on that cable's nodes, which jaxnet cannot do (a cable is sewn along a panel "
+                                     "side only)")
+                n_bars[k] = 1  # FEMNET gives it the single bar of the cable it lies on
+    corners = {}
+    for kind, k, p, name in _panels(case):
+        corners[(kind, k)] = moved[[index[(kind, k, c)] for c in range(len(p.corners))]]
+    cable_ends = [moved[[index[("el", k, 0)], index[("el", k, 1)]]] for k in range(len(case.cables))]
+    joined = [[points[i][1] for i in ids] for ids in members.values() if len(ids) > 1]
+    return _Plan(corners, cable_ends, seams, along, n_bars, joined)
+
+
+def _panel_of(case: Case, key):
+    return (case.panels if key[0] == "pa" else case.hexagonal)[key[1]]
+
+
+def _joined(case: Case, plan: _Plan) -> Case:
+    """The case with its corners and cable ends at their joined start positions."""
+    def panel(p, xyz):
+        corners = p.corners.copy()
+        corners[:, :3] = xyz
+        return dataclasses.replace(p, corners=corners)
+
+    return dataclasses.replace(
+        case,
+        panels=[panel(p, plan.corners[("pa", k)]) for k, p in enumerate(case.panels)],
+        hexagonal=[panel(p, plan.corners[("ha", k)]) for k, p in enumerate(case.hexagonal)],
+        cables=[dataclasses.replace(c, ends=plan.ends[k]) for k, c in enumerate(case.cables)])
 
 
 def _symmetry(case: Case, position, node_type):
@@ -584,55 +948,83 @@ def _catch(case: Case, position, netting_nodes, planes, env: Environment):
     return volume * copies, case.catch["catch_cd"].value, copies, center, axis
 
 
-def _describe(case: Case, env: Environment):
-    """The panels and cables of the case on a new Net; and the cables sewn along panel sides."""
-    net = Net(environment=env)
-    for k, p in enumerate(case.panels):
-        corners = np.concatenate([p.corners[:, :3], _twine_coordinates(p.corners[:, 3:5])], axis=1)
-        net.panel(f"panel {k + 1}", corners, _twine(p), p.material["step"].value)
-    rank = {item: i for i, item in enumerate(case.order)}
-    sewn = {}
-    for k, c in enumerate(case.cables):
-        side = _sewn_side(case, c)
-        name = f"cable {k + 1}"
-        length, nb = c.material["l0"].value, c.material["n_bars"].value
-        if side is not None:
-            pk, s = side
-            # meshed before the panel: its bars divide the side; after: the side's division is kept
-            first = rank.get(("el", k + 1), 0) < rank.get(("pa", pk + 1), 0)
-            net.cable(name, along=Side(f"panel {pk + 1}", s), rope=_rope(c), length=length, n_bars=nb if first else None)
-            sewn[k] = side
+def _describe(case: Case, env: Environment, plan: _Plan) -> Net:
+    """The panels and cables of the (joined) case on a new Net, sewn as ``plan`` says."""
+    net = Net(environment=env, merge_tolerance=MERGE_TOLERANCE)
+    for kind, k, p, name in _panels(case):
+        if kind == "pa":
+            corners = np.concatenate([p.corners[:, :3], _twine_coordinates(p.corners[:, 3:5])], axis=1)
+            net.panel(name, corners, _twine(p), p.material["step"].value)
         else:
-            net.cable(name, start=tuple(c.ends[0]), end=tuple(c.ends[1]), rope=_rope(c), length=length, n_bars=nb)
-    return net, sewn
+            # hexagonal: FEMNET's (U, V) count base meshes, as jaxnet's (see the module docstring)
+            net.panel(name, p.corners, _hextwine(p), p.material["step"].value)
+    for a, b in plan.seams:
+        net.seam(a, b)
+    for k, c in enumerate(case.cables):
+        name, length = f"cable {k + 1}", c.material["l0"].value
+        if k in plan.along:
+            side, n_bars = plan.along[k]
+            net.cable(name, along=side, rope=_rope(c), length=length, n_bars=n_bars)
+        else:
+            net.cable(name, start=tuple(c.ends[0]), end=tuple(c.ends[1]), rope=_rope(c), length=length,
+                      n_bars=plan.n_bars[k])
+    return net
+
+
+@contextlib.contextmanager
+def _located(case: Case, what: str):
+    """Name the file and the line of the part it names in a SceneError from jaxnet's Net (describing or
+    building the net)."""
+    try:
+        yield
+    except SceneError as err:
+        if str(err).startswith(f"{case.path}:"):
+            raise
+        raise SceneError(f"{case.path}:{_culprit_line(case, str(err))}: {what}: {err}") from None
+
+
+def _culprit_line(case: Case, message: str) -> int:
+    """The line of the panel or cable a message names; else of the first node type (fixings, loads)."""
+    m = re.search(r"(hexagonal panel|panel|cable) (\d+)", message)
+    if m:
+        parts = {"hexagonal panel": case.hexagonal, "panel": case.panels, "cable": case.cables}[m.group(1)]
+        k = int(m.group(2)) - 1
+        if 0 <= k < len(parts):
+            return parts[k].line
+    return min((t.line for t in case.types.values()), default=1)
 
 
 def read_don(path):
     """Read FEMNET's ``.don`` case ``path`` into jaxnet.
 
     Returns:
-      (net, solver, info): a :class:`~jaxnet.net.Net` (jaxnet meshes it; ``net.build()`` gives the scene),
-      the :class:`~jaxnet.solve.statics.Newton` options (tol = FEMNET's threshold in N, max_iter, max_step
-      = FEMNET's displacement limit in m), and a dict ``info`` of what the reader decided (symmetry
-      planes and copies, FEMNET's solver settings, the inputs and outputs, the depth).
+      (net, solver, info): a :class:`~jaxnet.net.Net` (jaxnet meshes it; ``net.build()`` gives the scene,
+      checked here to build), the :class:`~jaxnet.solve.statics.Newton` options (tol = FEMNET's threshold in
+      N, max_iter, max_step = FEMNET's displacement limit in m), and a dict ``info`` of what the reader
+      decided (symmetry planes and copies, FEMNET's solver settings, the inputs and outputs, the depth, the
+      joined points, seams and sewn cables, the added masses per node type).
     Raises:
       SceneError naming the file and line (see the module docstring).
     """
     case = parse_don(path)
     _check_types(case)
+    _check_supported(case)
     env = _environment(case)
+    plan = _plan(case)
+    case = _joined(case, plan)
     # a first build, held at every corner and cable end, tells where jaxnet's mesher put the nodes: their
     # FEMNET types (and so the fixings and loads of the real net) follow from where they were created
-    probe, sewn = _describe(case, env)
-    for p in case.panels:
-        for xyz in p.corners[:, :3]:
-            probe.fix(tuple(xyz))
-    for c in case.cables:
-        for xyz in c.ends:
-            probe.fix(tuple(xyz))
-    scene = probe.build()
-    net, _ = _describe(case, env)
-    node_type = _node_types(case, scene, sewn)
+    with _located(case, "meshing the case"):
+        probe = _describe(case, env, plan)
+        for kind, k, p, name in _panels(case):
+            for xyz in p.corners[:, :3]:
+                probe.fix(tuple(xyz))
+        for c in case.cables:
+            for xyz in c.ends:
+                probe.fix(tuple(xyz))
+        scene = probe.build()
+        net = _describe(case, env, plan)
+    node_type = _node_types(case, scene)
     position = np.asarray(scene.nodes.position)
     planes = _symmetry(case, position, node_type)
     for i, t in enumerate(node_type):
@@ -644,13 +1036,16 @@ def read_don(path):
             net.attach(tuple(position[i]), mass=nt.mass[0], force=nt.force)
     netting_nodes = np.unique(np.asarray(scene.netting.vertices)) if scene.netting is not None else np.arange(len(position))
     catch = _catch(case, position, netting_nodes, planes, env)
-    if catch is not None:
-        volume, cd, copies, center, axis = catch
-        net.catch(volume, drag_coefficient=cd, symmetry=copies, center=tuple(center), axis=tuple(axis))
-    return net, _solver(case), _info(case, planes, catch, sewn)
+    with _located(case, "the net with its node types"):
+        if catch is not None:
+            volume, cd, copies, center, axis = catch
+            net.catch(volume, drag_coefficient=cd, symmetry=copies, center=tuple(center), axis=tuple(axis))
+        net.build()
+    return net, _solver(case), _info(case, planes, catch, plan)
 
 
-def _info(case, planes, catch, sewn):
+def _info(case, planes, catch, plan=None):
+    along = {} if plan is None else plan.along
     return {
         "source": case.path,
         "symmetry_axes": ["xyz"[a] for a in sorted(planes)],
@@ -666,7 +1061,16 @@ def _info(case, planes, catch, sewn):
         "water_density": _environment(case).water_density,
         "inputs": {k: v.value for k, v in case.inputs.items()},
         "outputs": list(case.outputs),
-        "cables_sewn_along_sides": {f"cable {k + 1}": f"panel {p + 1} side {s + 1}" for k, (p, s) in sewn.items()},
+        "cables_sewn_along_sides": {f"cable {k + 1}": f"{side.panel} side {side.index + 1}"
+                                    for k, (side, _) in sorted(along.items())},
+        "seams": [] if plan is None else [f"{a.panel} side {a.index + 1} = {b.panel} side {b.index + 1}"
+                                          for a, b in plan.seams],
+        "joined": [] if plan is None else plan.joined,
+        # FEMNET's added mass acts in dynamics only (lectureDo4.c): read, kept here, without effect in statics
+        "added_mass": {t: list(nt.added_mass) for t, nt in sorted(case.types.items())},
+        "hexagonal_twine_diameter_m": {f"hexagonal panel {k + 1}": _hexagonal_diameter(
+            [v.value for v in p.material["l0"]], [v.value for v in p.material["diameter"]])
+            for k, p in enumerate(case.hexagonal)},
     }
 
 
@@ -678,7 +1082,7 @@ def _on_segment(points, a, b, tol):
     return (d <= tol) & (t > 1e-9) & (t < 1 - 1e-9)
 
 
-def _node_types(case: Case, scene, sewn):
+def _node_types(case: Case, scene):
     """Node type of every scene node, from where it was created (see the module docstring)."""
     pos = np.asarray(scene.nodes.position)
     n = len(pos)
@@ -697,16 +1101,17 @@ def _node_types(case: Case, scene, sewn):
     def at(point):
         return np.flatnonzero(np.linalg.norm(pos - point, axis=1) <= tol)
 
-    panel_of = np.asarray(scene.netting.panel) if scene.netting is not None else np.zeros(0, int)
-    tri = np.asarray(scene.netting.vertices) if scene.netting is not None else np.zeros((0, 3), int)
-    for k, p in enumerate(case.panels):
-        nodes = np.unique(tri[panel_of == k])
-        claim(nodes, 0, p.material["inner_type"], f"panel {k + 1} internal nodes")
+    nettings = [f for f in (scene.netting, scene.hexagonal) if f is not None]
+    panel_of = np.concatenate([np.asarray(f.panel) for f in nettings]) if nettings else np.zeros(0, int)
+    tri = np.concatenate([np.asarray(f.vertices) for f in nettings]) if nettings else np.zeros((0, 3), int)
+    for j, (kind, k, p, name) in enumerate(_panels(case)):
+        nodes = np.unique(tri[panel_of == j])
+        claim(nodes, 0, p.material["inner_type"], f"{name} internal nodes")
         C = len(p.corners)
         for c in range(C):
             a, b = p.corners[c, :3], p.corners[(c + 1) % C, :3]
-            claim(nodes[_on_segment(pos[nodes], a, b, tol)], 1, p.side_type[c], f"panel {k + 1} side {c + 1}")
-            claim(at(a), 2, p.corner_type[c], f"panel {k + 1} corner {c + 1}")
+            claim(nodes[_on_segment(pos[nodes], a, b, tol)], 1, p.side_type[c], f"{name} side {c + 1}")
+            claim(at(a), 2, p.corner_type[c], f"{name} corner {c + 1}")
     if scene.bars is not None:
         ends, cable_of = np.asarray(scene.bars.ends), np.asarray(scene.bars.cable)
         for k, c in enumerate(case.cables):
@@ -719,7 +1124,8 @@ def _node_types(case: Case, scene, sewn):
     out = []
     for i in range(n):
         if not claims[i]:
-            raise SceneError(f"{case.path}: node {i} at {pos[i].tolist()} belongs to no panel or cable")
+            raise SceneError(f"{case.path}:{_culprit_line(case, '')}: node {i} at {pos[i].tolist()} belongs to no "
+                             "panel or cable")
         out.append(claims[i][max(claims[i])][0].value)
     return out
 
@@ -820,7 +1226,7 @@ def read_mdg(path, don=None):
                 "opening_stiffness": "opening_stiffness", "rest_angle": "rest_angle", "knot_size": "knot_size",
                 "bending_stiffness": "bending_stiffness"}
         data = {k: np.array([float(getattr(twines[p], f)) for p in panel]) for k, f in cols.items()}
-        data["knot_stiffness"] = np.array([_knot_stiffness(twines[p]) for p in panel])
+        data["knot_stiffness"] = np.array([knot_stiffness(twines[p]) for p in panel])
         netting = Netting(vertices=vertices, uv=uv, panel=panel, drag_model=np.zeros(n_tri, dtype=int), **data)
     bars = None
     if n_bars:
@@ -848,12 +1254,12 @@ def read_mdg(path, don=None):
     if catch_spec is not None:
         volume, cd, copies, center, axis = catch_spec
         catch = Catch(volume=volume, drag_coefficient=cd, axis=axis, center=center, symmetry=copies)
-        netting = dataclasses.replace(netting, outward=_outward(position, np.asarray(netting.vertices), center))
+        netting = dataclasses.replace(netting, outward=outward(position, np.asarray(netting.vertices), center))
     scene = Scene(nodes=nodes, netting=netting, bars=bars, environment=env, catch=catch,
                   panel_names=tuple(f"panel {k + 1}" for k in range(len(case.panels))),
                   cable_names=tuple(f"cable {k + 1}" for k in range(len(case.cables))))
     validate(scene)
-    return scene, _solver(case), _info(case, planes, catch_spec, {})
+    return scene, _solver(case), _info(case, planes, catch_spec)
 
 
 # -- FEMNET's figures and results ---------------------------------------------------------------
