@@ -4,7 +4,9 @@ With no SCENE, solves a built-in scene (``--scene``, default ``cage``: a fish ca
 ``jaxnet run --help`` for the list). SCENE may be a jaxnet scene file (.json, .toml) or a FEMNET case
 (.don, :mod:`jaxnet.io.femnet`); for a FEMNET case ``--mesh CASE.mdg`` solves on FEMNET's own mesh instead
 of jaxnet's, and result.json gets a "femnet" section with FEMNET's summary figures (drag on netting,
-cables and catch, total force on the fixings, catch thickness and diameter).
+cables and catch, total force on the fixings, catch thickness and diameter). A FEMNET case uses FEMNET's own
+laws where they differ from the book's (``docs/errata.md``), so that it gives FEMNET's answers;
+``--jaxnet-laws`` solves it with jaxnet's.
 Writes DIR/result.json (figures, see README), DIR/net.vtu (ParaView) and DIR/net.png, prints one line
 per Newton iteration and a short summary. Exit status 0 on convergence, 1 on a failed solve, 2 on bad input.
 
@@ -57,10 +59,10 @@ def _run(args):
         scene = net.build()
     elif str(args.scene).endswith(".don"):
         if args.mesh is not None:
-            scene, solver, femnet_info = femnet.read_mdg(args.mesh, args.scene)
+            scene, solver, femnet_info = femnet.read_mdg(args.mesh, args.scene, femnet_laws=not args.jaxnet_laws)
             label = f"FEMNET case {args.scene} on FEMNET's mesh {args.mesh}"
         else:
-            net, solver, femnet_info = femnet.read_don(args.scene)
+            net, solver, femnet_info = femnet.read_don(args.scene, femnet_laws=not args.jaxnet_laws)
             scene = net.build()
             label = f"FEMNET case {args.scene}"
     else:
@@ -114,6 +116,9 @@ def main(argv=None):
     run.add_argument("--tol", type=float, help="convergence threshold on the largest nodal force (N)")
     run.add_argument("--max-iter", type=int, dest="max_iter", help="maximum Newton iterations")
     run.add_argument("--quiet", action="store_true", help="no per-iteration progress lines")
+    run.add_argument("--jaxnet-laws", action="store_true", dest="jaxnet_laws",
+                     help="with a FEMNET case: jaxnet's own laws (the book's, corrected) where FEMNET's differ (knot "
+                          "contact, netting drag with a catch: docs/errata.md), instead of FEMNET's")
     default_cache = pathlib.Path(os.environ.get("XDG_CACHE_HOME") or pathlib.Path.home() / ".cache") / "jaxnet"
     run.add_argument("--cache", default=str(default_cache),
                      help=f"directory of compiled programs kept between runs (default: {default_cache})")

@@ -32,7 +32,9 @@ from jaxnet.scene import Bars, Environment, Netting, Nodes, Scene, SceneError
 
 
 #: how the current loads netting (``Twine.drag_model``) -> code in ``Netting.drag_model``
-DRAG_MODELS = {"twines": 0, "loland": 1, "kristiansen-faltinsen": 2}
+DRAG_MODELS = {"twines": 0, "loland": 1, "kristiansen-faltinsen": 2, "femnet-catch": 3}
+#: knot contact law (``Twine.knot_form``) -> code in ``Netting.knot_form``
+KNOT_FORMS = {"book": 0, "femnet": 1}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -44,11 +46,13 @@ class Twine:
     (kg/m³, 1140 = polyamide).
     cd_normal, tangential_ratio: twine drag: normal coefficient Cd and f, the tangential drag as a fraction
       of Cd (eqs 4.114-4.115; FEMNET's usual 1.2 and 0.08); drag_model: "twines" (drag on every twine, the book), "loland" or
-      "kristiansen-faltinsen" (screen models of aquaculture engineering).
+      "kristiansen-faltinsen" (screen models of aquaculture engineering), or "femnet-catch" (FEMNET's twine
+      drag of cases with a catch, which misdirects the U twines' cross-flow drag: to reproduce FEMNET only).
     opening_stiffness: mesh opening stiffness H (N·m/rad, eqs 4.211-4.219); rest_angle: the half opening
       angle α0 (rad) at which the mesh is unstressed in flexion (π/4: square meshes).
     knot_size: knot size (m, eq. 4.278: meshes cannot close below the angle it sets; 0 for none);
-      knot_stiffness: contact stiffness (N·m/rad), None for the default of eq. 4.280.
+      knot_stiffness: contact stiffness (N·m/rad), None for the default of eq. 4.280; knot_form: "book"
+      (4.278-4.280) or "femnet" (FEMNET's law, :mod:`jaxnet.terms.knot`; give it FEMNET's stiffness).
     bending_stiffness: flexural stiffness EI of one twine (N·m², eqs 4.220-4.245; 0 for none).
     """
 
@@ -64,6 +68,7 @@ class Twine:
     rest_angle: float = float(np.pi / 4)
     knot_size: float = 0.0
     knot_stiffness: float | None = None
+    knot_form: str = "book"
     bending_stiffness: float = 0.0
 
 
@@ -241,6 +246,8 @@ class Net:
             raise SceneError(f"panel '{name}': rest_angle (half opening angle, rad) must be in (0, pi/2], got {twine.rest_angle!r}")
         if twine.knot_stiffness is not None:
             _check_material(twine, f"panel '{name}'", ("knot_stiffness",))
+        if twine.knot_form not in KNOT_FORMS:
+            raise SceneError(f"panel '{name}': knot_form must be one of {sorted(KNOT_FORMS)}, got {twine.knot_form!r}")
         self._panels[name] = _Panel(name, corners, twine, float(step))
         return PanelRef(name)
 
@@ -530,12 +537,13 @@ class Net:
             "opening_stiffness": "opening_stiffness", "rest_angle": "rest_angle", "knot_size": "knot_size",
             "bending_stiffness": "bending_stiffness",
         }
-        rows = {k: [] for k in ("vertices", "uv", "panel", "drag_model", "knot_stiffness", *columns)}
+        rows = {k: [] for k in ("vertices", "uv", "panel", "drag_model", "knot_stiffness", "knot_form", *columns)}
         for p, e in self._panel_triangles(meshes, ids, rows, lambda p: not isinstance(p.twine, HexTwine)):
             for key, field in columns.items():
                 rows[key].append(np.full(e, float(getattr(p.twine, field))))
             rows["drag_model"].append(np.full(e, DRAG_MODELS[p.twine.drag_model]))
             rows["knot_stiffness"].append(np.full(e, _knot_stiffness(p.twine)))
+            rows["knot_form"].append(np.full(e, KNOT_FORMS[p.twine.knot_form]))
         if not rows["vertices"]:
             return None
         return Netting(**{k: np.concatenate(v) for k, v in rows.items()})

@@ -107,9 +107,10 @@ import re
 
 import numpy as np
 
-from jaxnet.net import HexTwine, Net, Rope, Side, Twine, knot_stiffness, outward
+from jaxnet.net import DRAG_MODELS, KNOT_FORMS, HexTwine, Net, Rope, Side, Twine, knot_stiffness, outward
 from jaxnet.scene import Bars, Catch, Environment, Netting, Nodes, Scene, SceneError, validate
 from jaxnet.solve.statics import Newton
+from jaxnet.terms import knot
 
 #: FEMNET's default water density (kg/m³, phobos ``chargement_don.c``: RHO = 1025)
 WATER_DENSITY = 1025.0
@@ -683,10 +684,25 @@ def _commands(r):
 # -- mapping onto jaxnet --------------------------------------------------------------------------
 
 
-def _twine(p: _Panel) -> Twine:
+def _twine(p: _Panel, case: Case, femnet_laws: bool) -> Twine:
+    """The panel's netting material; with ``femnet_laws``, with FEMNET's laws where they differ from the book
+    (``docs/errata.md``, "Where FEMNET differs"): its knot contact (``fermeture2``), and, in a case with a
+    catch, its netting drag (``trainee_fil``)."""
     m = {k: v.value for k, v in p.material.items()}
-    return Twine(l0=m["l0"], ea=m["ea"], diameter=m["diameter"], ea_compression=m["eac"], density=m["density"],
-                 cd_normal=m["cd"], tangential_ratio=m["f"], opening_stiffness=m["opening"], knot_size=m["knot"])
+    twine = Twine(l0=m["l0"], ea=m["ea"], diameter=m["diameter"], ea_compression=m["eac"], density=m["density"],
+                  cd_normal=m["cd"], tangential_ratio=m["f"], opening_stiffness=m["opening"], knot_size=m["knot"])
+    if not femnet_laws:
+        return twine
+    return dataclasses.replace(
+        twine, knot_form="femnet", knot_stiffness=float(knot.femnet_knot_stiffness(m["l0"], m["knot"], m["ea"])),
+        drag_model="femnet-catch" if _femnet_catch_drag(case) else "twines")
+
+
+def _femnet_catch_drag(case: Case) -> bool:
+    """Whether FEMNET loads this case's netting with its drag of cases with a catch (``unix.c``: a catch
+    volume above its accuracy, in a current) rather than its twine drag (``filethydro4_sta``)."""
+    return (case.catch["catch_volume"].value > case.catch["catch_accuracy"].value
+            and case.ocean["current_speed"].value > 0)
 
 
 def _hextwine(p: _Panel) -> HexTwine:
@@ -948,13 +964,13 @@ def _catch(case: Case, position, netting_nodes, planes, env: Environment):
     return volume * copies, case.catch["catch_cd"].value, copies, center, axis
 
 
-def _describe(case: Case, env: Environment, plan: _Plan) -> Net:
+def _describe(case: Case, env: Environment, plan: _Plan, femnet_laws: bool = True) -> Net:
     """The panels and cables of the (joined) case on a new Net, sewn as ``plan`` says."""
     net = Net(environment=env, merge_tolerance=MERGE_TOLERANCE)
     for kind, k, p, name in _panels(case):
         if kind == "pa":
             corners = np.concatenate([p.corners[:, :3], _twine_coordinates(p.corners[:, 3:5])], axis=1)
-            net.panel(name, corners, _twine(p), p.material["step"].value)
+            net.panel(name, corners, _twine(p, case, femnet_laws), p.material["step"].value)
         else:
             # hexagonal: FEMNET's (U, V) count base meshes, as jaxnet's (see the module docstring)
             net.panel(name, p.corners, _hextwine(p), p.material["step"].value)
@@ -994,8 +1010,12 @@ def _culprit_line(case: Case, message: str) -> int:
     return min((t.line for t in case.types.values()), default=1)
 
 
-def read_don(path):
+def read_don(path, femnet_laws=True):
     """Read FEMNET's ``.don`` case ``path`` into jaxnet.
+
+    ``femnet_laws``: use FEMNET's own laws where they differ from the book (knot contact; netting drag in a
+    case with a catch; ``docs/errata.md``), so that jaxnet gives FEMNET's answers (the default); False for
+    jaxnet's own physics (the book's laws, corrected).
 
     Returns:
       (net, solver, info): a :class:`~jaxnet.net.Net` (jaxnet meshes it; ``net.build()`` gives the scene,
@@ -1015,7 +1035,7 @@ def read_don(path):
     # a first build, held at every corner and cable end, tells where jaxnet's mesher put the nodes: their
     # FEMNET types (and so the fixings and loads of the real net) follow from where they were created
     with _located(case, "meshing the case"):
-        probe = _describe(case, env, plan)
+        probe = _describe(case, env, plan, femnet_laws)
         for kind, k, p, name in _panels(case):
             for xyz in p.corners[:, :3]:
                 probe.fix(tuple(xyz))
@@ -1023,7 +1043,7 @@ def read_don(path):
             for xyz in c.ends:
                 probe.fix(tuple(xyz))
         scene = probe.build()
-        net = _describe(case, env, plan)
+        net = _describe(case, env, plan, femnet_laws)
     node_type = _node_types(case, scene)
     position = np.asarray(scene.nodes.position)
     planes = _symmetry(case, position, node_type)
@@ -1041,12 +1061,17 @@ def read_don(path):
             volume, cd, copies, center, axis = catch
             net.catch(volume, drag_coefficient=cd, symmetry=copies, center=tuple(center), axis=tuple(axis))
         net.build()
-    return net, _solver(case), _info(case, planes, catch, plan)
+    return net, _solver(case), {**_info(case, planes, catch, plan), "femnet_laws": bool(femnet_laws)}
 
 
 def _info(case, planes, catch, plan=None):
     along = {} if plan is None else plan.along
+    differences = []
+    if any(p.material["opening"].value > 0 for p in case.panels):
+        differences.append("mesh opening stiffness: the book's law (FEMNET's flexion2 applies 4.218 as printed: its "
+                           "couple is 2 H cos(a) (a - a0)); docs/errata.md")
     return {
+        "laws_differing_from_femnet": differences,
         "source": case.path,
         "symmetry_axes": ["xyz"[a] for a in sorted(planes)],
         "symmetry_planes_m": {"xyz"[a]: c for a, c in planes.items()},
@@ -1133,7 +1158,7 @@ def _node_types(case: Case, scene):
 # -- FEMNET's own mesh ----------------------------------------------------------------------------
 
 
-def read_mdg(path, don=None):
+def read_mdg(path, don=None, femnet_laws=True):
     """FEMNET's mesh ``path`` (.mdg) as a :class:`~jaxnet.scene.Scene`, with the materials and node types of
     the ``.don`` case ``don`` (default: the same name with ``.don``).
 
@@ -1220,14 +1245,16 @@ def read_mdg(path, don=None):
         for r, p in zip(tri_rows, panel):
             if not 0 <= p < len(case.panels):
                 raise SceneError(f"{where}:{r[-1]}: triangle {int(r[0])} belongs to panel {p + 1}, not in {don}")
-        twines = [_twine(p) for p in case.panels]
+        twines = [_twine(p, case, femnet_laws) for p in case.panels]
         cols = {"l0": "l0", "ea_traction": "ea", "ea_compression": "ea_compression", "diameter": "diameter",
                 "density": "density", "cd_normal": "cd_normal", "tangential_ratio": "tangential_ratio",
                 "opening_stiffness": "opening_stiffness", "rest_angle": "rest_angle", "knot_size": "knot_size",
                 "bending_stiffness": "bending_stiffness"}
         data = {k: np.array([float(getattr(twines[p], f)) for p in panel]) for k, f in cols.items()}
         data["knot_stiffness"] = np.array([knot_stiffness(twines[p]) for p in panel])
-        netting = Netting(vertices=vertices, uv=uv, panel=panel, drag_model=np.zeros(n_tri, dtype=int), **data)
+        data["knot_form"] = np.array([KNOT_FORMS[twines[p].knot_form] for p in panel])
+        data["drag_model"] = np.array([DRAG_MODELS[twines[p].drag_model] for p in panel])
+        netting = Netting(vertices=vertices, uv=uv, panel=panel, **data)
     bars = None
     if n_bars:
         ends = np.array([[node_index(v, r[-1]) for v in r[1:3]] for r in bar_rows])
@@ -1259,7 +1286,7 @@ def read_mdg(path, don=None):
                   panel_names=tuple(f"panel {k + 1}" for k in range(len(case.panels))),
                   cable_names=tuple(f"cable {k + 1}" for k in range(len(case.cables))))
     validate(scene)
-    return scene, _solver(case), _info(case, planes, catch_spec)
+    return scene, _solver(case), {**_info(case, planes, catch_spec), "femnet_laws": bool(femnet_laws)}
 
 
 # -- FEMNET's figures and results ---------------------------------------------------------------
