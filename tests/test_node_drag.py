@@ -9,7 +9,6 @@ assembled; the term is compiled only when used; a pendulum in a current; validat
 
 import dataclasses
 import json
-import re
 
 import jax
 import jax.numpy as jnp
@@ -22,7 +21,6 @@ from jaxnet import assemble, model
 from jaxnet.io import scene_file
 from jaxnet.net import Net, Rope
 from jaxnet.scene import Environment, SceneError, validate
-from jaxnet.solve import statics
 from jaxnet.terms import drag
 
 RHO, G = 1025.0, 9.81
@@ -165,20 +163,7 @@ def test_tangent_of_a_floating_body_in_a_sheared_current_is_its_finite_differenc
 
 # -- presence in the compiled program -------------------------------------------------------------
 
-_NAMED_LOCATION = re.compile(r'loc\("([^"]+)"\(')
-
-
-def traced_terms(scene):
-    """Term names in the name stacks of the scene's lowered Newton program (as tests/test_terms_in_scenes)."""
-    m = model.active_terms(scene)
-    p = assemble.build_pattern(scene, m)
-    x0 = np.asarray(scene.nodes.position).ravel()[np.asarray(p.free)]
-    text = statics._newton_jit.lower(x0, scene, p, model=m, opts=jn.Newton()).as_text(debug_info=True)
-    words = set()
-    for name in _NAMED_LOCATION.findall(text):
-        if "/" in name:
-            words.update(re.findall(r"[A-Za-z_][A-Za-z0-9_]*", name))
-    return words & {t.name for t in model.TERMS}
+from traced import traced_terms  # noqa: E402  (tests/traced.py)
 
 
 def test_box_drag_is_compiled_only_when_a_body_meets_a_current():

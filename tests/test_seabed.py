@@ -12,7 +12,6 @@ its friction; terms compiled only when used; validation; scene files.
 
 import dataclasses
 import json
-import re
 
 import jax
 import jax.numpy as jnp
@@ -24,7 +23,6 @@ from jaxnet import assemble, model
 from jaxnet.io import scene_file
 from jaxnet.net import Net, Rope, Twine
 from jaxnet.scene import Environment, SceneError, validate
-from jaxnet.solve import statics
 from jaxnet.terms import bottom
 
 RHO, G, LEAD = 1025.0, 9.81, 11340.0
@@ -275,19 +273,7 @@ def test_net_resting_on_a_moving_bottom_balances_its_weight_and_friction(solved_
 
 # -- presence in the compiled program -------------------------------------------------------------
 
-_NAMED_LOCATION = re.compile(r'loc\("([^"]+)"\(')
-
-
-def traced_terms(scene):
-    m = model.active_terms(scene)
-    p = assemble.build_pattern(scene, m)
-    x0 = np.asarray(scene.nodes.position).ravel()[np.asarray(p.free)]
-    text = statics._newton_jit.lower(x0, scene, p, model=m, opts=jn.Newton()).as_text(debug_info=True)
-    words = set()
-    for name in _NAMED_LOCATION.findall(text):
-        if "/" in name:
-            words.update(re.findall(r"[A-Za-z_][A-Za-z0-9_]*", name))
-    return words & {t.name for t in model.TERMS}
+from traced import traced_terms  # noqa: E402  (tests/traced.py)
 
 
 def test_contact_and_friction_are_compiled_only_when_used():

@@ -6,17 +6,12 @@ import numpy as np
 
 import jaxnet as jn
 import jaxnet.net  # noqa: F401
-from jaxnet import assemble, model
+
 from jaxnet.net import Rope
 from jaxnet.scenes.panel import framed_panel, hanging_panel
-from jaxnet.solve import statics
 
 
-def lowered_text(scene):
-    m = model.active_terms(scene)
-    p = assemble.build_pattern(scene, m)
-    x0 = np.asarray(scene.nodes.position).ravel()[np.asarray(p.free)]
-    return statics._newton_jit.lower(x0, scene, p, model=m, opts=jn.Newton()).as_text(debug_info=True)
+from traced import lowered_text  # noqa: E402  (tests/traced.py)
 
 
 def test_weightless_net_compiles_no_weight():

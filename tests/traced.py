@@ -1,0 +1,31 @@
+"""What a scene's Newton program traces: the lowered (not compiled) program and the term names in it.
+
+Shared by the tests that check a scene compiles only the terms it uses."""
+
+import re
+
+import numpy as np
+
+import jaxnet as jn
+from jaxnet import assemble, model
+from jaxnet.solve import statics
+
+#: a location of the lowered program with its name stack, e.g. jit(newton_loop)/vmap(netting_drag)/...
+NAMED_LOCATION = re.compile(r'loc\("([^"]+)"\(')
+
+
+def lowered_text(scene):
+    """The scene's whole Newton program, lowered with debug information (nothing is compiled)."""
+    m = model.active_terms(scene)
+    p = assemble.build_pattern(scene, m)
+    x0 = np.asarray(scene.nodes.position).ravel()[np.asarray(p.free)]
+    return statics._newton_jit.lower(x0, scene, p, model=m, opts=jn.Newton()).as_text(debug_info=True)
+
+
+def traced_terms(scene):
+    """Names of registered terms found in the name stacks of the scene's lowered Newton program."""
+    words = set()
+    for name in NAMED_LOCATION.findall(lowered_text(scene)):
+        if "/" in name:
+            words.update(re.findall(r"[A-Za-z_][A-Za-z0-9_]*", name))
+    return words & {t.name for t in model.TERMS}
