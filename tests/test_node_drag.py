@@ -22,6 +22,7 @@ from jaxnet.io import scene_file
 from jaxnet.net import Net, Rope
 from jaxnet.scene import Environment, SceneError, validate
 from jaxnet.terms import drag
+from traced import traced_terms  # tests/traced.py
 
 RHO, G = 1025.0, 9.81
 LENGTH = np.array([0.3, 0.5, 0.4])  # box sizes along x, y, z (m)
@@ -163,7 +164,6 @@ def test_tangent_of_a_floating_body_in_a_sheared_current_is_its_finite_differenc
 
 # -- presence in the compiled program -------------------------------------------------------------
 
-from traced import traced_terms  # noqa: E402  (tests/traced.py)
 
 
 def test_box_drag_is_compiled_only_when_a_body_meets_a_current():

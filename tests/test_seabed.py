@@ -24,6 +24,7 @@ from jaxnet.io import scene_file
 from jaxnet.net import Net, Rope, Twine
 from jaxnet.scene import Environment, SceneError, validate
 from jaxnet.terms import bottom
+from traced import traced_terms  # tests/traced.py
 
 RHO, G, LEAD = 1025.0, 9.81, 11340.0
 RNG = np.random.default_rng(7)
@@ -273,7 +274,6 @@ def test_net_resting_on_a_moving_bottom_balances_its_weight_and_friction(solved_
 
 # -- presence in the compiled program -------------------------------------------------------------
 
-from traced import traced_terms  # noqa: E402  (tests/traced.py)
 
 
 def test_contact_and_friction_are_compiled_only_when_used():

@@ -6,12 +6,9 @@ import numpy as np
 
 import jaxnet as jn
 import jaxnet.net  # noqa: F401
-
 from jaxnet.net import Rope
 from jaxnet.scenes.panel import framed_panel, hanging_panel
-
-
-from traced import lowered_text  # noqa: E402  (tests/traced.py)
+from traced import lowered_text  # tests/traced.py
 
 
 def test_weightless_net_compiles_no_weight():
