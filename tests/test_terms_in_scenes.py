@@ -37,8 +37,8 @@ import jaxnet as jn
 from jaxnet import assemble, figures, geometry, model
 from jaxnet.net import HexTwine, Net, Rope, Twine
 from jaxnet.scene import Environment
-from jaxnet.solve import statics
 from jaxnet.terms import bending, opening, screen
+from traced import NAMED_LOCATION, lowered_text  # tests/traced.py
 
 RHO = 1025.0  # sea water (kg/m³), the Environment default
 G = 9.81
@@ -51,16 +51,8 @@ SCOPES = frozenset(TERM_NAMES + DRAG_SCOPES)
 # ----------------------------------------------------------------------------------------------------
 
 # named locations of the MLIR text: loc("NAME"(...)); file locations are loc("FILE":line:col)
-_NAMED_LOCATION = re.compile(r'loc\("([^"]+)"\(')
 _IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _traced_cache: dict = {}
-
-
-def lowered_text(scene):
-    m = model.active_terms(scene)
-    p = assemble.build_pattern(scene, m)
-    x0 = np.asarray(scene.nodes.position).ravel()[np.asarray(p.free)]
-    return statics._newton_jit.lower(x0, scene, p, model=m, opts=jn.Newton()).as_text(debug_info=True)
 
 
 def traced_scopes(scene):
@@ -69,7 +61,7 @@ def traced_scopes(scene):
            tuple(np.shape(a) for a in jax.tree.leaves(scene)))
     if key not in _traced_cache:  # the program depends on these only; the parameter values are arguments
         words = set()
-        for name in _NAMED_LOCATION.findall(lowered_text(scene)):
+        for name in NAMED_LOCATION.findall(lowered_text(scene)):
             if "/" in name:  # a name stack (scopes and transforms), not a Python call site
                 words.update(_IDENTIFIER.findall(name))
         _traced_cache[key] = frozenset(words & SCOPES)

@@ -133,8 +133,9 @@ def _progress(it, res, damping, step):
 # -- the pieces of one iteration, shared by the two drivers (jitted loop and host loop) ----------------
 
 
-def _evaluate(x, f_frozen, scene, pattern, model):
+def _evaluate(x, f_frozen, load, scene, pattern, model):
     """At free coordinates x: the residual and what the line search needs, in one traced evaluation.
+    ``load``: the (N, 3) constant nodal loads (N), computed once per solve.
 
     Returns (energy, force, f_nc, merit, state): the stored energy (J); the out-of-balance force (N, 3)
     at every node (at fixed coordinates minus the reactions); the non-conservative nodal forces (N, 3);
@@ -142,7 +143,6 @@ def _evaluate(x, f_frozen, scene, pattern, model):
     terms' global states (the catch front), reused by the tangent at the same point.
     """
     X = assemble.positions(x, scene, pattern)
-    load = assemble.loads(scene, model)
     e, grad = jax.value_and_grad(assemble.energy)(X, scene, model)
     if any(t.term.kind == "force" for t in model):
         state = assemble.states(X, scene, model)
@@ -206,7 +206,7 @@ def newton_loop(x0, scene, pattern, model, opts: Newton):
     free = pattern.free
 
     def evaluate(x, f_frozen):
-        e, force, f_nc, m, state = _evaluate(x, f_frozen, scene, pattern, model)
+        e, force, f_nc, m, state = _evaluate(x, f_frozen, load, scene, pattern, model)
         return e, force.ravel()[free], f_nc, m, state
 
     def status_of(it, f, e):
@@ -308,8 +308,8 @@ def _compile_pieces(start, scene, pattern, model):
         return
     zero = jnp.zeros(scene.nodes.position.shape)
     state = jax.tree.map(lambda s: jnp.zeros(s.shape, s.dtype),
-                         jax.eval_shape(lambda: _evaluate(start, zero, scene, pattern, model)[-1]))
-    calls = (lambda: _evaluate_jit(start, zero, scene, pattern, model=model),
+                         jax.eval_shape(lambda: _evaluate(start, zero, zero, scene, pattern, model)[-1]))
+    calls = (lambda: _evaluate_jit(start, zero, zero, scene, pattern, model=model),
              lambda: _tangent_jit(start, state, scene, pattern, model=model),
              lambda: _springs_jit(scene, model, pattern))
     with concurrent.futures.ThreadPoolExecutor(len(calls)) as pool:
@@ -327,7 +327,8 @@ def host_loop(start, scene, pattern, model, opts: Newton):
     indptr, indices = np.asarray(pattern.indptr), np.asarray(pattern.indices)
     factor = linalg.HostSolver(indptr, indices)
     springs = np.asarray(_springs_jit(scene, model, pattern))
-    load = np.asarray(assemble.loads(scene, model))
+    load_device = assemble.loads(scene, model)  # constant: computed once, passed to every evaluation
+    load = np.asarray(load_device)
     X0 = np.asarray(scene.nodes.position, dtype=float).ravel()
 
     def nodal(v):
@@ -341,7 +342,7 @@ def host_loop(start, scene, pattern, model, opts: Newton):
         return X.reshape(-1, 3)
 
     def run(x, f_frozen):
-        e, force, f_nc, m, state = _evaluate_jit(x, f_frozen, scene, pattern, model=model)
+        e, force, f_nc, m, state = _evaluate_jit(x, f_frozen, load_device, scene, pattern, model=model)
         return float(e), np.asarray(force), np.asarray(f_nc), float(m), state
 
     x = np.asarray(start, dtype=float)
