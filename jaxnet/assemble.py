@@ -30,7 +30,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxnet.closed_form import registry as closed_form_registry
 from jaxnet.model import ActiveTerm
+
+#: the two ways of computing the tangent stiffness (:func:`tangent`)
+STIFFNESS_PATHS = ("autodiff", "closed_form")
 
 def connectivity(scene, family):
     """(E, k) node indices of the elements of a family ("nodes": each node is its own element)."""
@@ -225,23 +229,25 @@ def term_forces(x, scene, model):
     return out
 
 
-def scatter_hessians(x, scene, pattern, element_energies, element_forces=None, state=None):
+def scatter_hessians(x, scene, pattern, element_energies, element_forces=None, state=None, element_blocks=None):
     """CSR entries (nnz,) of the stiffness of per-element energies and forces.
 
     ``element_energies[family](x, p, env)`` (J) is differentiated twice (``jax.jacfwd`` of ``jax.grad``)
     on its own vertices; ``element_forces[family](x, p, env, state)`` (N) once (``jax.jacfwd``), with
-    the sign of K = -dF/dx; both vmapped over the family, their entries summed into the pattern's slots
-    (entries on fixed coordinates are dropped).
+    the sign of K = -dF/dx; ``element_blocks[family](x, p, env, state)`` gives (3k, 3k) element matrices
+    directly (the closed-form path); all vmapped over the family, their entries summed into the pattern's
+    slots (entries on fixed coordinates are dropped).
     """
     data = jnp.zeros(pattern.nnz + 1)
     element_forces = element_forces or {}
-    for family in sorted(set(element_energies) | set(element_forces)):
+    element_blocks = element_blocks or {}
+    for family in sorted(set(element_energies) | set(element_forces) | set(element_blocks)):
         conn = connectivity(scene, family)
         fam = getattr(scene, family)
         k = conn.shape[1]
-        energy_fn, force_fn = element_energies.get(family), element_forces.get(family)
+        energy_fn, force_fn, block_fn = element_energies.get(family), element_forces.get(family), element_blocks.get(family)
 
-        def stiffness(xe, p, energy_fn=energy_fn, force_fn=force_fn, k=k):
+        def stiffness(xe, p, energy_fn=energy_fn, force_fn=force_fn, block_fn=block_fn, k=k):
             block = jnp.zeros((3 * k, 3 * k))
             if energy_fn is not None:
                 flat = lambda v: energy_fn(v.reshape(k, 3), p, scene.environment)  # noqa: E731
@@ -249,6 +255,8 @@ def scatter_hessians(x, scene, pattern, element_energies, element_forces=None, s
             if force_fn is not None:
                 flat = lambda v: force_fn(v.reshape(k, 3), p, scene.environment, state).ravel()  # noqa: E731
                 block = block - jax.jacfwd(flat)(xe.ravel())
+            if block_fn is not None:
+                block = block + block_fn(xe, p, scene.environment, state)
             return block
 
         blocks = jax.vmap(stiffness)(x[conn], fam)
@@ -256,17 +264,46 @@ def scatter_hessians(x, scene, pattern, element_energies, element_forces=None, s
     return data[:-1]
 
 
-def tangent(x, scene, model, pattern, state=None, elastic_scale=1.0):
+def _family_closed_form(model, family, elastic_scale=1.0):
+    """Sum of the closed-form element matrices (:mod:`jaxnet.closed_form`) of a family's terms in ``model``."""
+    terms = [t for t in model if t.term.family == family]
+
+    def block(x, p, env, state):
+        total = 0.0
+        for t in terms:
+            entry = closed_form_registry.STIFFNESS[t.name]
+            with jax.named_scope(t.name):
+                if t.term.kind == "energy":
+                    k = entry.stiffness(x, p, env, **t.kwargs())
+                    k = elastic_scale * k if t.term.elastic else k
+                else:
+                    k = entry.stiffness(x, p, env, state.get(t.name), **t.kwargs())
+            total = total + k
+        return total
+
+    return block
+
+
+def tangent(x, scene, model, pattern, state=None, elastic_scale=1.0, stiffness="autodiff"):
     """CSR entries (nnz,) of the tangent K = -d force / dx over the free coordinates.
 
     ``elastic_scale``: factor on the elastic terms' energy, as in :func:`energy`.
 
     ``state``: the force terms' global states at x (:func:`states`), if already computed (the solver
     has them from its last evaluation of the force), else computed here.
+
+    ``stiffness``: ``"autodiff"`` (every term by ``jax.jacfwd``) or ``"closed_form"``: the terms with a
+    hand-derived stiffness (:mod:`jaxnet.closed_form`) use it, the others autodiff
+    (:func:`jaxnet.closed_form.registry.paths` says which is which). A Python str.
     """
-    energies = {f: _family_energy(model, f, elastic_scale) for f in _families(model, "energy")}
-    element_forces = {f: _family_force(model, f) for f in _families(model, "force")}
+    if stiffness not in STIFFNESS_PATHS:
+        raise ValueError(f"stiffness must be one of {STIFFNESS_PATHS}, not {stiffness!r}")
+    by_hand = tuple(t for t in model if stiffness == "closed_form" and closed_form_registry.covered(t))
+    rest = tuple(t for t in model if t not in by_hand)
+    energies = {f: _family_energy(rest, f, elastic_scale) for f in _families(rest, "energy")}
+    element_forces = {f: _family_force(rest, f) for f in _families(rest, "force")}
+    blocks = {f: _family_closed_form(by_hand, f, elastic_scale) for f in sorted({t.term.family for t in by_hand})}
     # global states (the catch front) are held fixed in the tangent: see the module docstring
-    if element_forces:
+    if _families(model, "force"):
         state = jax.lax.stop_gradient(states(x, scene, model) if state is None else state)
-    return scatter_hessians(x, scene, pattern, energies, element_forces, state)
+    return scatter_hessians(x, scene, pattern, energies, element_forces, state, blocks)

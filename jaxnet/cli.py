@@ -69,7 +69,8 @@ def _run(args):
         net, solver = scene_file.read(args.scene)
         label = str(args.scene)
         scene = net.build()
-    overrides = {k: v for k, v in (("tol", args.tol), ("max_iter", args.max_iter)) if v is not None}
+    overrides = {k: v for k, v in (("tol", args.tol), ("max_iter", args.max_iter), ("stiffness", args.stiffness))
+                 if v is not None}
     print(f"jaxnet: {label}")
     print(f"  {scene.n_nodes} nodes, {scene.n_elements} elements, {scene.n_dof} unknowns")
     out = pathlib.Path(args.out)
@@ -116,6 +117,9 @@ def main(argv=None):
     run.add_argument("--tol", type=float, help="convergence threshold on the largest nodal force (N)")
     run.add_argument("--max-iter", type=int, dest="max_iter", help="maximum Newton iterations")
     run.add_argument("--quiet", action="store_true", help="no per-iteration progress lines")
+    run.add_argument("--stiffness", choices=("autodiff", "closed_form"),
+                     help="the tangent's path: autodiff (jax.jacfwd of every term) or closed_form (the book's "
+                          "hand-derived stiffness where a term has one; docs/errata.md); the same matrix either way")
     run.add_argument("--jaxnet-laws", action="store_true", dest="jaxnet_laws",
                      help="with a FEMNET case: jaxnet's own laws (the book's, corrected) where FEMNET's differ (knot "
                           "contact, netting drag with a catch: docs/errata.md), instead of FEMNET's")

@@ -51,6 +51,26 @@ def twine_vectors(x, uv):
     return U, V, d
 
 
+def twine_coefficients(uv):
+    """Coefficients of the twine vectors on the vertex positions: U = a @ x, V = b @ x (eqs 4.3-4.4).
+
+    U and V are linear in the vertex positions with coefficients fixed by the twine coordinates; the
+    closed-form stiffness (:mod:`jaxnet.closed_form`) is built on them (the book's u_i, v_i factors of
+    4.43-4.45 are d a_i and d b_i up to their signs).
+
+    Args:
+      uv: (3, 2) twine coordinates of the vertices.
+    Returns:
+      (a, b, d): (3,) coefficients (1/twine, dimensionless per vertex; each sums to 0) and the signed d of 4.7.
+    """
+    d = twine_determinant(uv)
+    du2, dv2 = uv[1, 0] - uv[0, 0], uv[1, 1] - uv[0, 1]
+    du3, dv3 = uv[2, 0] - uv[0, 0], uv[2, 1] - uv[0, 1]
+    a = jnp.stack([dv2 - dv3, dv3, -dv2]) / d
+    b = jnp.stack([du3 - du2, -du3, du2]) / d
+    return a, b, d
+
+
 def safe_norm(v, eps=1e-300):
     """Euclidean norm with a finite derivative at v = 0 (the derivative there is taken as 0).
 

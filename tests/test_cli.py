@@ -44,6 +44,17 @@ def test_hanging_scene_reaction_carries_the_weight(tmp_path):
     np.testing.assert_allclose(result["forces_N"]["weight_and_buoyancy_N"], result["load_N"], rtol=1e-12)
 
 
+def test_closed_form_stiffness_gives_the_same_answer(tmp_path):
+    results = {}
+    for path in ("autodiff", "closed_form"):
+        out = tmp_path / path
+        assert cli.main(["run", "--scene", "hanging", "--out", str(out), "--quiet", "--no-cache", "--stiffness", path]) == 0
+        results[path] = json.loads((out / "result.json").read_text())
+    a, c = results["autodiff"], results["closed_form"]
+    np.testing.assert_allclose(c["reaction_N"], a["reaction_N"], rtol=1e-6, atol=1e-6)
+    np.testing.assert_allclose(c["bounding_box_m"], a["bounding_box_m"], rtol=1e-9, atol=1e-9)
+
+
 def test_scene_file_and_bad_scene_file(tmp_path, capsys):
     w = 0.5
     doc = {

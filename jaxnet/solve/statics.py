@@ -105,6 +105,9 @@ class Newton:
     stiffening: the factor between consecutive stages (> 1).
     stage_rtol: a stage ends when the residual is this fraction of the residual it started with (or the
       tolerance ``tol``); the last stage (the net as it is) ends at ``tol``.
+    stiffness: the tangent's path, ``"autodiff"`` (``jax.jacfwd`` of every term) or ``"closed_form"`` (the
+      hand-derived stiffness of :mod:`jaxnet.closed_form` where a term has one, autodiff for the others).
+      Both are the same matrix to rounding, so both paths reach the same equilibrium.
     verbose: print one line per iteration.
     """
 
@@ -120,7 +123,12 @@ class Newton:
     soft_start: float = 1e-2
     stiffening: float = 10**0.5
     stage_rtol: float = 1e-2
+    stiffness: str = "autodiff"
     verbose: bool = False
+
+    def __post_init__(self):
+        if self.stiffness not in assemble.STIFFNESS_PATHS:
+            raise ValueError(f"Newton: stiffness must be one of {assemble.STIFFNESS_PATHS}, not {self.stiffness!r}")
 
 
 class Equilibrium(eqx.Module):
@@ -197,10 +205,10 @@ def _merit(e_stored, X, frozen_load):
     return e_stored - jnp.sum(frozen_load * X)
 
 
-def _tangent(x, state, scale, scene, pattern, model):
+def _tangent(x, state, scale, scene, pattern, model, stiffness="autodiff"):
     """CSR entries of the tangent K = -dF/dx at free coordinates x (force terms' states given, the elastic
-    energies scaled by ``scale``)."""
-    return assemble.tangent(assemble.positions(x, scene, pattern), scene, model, pattern, state, scale)
+    energies scaled by ``scale``; ``stiffness``: its path, see :class:`Newton`)."""
+    return assemble.tangent(assemble.positions(x, scene, pattern), scene, model, pattern, state, scale, stiffness)
 
 
 def _accepts(m_try, f_try, e, alpha, slope, roundoff, res_now, xp):
@@ -266,7 +274,7 @@ def newton_loop(x0, scene, pattern, model, opts: Newton):
         x, f, e_stored, f_nc, s, mu, it, _, hist = state
         X = assemble.positions(x, scene, pattern)
         e = _merit(e_stored, X, load + f_nc)
-        data = _tangent(x, s, 1.0, scene, pattern, model)
+        data = _tangent(x, s, 1.0, scene, pattern, model, opts.stiffness)
         dx, ok = linalg.solve(data + mu * springs, f, pattern.indptr, pattern.indices)
         # FEMNET's displacement limit: scale the step so that no node moves more than max_step.
         biggest = jnp.max(_nodal_norm(dx, pattern, n_nodes))
@@ -322,7 +330,7 @@ _newton_jit = jax.jit(newton_loop, static_argnames=("model", "opts"))
 # -- the host loop: the same iteration driven from Python, its pieces compiled once --------------------
 
 _evaluate_jit = jax.jit(_evaluate, static_argnames=("model",))
-_tangent_jit = jax.jit(_tangent, static_argnames=("model",))
+_tangent_jit = jax.jit(_tangent, static_argnames=("model", "stiffness"))
 _springs_jit = jax.jit(spring_network.stiffness, static_argnames=("model",))
 # jitted although it runs once per solve: op by op, its vmaps compile dozens of small programs (1.7 s cold)
 _loads_jit = jax.jit(assemble.loads, static_argnames=("model",))
@@ -338,13 +346,13 @@ def _signature(args):
     return treedef, tuple((np.shape(a), jnp.result_type(a).str) for a in leaves)
 
 
-def _compile_pieces(start, scene, pattern, model):
+def _compile_pieces(start, scene, pattern, model, stiffness="autodiff"):
     """Compile the evaluation, the tangent, the spring network and the loads for this scene's shape, in parallel
     threads (XLA compiles without the GIL), by calling them once. The loop then calls the same ``jax.jit``
     functions (their C++ dispatch costs microseconds, where an AOT executable's Python call costs a
     millisecond for a scene's many leaves). The pieces hold no host callback, so JAX's persistent
     compilation cache, when on, keeps them on disk for the next process."""
-    key = (model, _signature((start, scene, pattern)))
+    key = (model, stiffness, _signature((start, scene, pattern)))
     if key in _compiled:
         return
     zero = jnp.zeros(scene.nodes.position.shape)
@@ -352,7 +360,7 @@ def _compile_pieces(start, scene, pattern, model):
     state = jax.tree.map(lambda s: jnp.zeros(s.shape, s.dtype), jax.eval_shape(
         lambda: assemble.states(assemble.positions(start, scene, pattern), scene, model)))
     calls = (lambda: _evaluate_jit(start, zero, zero, 1.0, scene, pattern, model=model),
-             lambda: _tangent_jit(start, state, 1.0, scene, pattern, model=model),
+             lambda: _tangent_jit(start, state, 1.0, scene, pattern, model=model, stiffness=stiffness),
              lambda: _springs_jit(scene, model, pattern),
              lambda: _loads_jit(scene, model))
     with concurrent.futures.ThreadPoolExecutor(len(calls)) as pool:
@@ -461,7 +469,7 @@ def host_loop(start, scene, pattern, model, opts: Newton):
                 print(f"  stiffness x {scales[stage]:.3g}")
         X = positions(x)
         e = e_stored - float(np.sum((load + f_nc) * X))
-        data = np.asarray(_tangent_jit(x, state, scales[stage], scene, pattern, model=model))
+        data = np.asarray(_tangent_jit(x, state, scales[stage], scene, pattern, model=model, stiffness=opts.stiffness))
         dx, ok = factor.solve(data + mu * springs, f)
         biggest = nodal(dx).max()
         dx = dx * min(1.0, opts.max_step / max(biggest, 1e-300))
@@ -534,7 +542,7 @@ def solve(scene, solver: Newton | None = None, x0=None, raise_on_failure=True, *
     pattern = assemble.build_pattern(scene, model)
     start = np.asarray(scene.nodes.position if x0 is None else x0, dtype=float).ravel()[np.asarray(pattern.free)]
     t0 = time.perf_counter()
-    _compile_pieces(jnp.asarray(start), scene, pattern, model)
+    _compile_pieces(jnp.asarray(start), scene, pattern, model, solver.stiffness)
     t1 = time.perf_counter()
     eq = host_loop(start, scene, pattern, model, solver)
     t2 = time.perf_counter()
