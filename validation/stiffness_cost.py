@@ -77,8 +77,9 @@ def timed(fn, args, repeats):
     return compile_s, 1e3 * statistics.median(runs), temp
 
 
-def element_functions(term, scene, state):
-    """name -> function of (xe (E, k, 3), rows) giving the (E, 3k, 3k) element matrices of one term."""
+def element_functions(term, scene, state, all_modes=True):
+    """name -> function of (xe (E, k, 3), rows) giving the (E, 3k, 3k) element matrices of one term
+    (``all_modes``: also the Hessians by ``jax.hessian`` and ``jax.jacrev(jax.grad)``)."""
     env, family = scene.environment, term.term.family
     k = assemble.connectivity(scene, family).shape[1]
     out = {}
@@ -88,7 +89,7 @@ def element_functions(term, scene, state):
         modes = {"jacfwd(grad)": lambda f: jax.jacfwd(jax.grad(f)),
                  "hessian": jax.hessian,
                  "jacrev(grad)": lambda f: jax.jacrev(jax.grad(f))}
-        for name, mode in modes.items():
+        for name, mode in (modes if all_modes else dict(list(modes.items())[:1])).items():
             out[name] = (lambda mode: lambda xe, p: jax.vmap(
                 lambda v, q: mode(lambda w: flat(w, q))(v.ravel()))(xe, p))(mode)
     else:
@@ -104,7 +105,8 @@ def element_functions(term, scene, state):
     return out
 
 
-def measure(triangles, repeats):
+def measure(triangles, repeats, all_modes=True):
+    """Rows of the tables for a cod-end of about ``triangles`` triangles, and the terms with no closed form."""
     scene = scene_of_size(triangles)
     model = model_lib.active_terms(scene)
     rng = np.random.default_rng(0)
@@ -116,7 +118,7 @@ def measure(triangles, repeats):
         family = term.term.family
         conn = assemble.connectivity(scene, family)
         xe, fam = x[conn], getattr(scene, family)
-        fns = element_functions(term, scene, state)
+        fns = element_functions(term, scene, state, all_modes)
         for name, fn in fns.items():
             rows.append(dict(elements=int(scene.netting.vertices.shape[0]), term=term.name, level="element",
                              method=name, count=int(conn.shape[0]), **dict(zip(("compile_s", "run_ms", "temp_mb"),

@@ -17,7 +17,7 @@ from __future__ import annotations
 import dataclasses
 from typing import Callable
 
-from jaxnet.closed_form import tension
+from jaxnet.closed_form import pressure, tension
 
 
 @dataclasses.dataclass(frozen=True)
@@ -41,10 +41,15 @@ def _bar_tension(x, p, env, compression):
     return tension.bar_stiffness(x, p.rest_length, p.ea_traction, p.ea_compression if compression else None)
 
 
+def _catch_pressure(x, p, env, state):
+    return pressure.catch_pressure_stiffness(x, state["pressure"], state["front"], state["axis"], p.outward)
+
+
 #: term name (:data:`jaxnet.model.TERMS`) -> its closed-form stiffness
 STIFFNESS = {
     "netting_tension": ClosedForm(_netting_tension),
     "bar_tension": ClosedForm(_bar_tension),
+    "catch_pressure": ClosedForm(_catch_pressure),
 }
 
 
