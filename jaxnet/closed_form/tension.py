@@ -14,6 +14,9 @@ in this notation, once 4.47-4.49's 1/n0 is read as 1/l0 and 4.58-4.75's missing 
 back (docs/errata.md). The chain rule from U and V to the vertices (the (V3-V2)/d factors of 4.58-4.75)
 is :mod:`jaxnet.closed_form.chain`.
 
+Kink: at a twine exactly at its rest length without compression stiffness the Hessian does not exist (one-
+sided values EA/l0 and 0 along the twine); the value returned is the autodiff path's, EA/(4 l0).
+
 Singular point: a twine of zero length has no direction; its stiffness is taken as 0 there, as the
 autodiff path's ``safe_norm`` gives. With a compression stiffness T/L grows like -EA/L as L -> 0: the
 element is then collapsing, and the value is returned as it is (finite for L > 0).
@@ -36,7 +39,8 @@ def rod_stiffness(w, rest_length, ea_traction, ea_compression=None):
     Args:
       w: (3,) the rod's vector, end minus start (m).
       rest_length: L0 (m). ea_traction, ea_compression: EA (N); ``ea_compression=None`` for a rod that goes
-        slack in compression (no stiffness, no tension when L <= L0).
+        slack in compression (no stiffness, no tension when L < L0; at L = L0 exactly, EA/(4 L0) along the
+        rod, as the autodiff path gives).
     """
     length = geometry.safe_norm(w)
     has = length > 0.0
@@ -44,7 +48,10 @@ def rod_stiffness(w, rest_length, ea_traction, ea_compression=None):
     e = w * inv
     strain = (length - rest_length) / rest_length
     if ea_compression is None:
-        ea = jnp.where(strain > 0.0, ea_traction, 0.0)
+        # At eps = 0 exactly (the kink of EA l0 max(eps, 0)²/2) the autodiff path differentiates max with
+        # the tie split in halves, twice: its axial stiffness there is (1/2)² EA/l0. Same value here, so
+        # the two paths agree on a twine exactly at its rest length (T = 0 there: no geometric part).
+        ea = jnp.where(strain > 0.0, ea_traction, jnp.where(strain == 0.0, 0.25 * ea_traction, 0.0))
     else:
         ea = jnp.where(strain > 0.0, ea_traction, ea_compression)
     tension = ea * strain
