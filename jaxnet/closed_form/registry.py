@@ -17,7 +17,11 @@ from __future__ import annotations
 import dataclasses
 from typing import Callable
 
-from jaxnet.closed_form import pressure, tension
+import jax.numpy as jnp
+
+from jaxnet import geometry, model
+from jaxnet.closed_form import drag, pressure, tension
+from jaxnet.terms import pressure as catch_load
 
 
 @dataclasses.dataclass(frozen=True)
@@ -45,10 +49,59 @@ def _catch_pressure(x, p, env, state):
     return pressure.catch_pressure_stiffness(x, state["pressure"], state["front"], state["axis"], p.outward)
 
 
+def _water(x, env):
+    """The current at the centroid of the element's vertices x (k, 3), as the force terms see it
+    (:func:`jaxnet.model._water_velocity`), and its slope dc/dz there (m/s per m of height)."""
+    z = jnp.dot(geometry.centroid(x), env.up)
+    slope = drag.current_slope(z, env.current_speed, env.current_direction, env.profile_depth, env.profile_factor,
+                               env.surface_level)
+    return model._water_velocity(x, env), slope
+
+
+#: closed forms of the netting drag models made of twine drags (``Netting.drag_model`` codes)
+_NETTING_DRAG = {0: drag.netting_drag_stiffness, 3: drag.netting_drag_femnet_catch_stiffness}
+
+
+def _netting_drag(x, p, env, state, models, shielded):
+    c, slope = _water(x, env)
+    stiffness, force = 0.0, 0.0
+    for code in models:
+        k = _NETTING_DRAG[code](x, p.uv, p.l0, p.diameter, p.cd_normal, p.tangential_ratio * p.cd_normal, c,
+                                env.water_density, slope, env.up)
+        f = model.NETTING_DRAG[code][1](x, p, c, env.water_density) if shielded else 0.0
+        if len(models) > 1:
+            k, f = jnp.where(p.drag_model == code, k, 0.0), jnp.where(p.drag_model == code, f, 0.0)
+        stiffness, force = stiffness + k, force + f
+    if shielded:
+        # the netting behind the catch front keeps the factor 1 - 3 w_i(h) of its drag (model._netting_drag),
+        # w the clipped shape integrals of the heights h_j = x_j . axis - s: product rule, the front fixed
+        h = catch_load.front_heights(x, state["front"], state["axis"])
+        keep = 1.0 - 3.0 * catch_load.clipped_shape_integrals(h)
+        dw = pressure.clipped_shape_integrals_jacobian(h)  # (i, j): dw_i/dh_j
+        # d(1 - 3 w_i)/dx_j = -3 dw_i/dh_j axis: K_i,j = keep_i K_i,j + 3 f_i (dw_i/dh_j axis)^T
+        correction = 3.0 * force[:, :, None, None] * (dw[:, None, :, None] * state["axis"][None, None, None, :])
+        stiffness = keep.repeat(3)[:, None] * stiffness + correction.reshape(9, 9)
+    return stiffness
+
+
+def _bar_drag(x, p, env, state):
+    c, slope = _water(x, env)
+    return drag.bar_drag_stiffness(x, p.rest_length, p.diameter, p.cd_normal, p.tangential_ratio * p.cd_normal, c,
+                                   env.water_density, slope, env.up)
+
+
+def _node_drag(x, p, env, state):
+    c, slope = _water(x, env)
+    return drag.node_drag_stiffness(p.drag_area, c, env.water_density, slope, env.up)
+
+
 #: term name (:data:`jaxnet.model.TERMS`) -> its closed-form stiffness
 STIFFNESS = {
     "netting_tension": ClosedForm(_netting_tension),
     "bar_tension": ClosedForm(_bar_tension),
+    "netting_drag": ClosedForm(_netting_drag, covers=lambda options: set(options["models"]) <= set(_NETTING_DRAG)),
+    "bar_drag": ClosedForm(_bar_drag),
+    "node_drag": ClosedForm(_node_drag),
     "catch_pressure": ClosedForm(_catch_pressure),
 }
 
