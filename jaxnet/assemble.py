@@ -14,6 +14,10 @@ symmetric. The CSR structure and the slot of every element-matrix entry are comp
 numpy (:func:`build_pattern`) and passed to the jitted functions as arguments — never closed over, so XLA
 does not constant-fold large index arrays. No dense global matrix is ever formed.
 
+The same tangent can instead be assembled from the hand-derived element matrices of
+:mod:`jaxnet.closed_form` (``tangent(..., stiffness="closed_form")``): for each term that has one, its
+closed form replaces its autodiff matrix; the two paths never share a term's computation.
+
 Some force terms depend on a global quantity of the whole net (the catch front, placed so that the
 enclosed volume is the catch volume): each such term's ``state(x, scene)`` is computed once per
 evaluation and handed to its elements; the tangent treats it as constant (a quasi-Newton

@@ -20,7 +20,7 @@ from typing import Callable
 import jax.numpy as jnp
 
 from jaxnet import geometry, model
-from jaxnet.closed_form import drag, pressure, tension
+from jaxnet.closed_form import bending, drag, pressure, tension
 from jaxnet.terms import pressure as catch_load
 
 
@@ -43,6 +43,10 @@ def _netting_tension(x, p, env, compression):
 
 def _bar_tension(x, p, env, compression):
     return tension.bar_stiffness(x, p.rest_length, p.ea_traction, p.ea_compression if compression else None)
+
+
+def _twine_bending(x, p, env):
+    return bending.hinge_stiffness(x, p.uv, p.l0, p.stiffness)
 
 
 def _catch_pressure(x, p, env, state):
@@ -99,6 +103,7 @@ def _node_drag(x, p, env, state):
 STIFFNESS = {
     "netting_tension": ClosedForm(_netting_tension),
     "bar_tension": ClosedForm(_bar_tension),
+    "twine_bending": ClosedForm(_twine_bending),
     "netting_drag": ClosedForm(_netting_drag, covers=lambda options: set(options["models"]) <= set(_NETTING_DRAG)),
     "bar_drag": ClosedForm(_bar_drag),
     "node_drag": ClosedForm(_node_drag),
