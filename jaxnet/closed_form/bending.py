@@ -170,11 +170,14 @@ def _symmetric_product(j1, j2):
     return p + p.T
 
 
-def _invariant_derivatives(x, rows):
-    """z (9,), dz/dx (9, 12) and d²z/dx² (9, 12, 12) of the hinge (module docstring, step 1).
+def _invariant_derivatives(x, rows, weights=None):
+    """z (9,), dz/dx (9, 12) and, given weights g (9,), sum_k g_k d²z_k/dx² (12, 12) of the hinge (module
+    docstring, step 1; None without weights).
 
-    z is computed from the vectors as the energy computes it (n2 = (a - b) ^ (q - b), exactly 0 for a
-    triangle collapsed onto b), so that the guards trip on the same inputs.
+    The second derivatives are only ever needed contracted with dE/dz: summing them as they are formed keeps
+    nine (12, 12) matrices per hinge out of memory (materialised, they made this closed form slower than
+    autodiff). z is computed from the vectors as the energy computes it (n2 = (a - b) ^ (q - b), exactly 0 for
+    a triangle collapsed onto b), so that the guards trip on the same inputs.
     """
     e, r, s = x[1] - x[0], x[2] - x[0], x[3] - x[0]
     n1 = jnp.cross(e, r)
@@ -197,17 +200,17 @@ def _invariant_derivatives(x, rows):
         ]),
         2.0 * jnp.einsum("fk,fkn->fn", twines, d_twines),
     ])
-    hz = jnp.concatenate([
-        jnp.stack([
-            2.0 * d_e.T @ d_e,
-            _normal_curvature(_ROW_E, _ROW_R, s) + _symmetric_product(j1, d_s),
-            _normal_curvature(_ROW_E, _ROW_R, n2) + _normal_curvature(_ROW_S, _ROW_E, n1) + _symmetric_product(j1, j2),
-            2.0 * _normal_curvature(_ROW_E, _ROW_R, n1) + _symmetric_product(j1, j1),
-            2.0 * _normal_curvature(_ROW_S, _ROW_E, n2) + _symmetric_product(j2, j2),
-        ]),
-        2.0 * jnp.einsum("fkm,fkn->fmn", d_twines, d_twines),
-    ])
-    return z, dz, hz
+    if weights is None:
+        return z, dz, None
+    g = weights
+    # d²z_k/dx² for k = |e|², tau, n1.n2, |n1|², |n2|², the four |twine|², each times g_k; the curvature of
+    # m . n (m fixed) is linear in m, so the n-terms of tau, n1.n2, |n1|² and |n2|² combine into one m each
+    curvature = (_normal_curvature(_ROW_E, _ROW_R, g[1] * s + g[2] * n2 + 2.0 * g[3] * n1)
+                 + _normal_curvature(_ROW_S, _ROW_E, g[2] * n1 + 2.0 * g[4] * n2)
+                 + g[1] * _symmetric_product(j1, d_s) + g[2] * _symmetric_product(j1, j2)
+                 + 2.0 * g[3] * (j1.T @ j1) + 2.0 * g[4] * (j2.T @ j2) + 2.0 * g[0] * (d_e.T @ d_e)
+                 + 2.0 * jnp.einsum("f,fkm,fkn->mn", g[5:], d_twines, d_twines))
+    return z, dz, curvature
 
 
 # ---------------------------------------------------------------- theta and sigma as functions of z
@@ -254,26 +257,22 @@ def _sines_of_invariants(z, d_a, d_b, n_u, n_v):
     return sigma, d_sigma, h_sigma
 
 
-def _to_nodes(d_q, h_q, dz, hz):
-    """Chain rule z -> x (step 3): dq/dx (..., 12) and d²q/dx² (..., 12, 12) from dq/dz (..., 9),
-    d²q/dz² (..., 9, 9) and the invariants' dz/dx (9, 12), d²z/dx² (9, 12, 12)."""
-    grad = d_q @ dz
-    hess = dz.T @ h_q @ dz + jnp.tensordot(d_q, hz, 1)
-    return grad, hess
-
-
-def _hinge_parts(x, uv, l0, ei):
-    """w_f (2,), theta and sigma_f with their node derivatives and second derivatives
-    (under jit, :func:`hinge_gradient`'s unused second derivatives are not computed)."""
-    rows, d_a, d_b, n_u, n_v = _twine_rows(uv)
-    z, dz, hz = _invariant_derivatives(x, rows)
-    theta, d_theta_z, h_theta_z = _fold_angle_of_invariants(z)
-    sigma, d_sigma_z, h_sigma_z = _sines_of_invariants(z, d_a, d_b, n_u, n_v)
+def _energy_of_invariants(uv, l0, ei, z):
+    """E = sum_f w_f theta² sigma_f (J) as a function of the invariants z, with dE/dz (9,) and d²E/dz² (9, 9)
+    (module docstring, step 2: theta and sigma_f of z, w_f = 2 EI N_f² / (l0 (|d_a| + |d_b|)))."""
+    _, d_a, d_b, n_u, n_v = _twine_rows(uv)
+    theta, d_theta, h_theta = _fold_angle_of_invariants(z)
+    sigma, d_sigma, h_sigma = _sines_of_invariants(z, d_a, d_b, n_u, n_v)
     # w_f sigma_f = N_f EI sin(phi_a) sin(phi_b) / (A_f + B_f), A + B = (|d_a| + |d_b|) l0 / (2 N_f) (4.229-4.232)
     weight = 2.0 * ei * jnp.stack([n_u, n_v]) ** 2 / (l0 * (jnp.abs(d_a) + jnp.abs(d_b)))  # w_f (N m)
-    d_theta, h_theta = _to_nodes(d_theta_z, h_theta_z, dz, hz)
-    d_sigma, h_sigma = _to_nodes(d_sigma_z, h_sigma_z, dz, hz)
-    return weight, theta, d_theta, h_theta, sigma, d_sigma, h_sigma
+    # the families share theta: sum_f w_f sigma_f and its derivatives first
+    total, d_total, h_total = weight @ sigma, weight @ d_sigma, jnp.tensordot(weight, h_sigma, 1)
+    mixed = jnp.outer(d_theta, d_total)
+    energy = theta**2 * total
+    grad = 2.0 * theta * total * d_theta + theta**2 * d_total
+    hess = (2.0 * total * jnp.outer(d_theta, d_theta) + 2.0 * theta * total * h_theta
+            + 2.0 * theta * (mixed + mixed.T) + theta**2 * h_total)
+    return energy, grad, hess
 
 
 # ---------------------------------------------------------------- public
@@ -288,11 +287,9 @@ def hinge_gradient(x, uv, l0, ei):
     Args: as :func:`jaxnet.terms.bending.hinge_energy`: x (4, 3) node positions (m) of [a, b, p, q], uv (4, 2)
       twine coordinates, l0 (m) the unstretched twine length, ei (N m²) the flexural stiffness of one twine.
     """
-    weight, theta, d_theta, _, sigma, d_sigma, _ = _hinge_parts(x, uv, l0, ei)
-    # the families share theta: sum_f w_f sigma_f and its derivatives first
-    total, d_total = weight @ sigma, jnp.tensordot(weight, d_sigma, 1)
-    grad = 2.0 * theta * total * d_theta + theta**2 * d_total
-    return grad
+    z, dz, _ = _invariant_derivatives(x, _twine_rows(uv)[0])
+    _, grad_z, _ = _energy_of_invariants(uv, l0, ei, z)
+    return grad_z @ dz
 
 
 def hinge_stiffness(x, uv, l0, ei):
@@ -305,9 +302,9 @@ def hinge_stiffness(x, uv, l0, ei):
     Args: as :func:`hinge_gradient`. Layout vertex-major over [a, b, p, q] (entry (3 i + m, 3 j + n): coordinate
       m of node i, n of node j), as ``x.ravel()``.
     """
-    weight, theta, d_theta, h_theta, sigma, d_sigma, h_sigma = _hinge_parts(x, uv, l0, ei)
-    total, d_total, h_total = (weight @ sigma, jnp.tensordot(weight, d_sigma, 1),
-                               jnp.tensordot(weight, h_sigma, 1))
-    mixed = jnp.outer(d_theta, d_total)
-    return (2.0 * total * jnp.outer(d_theta, d_theta) + 2.0 * theta * total * h_theta
-            + 2.0 * theta * (mixed + mixed.T) + theta**2 * h_total)
+    rows = _twine_rows(uv)[0]
+    z, _, _ = _invariant_derivatives(x, rows)
+    _, grad_z, hess_z = _energy_of_invariants(uv, l0, ei, z)
+    # step 3, the chain rule z -> x: K = dz^T (d²E/dz²) dz + sum_k dE/dz_k d²z_k/dx²
+    _, dz, curvature = _invariant_derivatives(x, rows, grad_z)
+    return dz.T @ hess_z @ dz + curvature

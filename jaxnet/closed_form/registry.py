@@ -20,7 +20,7 @@ from typing import Callable
 import jax.numpy as jnp
 
 from jaxnet import geometry, model
-from jaxnet.closed_form import bending, drag, pressure, tension
+from jaxnet.closed_form import bending, drag, knot, opening, pressure, tension
 from jaxnet.terms import pressure as catch_load
 
 
@@ -43,6 +43,18 @@ def _netting_tension(x, p, env, compression):
 
 def _bar_tension(x, p, env, compression):
     return tension.bar_stiffness(x, p.rest_length, p.ea_traction, p.ea_compression if compression else None)
+
+
+def _opening(x, p, env):
+    return opening.opening_stiffness(x, p.uv, p.opening_stiffness, p.rest_angle)
+
+
+def _knot_contact(x, p, env, forms):
+    total = 0.0
+    for code in forms:
+        k = knot.knot_contact_stiffness(x, p.uv, p.l0, p.knot_size, p.knot_stiffness, form=model.KNOT_FORMS[code])
+        total = total + (k if len(forms) == 1 else jnp.where(p.knot_form == code, k, 0.0))
+    return total
 
 
 def _twine_bending(x, p, env):
@@ -103,6 +115,8 @@ def _node_drag(x, p, env, state):
 STIFFNESS = {
     "netting_tension": ClosedForm(_netting_tension),
     "bar_tension": ClosedForm(_bar_tension),
+    "mesh_opening": ClosedForm(_opening),
+    "knot_contact": ClosedForm(_knot_contact),
     "twine_bending": ClosedForm(_twine_bending),
     "netting_drag": ClosedForm(_netting_drag, covers=lambda options: set(options["models"]) <= set(_NETTING_DRAG)),
     "bar_drag": ClosedForm(_bar_drag),
