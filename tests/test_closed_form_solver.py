@@ -67,8 +67,24 @@ def test_paths_name_each_term():
     m = model.active_terms(scene)
     paths = registry.paths(m)
     assert set(paths) == {t.name for t in m if t.term.kind in ("energy", "force")}
-    assert paths["netting_tension"] == paths["bar_tension"] == "closed_form"
+    assert set(paths) >= {"netting_tension", "bar_tension", "mesh_opening", "knot_contact", "twine_bending",
+                          "netting_drag", "bar_drag", "catch_pressure"}
+    assert set(paths.values()) == {"closed_form"}
     assert set(registry.paths(m, "autodiff").values()) == {"autodiff"}
+
+
+def test_a_term_without_closed_form_keeps_autodiff():
+    """The screen drag models have no stiffness in the book: with them the netting drag stays on autodiff,
+    and the mixed tangent is still the autodiff one."""
+    twine = Twine(l0=0.06, ea=1e5, diameter=4e-3, density=1025.0, drag_model="loland")
+    scene = codend(meshes_around=8, meshes_along=4, step=0.12, twine=twine).build()
+    m = model.active_terms(scene)
+    assert registry.paths(m)["netting_drag"] == "autodiff"
+    assert registry.paths(m)["netting_tension"] == "closed_form"
+    x = jnp.asarray(scene.nodes.position) + 1e-3
+    pattern = assemble.build_pattern(scene, m)
+    k = {path: np.asarray(assemble.tangent(x, scene, m, pattern, None, 1.0, path)) for path in assemble.STIFFNESS_PATHS}
+    assert np.max(np.abs(k["closed_form"] - k["autodiff"])) <= 1e-10 * np.max(np.abs(k["autodiff"]))
 
 
 def test_global_tangents_agree():

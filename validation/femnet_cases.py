@@ -1,6 +1,7 @@
 """FEMNET's worked cases solved by jaxnet, figure by figure, with run times against FEMNET's.
 
     python validation/femnet_cases.py [--cases nr_netting c2] [--data tests/data/femnet] [--repeat 3]
+                                      [--stiffness autodiff closed_form]
 
 Per case and per mesh (FEMNET's own `.mdg` mesh, and jaxnet's mesher from the `.don`): FEMNET's summary
 figure (from its `.sta`), jaxnet's, and the relative difference; then jaxnet's nodes, elements, unknowns,
@@ -11,7 +12,8 @@ Each case runs in its own subprocess, so "cold" is really cold: twice, with an e
 compilation cache and then with the programs the first run left there (what `jaxnet run` gives the second
 time a case of that shape is run: its cache is on by default). Each such pair is repeated ``--repeat``
 times and the times printed are the medians, with their ranges: on a shared 2-core machine one run's
-times vary up to 1.7x.
+times vary up to 1.7x. Each case is run with each tangent stiffness path asked for (``--stiffness``: autodiff,
+and the book's closed forms of :mod:`jaxnet.closed_form`), side by side.
 """
 
 from __future__ import annotations
@@ -31,7 +33,7 @@ import numpy as np
 FEMNET_TIMES = {"nr_netting": (16.5, 4387), "c2": (6.9, 847)}
 
 
-def one(case, data, mesh):
+def one(case, data, mesh, stiffness="autodiff"):
     t0 = time.perf_counter()
     import numpy as np
 
@@ -44,10 +46,10 @@ def one(case, data, mesh):
     else:
         net, solver, info = femnet.read_don(don)
         scene = net.build()
-    eq, timing = solve(scene, solver, raise_on_failure=False)
+    eq, timing = solve(scene, solver, raise_on_failure=False, stiffness=stiffness)
     cold = time.perf_counter() - t0
     t1 = time.perf_counter()
-    eq2, _ = solve(scene, solver, raise_on_failure=False)
+    eq2, _ = solve(scene, solver, raise_on_failure=False, stiffness=stiffness)
     warm = time.perf_counter() - t1
     fig = femnet.femnet_figures(scene, eq, info["symmetry_axes"])
     positions, _, _, summary = femnet.read_sta(data / f"{case}.sta", *_mdg_counts(data, case))
@@ -125,55 +127,56 @@ def main():
     parser.add_argument("--repeat", type=int, default=3,
                         help="runs per case and mesh; the times printed are their medians, with the range "
                              "(timings on a shared machine vary up to 1.7x between runs)")
-    parser.add_argument("--one", nargs=2, help=argparse.SUPPRESS)
+    parser.add_argument("--stiffness", nargs="*", default=["autodiff", "closed_form"],
+                        help="tangent stiffness paths to run each case with (Newton(stiffness=...))")
+    parser.add_argument("--one", nargs=3, help=argparse.SUPPRESS)
     args = parser.parse_args()
     data = pathlib.Path(args.data)
     if args.one:
-        case, mesh = args.one
-        print(json.dumps(one(case, data, mesh == "mdg")))
+        case, mesh, stiffness = args.one
+        print(json.dumps(one(case, data, mesh == "mdg", stiffness)))
         return
-    for case in args.cases:
-        for mesh in ("mdg", "don"):
-            title = f"{case} on {'FEMNET' if mesh == 'mdg' else 'jaxnet'}'s mesh"
-            pairs = []  # per repeat: a run with an empty persistent cache, then one with what it left there
-            for _ in range(max(args.repeat, 1)):
-                with tempfile.TemporaryDirectory() as cache:
-                    env = {**os.environ, "JAX_COMPILATION_CACHE_DIR": cache, "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS": "0.2"}
-                    pairs.append([subprocess.run([sys.executable, __file__, "--data", str(data), "--one", case, mesh],
-                                                 capture_output=True, text=True, env=env) for _ in range(2)])
-            failed = [out for runs in pairs for out in runs if out.returncode != 0]
-            if failed:
-                out = failed[0]
-                print(f"{title}: failed: {out.stderr.strip().splitlines()[-1] if out.stderr else out.returncode}")
-                continue
-            results = [[json.loads(out.stdout.strip().splitlines()[-1]) for out in runs] for runs in pairs]
-            r, cached = results[0]
-            timing = {key: _median_and_range([res[k][key] for res in results])
-                      for k, key in ((0, "cold_s"), (0, "compile_s"), (0, "warm_s"))}
-            cached_timing = {key: _median_and_range([res[1][key] for res in results]) for key in ("cold_s", "compile_s")}
-            r = {**r, **{key: med for key, (med, _) in timing.items()}}
-            cached = {**cached, **{key: med for key, (med, _) in cached_timing.items()}}
-            print(f"\n{title}: {r['nodes']} nodes, {r['elements']} elements, {r['dof']} unknowns; "
-                  f"{r['iterations']} Newton iterations ({'converged' if r['converged'] else 'NOT converged'})")
-            print(f"  {'figure':36s} {'FEMNET':>12s} {'jaxnet':>12s} {'difference':>11s}")
-            for label, f, j in r["rows"]:
-                diff = f"{(j - f) / abs(f) * 100:+10.2f}%" if abs(f) > 1e-9 else f"{j - f:+11.3g}"
-                print(f"  {label:36s} {f:12.5g} {j:12.5g} {diff}")
-            if "max_position_difference_m" in r:
-                print(f"  {'largest node position difference (m)':36s} {'':12s} {r['max_position_difference_m']:12.4g}")
-                print(f"  at FEMNET's positions jaxnet's nodal residual is {r['femnet_residual_mean_N']:.3g} N mean, "
-                      f"{r['femnet_residual_max_N']:.3g} N max; one Newton step from there moves the nodes by "
-                      f"{r['newton_step_from_femnet_m']:.4g} m")
-            femnet_s, femnet_it = FEMNET_TIMES[case]
-            if len(results) > 1:
-                spread = ", ".join(f"{name} {lo:.2f}-{hi:.2f} s" for name, (_, (lo, hi)) in
-                                   (("cold", timing["cold_s"]), ("from disk", cached_timing["cold_s"]),
-                                    ("warm", timing["warm_s"])))
-                print(f"  times: medians of {len(results)} runs (ranges: {spread})")
-            print(f"  wall time: jaxnet cold {r['cold_s']:.1f} s (compile {r['compile_s']:.1f} s), cold with the compiled "
-                  f"programs on disk {cached['cold_s']:.1f} s (compile {cached['compile_s']:.1f} s), warm {r['warm_s']:.2f} s; "
-                  f"FEMNET {femnet_s} s ({femnet_it} iterations): {femnet_s / r['cold_s']:.1f}x cold, "
-                  f"{femnet_s / cached['cold_s']:.1f}x cold from disk, {femnet_s / r['warm_s']:.1f}x warm", flush=True)
+    for case, mesh, stiffness in [(c, m, s) for c in args.cases for m in ("mdg", "don") for s in args.stiffness]:
+        title = f"{case} on {'FEMNET' if mesh == 'mdg' else 'jaxnet'}'s mesh, {stiffness} stiffness"
+        pairs = []  # per repeat: a run with an empty persistent cache, then one with what it left there
+        for _ in range(max(args.repeat, 1)):
+            with tempfile.TemporaryDirectory() as cache:
+                env = {**os.environ, "JAX_COMPILATION_CACHE_DIR": cache, "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS": "0.2"}
+                pairs.append([subprocess.run([sys.executable, __file__, "--data", str(data), "--one", case, mesh, stiffness],
+                                             capture_output=True, text=True, env=env) for _ in range(2)])
+        failed = [out for runs in pairs for out in runs if out.returncode != 0]
+        if failed:
+            out = failed[0]
+            print(f"{title}: failed: {out.stderr.strip().splitlines()[-1] if out.stderr else out.returncode}")
+            continue
+        results = [[json.loads(out.stdout.strip().splitlines()[-1]) for out in runs] for runs in pairs]
+        r, cached = results[0]
+        timing = {key: _median_and_range([res[k][key] for res in results])
+                  for k, key in ((0, "cold_s"), (0, "compile_s"), (0, "warm_s"))}
+        cached_timing = {key: _median_and_range([res[1][key] for res in results]) for key in ("cold_s", "compile_s")}
+        r = {**r, **{key: med for key, (med, _) in timing.items()}}
+        cached = {**cached, **{key: med for key, (med, _) in cached_timing.items()}}
+        print(f"\n{title}: {r['nodes']} nodes, {r['elements']} elements, {r['dof']} unknowns; "
+              f"{r['iterations']} Newton iterations ({'converged' if r['converged'] else 'NOT converged'})")
+        print(f"  {'figure':36s} {'FEMNET':>12s} {'jaxnet':>12s} {'difference':>11s}")
+        for label, f, j in r["rows"]:
+            diff = f"{(j - f) / abs(f) * 100:+10.2f}%" if abs(f) > 1e-9 else f"{j - f:+11.3g}"
+            print(f"  {label:36s} {f:12.5g} {j:12.5g} {diff}")
+        if "max_position_difference_m" in r:
+            print(f"  {'largest node position difference (m)':36s} {'':12s} {r['max_position_difference_m']:12.4g}")
+            print(f"  at FEMNET's positions jaxnet's nodal residual is {r['femnet_residual_mean_N']:.3g} N mean, "
+                  f"{r['femnet_residual_max_N']:.3g} N max; one Newton step from there moves the nodes by "
+                  f"{r['newton_step_from_femnet_m']:.4g} m")
+        femnet_s, femnet_it = FEMNET_TIMES[case]
+        if len(results) > 1:
+            spread = ", ".join(f"{name} {lo:.2f}-{hi:.2f} s" for name, (_, (lo, hi)) in
+                               (("cold", timing["cold_s"]), ("from disk", cached_timing["cold_s"]),
+                                ("warm", timing["warm_s"])))
+            print(f"  times: medians of {len(results)} runs (ranges: {spread})")
+        print(f"  wall time: jaxnet cold {r['cold_s']:.1f} s (compile {r['compile_s']:.1f} s), cold with the compiled "
+              f"programs on disk {cached['cold_s']:.1f} s (compile {cached['compile_s']:.1f} s), warm {r['warm_s']:.2f} s; "
+              f"FEMNET {femnet_s} s ({femnet_it} iterations): {femnet_s / r['cold_s']:.1f}x cold, "
+              f"{femnet_s / cached['cold_s']:.1f}x cold from disk, {femnet_s / r['warm_s']:.1f}x warm", flush=True)
 
 
 if __name__ == "__main__":
