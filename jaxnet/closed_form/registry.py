@@ -131,8 +131,8 @@ def covered(active_term) -> bool:
     return entry is not None and (entry.covers is None or entry.covers(active_term.kwargs()))
 
 
-def paths(model, stiffness="closed_form") -> dict:
+def paths(terms, stiffness="closed_form") -> dict:
     """Per active term with a stiffness (energies and forces), the path its stiffness takes:
     ``"closed_form"`` or ``"autodiff"``, for a solver run with ``stiffness``."""
     return {t.name: ("closed_form" if stiffness == "closed_form" and covered(t) else "autodiff")
-            for t in model if t.term.kind in ("energy", "force")}
+            for t in terms if t.term.kind in ("energy", "force")}
