@@ -7,6 +7,7 @@ terms have their singular points, which the tests probe separately). Half of the
 (d < 0).
 """
 
+import jax.numpy as jnp
 import numpy as np
 
 L0 = 0.05  # m
@@ -57,3 +58,16 @@ def random_triangles(n, seed=0, **pair):
 def relative_difference(k, reference):
     """max |k - reference| / max |reference| (both arrays of any shape)."""
     return float(np.max(np.abs(np.asarray(k) - np.asarray(reference))) / np.max(np.abs(np.asarray(reference))))
+
+
+def central_differences(f, a, h):
+    """Jacobian of f at a by central differences of step h: (f(a).size, a.size); f is called on jnp arrays of
+    a's shape."""
+    a = np.asarray(a, float)
+    cols = []
+    for i in range(a.size):
+        e = np.zeros(a.size)
+        e[i] = h
+        e = e.reshape(a.shape)
+        cols.append((np.asarray(f(jnp.asarray(a + e))) - np.asarray(f(jnp.asarray(a - e)))).ravel() / (2 * h))
+    return np.stack(cols, axis=-1)

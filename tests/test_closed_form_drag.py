@@ -13,7 +13,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from elements import random_triangles, relative_difference
+from elements import central_differences, random_triangles, relative_difference
 
 import jaxnet  # noqa: F401  (float64)
 from jaxnet import current, geometry
@@ -281,17 +281,6 @@ def test_sheared_closed_form_equals_finite_differences(model):
     for k in moving[:2]:
         fd = -central_differences(lambda y: composed(jnp.asarray(y), uv[k], speed[k], direction[k]), x[k], 1e-6)
         assert relative_difference(r["sheared_closed"][k], fd) < 1e-7
-
-
-def central_differences(f, a, h):
-    a = np.asarray(a, float)
-    cols = []
-    for i in range(a.size):
-        e = np.zeros(a.size)
-        e[i] = h
-        e = e.reshape(a.shape)
-        cols.append((np.asarray(f(a + e)) - np.asarray(f(a - e))).ravel() / (2 * h))
-    return np.stack(cols, axis=-1)
 
 
 # ---------------------------------------------------------------------------------------------------

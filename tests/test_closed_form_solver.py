@@ -28,6 +28,8 @@ from jaxnet.scenes.panel import hanging_panel
 from jaxnet.solve import statics
 
 CLOSED_FORM = pathlib.Path(jn.__file__).parent / "closed_form"
+#: the tangent, compiled (op by op, its vmaps would compile dozens of small programs)
+TANGENT = jax.jit(assemble.tangent, static_argnames=("model", "stiffness"))
 AUTODIFF = re.compile(r"grad|jacfwd|jacrev|hessian|jvp|vjp|linearize|value_and_grad|custom_jvp|custom_vjp")
 
 
@@ -89,7 +91,7 @@ def test_a_term_without_closed_form_keeps_autodiff():
     assert registry.paths(m)["netting_tension"] == "closed_form"
     x = jnp.asarray(scene.nodes.position) + 1e-3
     pattern = assemble.build_pattern(scene, m)
-    k = {path: np.asarray(assemble.tangent(x, scene, m, pattern, None, 1.0, path)) for path in assemble.STIFFNESS_PATHS}
+    k = {path: np.asarray(TANGENT(x, scene, pattern=pattern, model=m, stiffness=path)) for path in assemble.STIFFNESS_PATHS}
     assert np.max(np.abs(k["closed_form"] - k["autodiff"])) <= 1e-10 * np.max(np.abs(k["autodiff"]))
 
 
@@ -99,13 +101,17 @@ def test_global_tangents_agree():
     m = model.active_terms(scene)
     pattern = assemble.build_pattern(scene, m)
     state = assemble.states(x, scene, m)
-    k = {path: np.asarray(jax.jit(lambda x, pattern, path=path: assemble.tangent(x, scene, m, pattern, state, 1.0, path))(x, pattern))
+    # the elastic scale as an array: one compilation per path serves both scales
+    k = {path: np.asarray(TANGENT(x, scene, pattern=pattern, state=state, elastic_scale=jnp.asarray(1.0), model=m,
+                                  stiffness=path))
          for path in assemble.STIFFNESS_PATHS}
     scale = np.max(np.abs(k["autodiff"]))
     assert scale > 0
     assert np.max(np.abs(k["closed_form"] - k["autodiff"])) <= 1e-10 * scale
     # and with the elastic energies scaled (the stiffness continuation's softened nets)
-    soft = {path: np.asarray(assemble.tangent(x, scene, m, pattern, state, 0.1, path)) for path in assemble.STIFFNESS_PATHS}
+    soft = {path: np.asarray(TANGENT(x, scene, pattern=pattern, state=state, elastic_scale=jnp.asarray(0.1), model=m,
+                                     stiffness=path))
+            for path in assemble.STIFFNESS_PATHS}
     assert np.max(np.abs(soft["closed_form"] - soft["autodiff"])) <= 1e-10 * scale
     assert np.max(np.abs(soft["autodiff"] - k["autodiff"])) > 1e-3 * scale
 
@@ -140,7 +146,7 @@ def test_global_tangents_agree_in_a_current_varying_with_depth():
         rng = np.random.default_rng(5)
         x = jnp.asarray(np.asarray(scene.nodes.position) + 0.02 * rng.normal(size=scene.nodes.position.shape))
         pattern = assemble.build_pattern(scene, m)
-        tangents[profile] = {path: np.asarray(assemble.tangent(x, scene, m, pattern, None, 1.0, path))
+        tangents[profile] = {path: np.asarray(TANGENT(x, scene, pattern=pattern, model=m, stiffness=path))
                              for path in assemble.STIFFNESS_PATHS}
     k = tangents[True]
     scale = np.max(np.abs(k["autodiff"]))

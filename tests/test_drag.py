@@ -4,6 +4,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from elements import central_differences  # tests/elements.py
 
 import jaxnet  # noqa: F401  (float64)
 from jaxnet import current, geometry
@@ -155,18 +156,6 @@ def test_collapsed_element_is_finite():
     expected = 2 * 3.0 * KN * jnp.linalg.norm(c) * c  # |d| = 6: 3 U and 3 V twines
     np.testing.assert_allclose(netting_jit(x, uv, c).sum(0), expected, rtol=1e-13)
     assert np.isfinite(jac_x(x, uv, c)).all() and np.isfinite(jac_c(x, uv, c)).all()
-
-
-def central_differences(f, a, h):
-    """Jacobian of f at a by central differences of step h: (f.size, a.size)."""
-    a = np.asarray(a, float)
-    cols = []
-    for i in range(a.size):
-        e = np.zeros(a.size)
-        e[i] = h
-        e = e.reshape(a.shape)
-        cols.append((np.asarray(f(jnp.asarray(a + e))) - np.asarray(f(jnp.asarray(a - e)))) / (2 * h))
-    return np.stack(cols, axis=-1)
 
 
 @pytest.mark.parametrize("clockwise", [False, True])

@@ -105,20 +105,23 @@ def element_functions(term, scene, state, all_modes=True):
     return out
 
 
-def measure(triangles, repeats, all_modes=True):
-    """Rows of the tables for a cod-end of about ``triangles`` triangles, and the terms with no closed form."""
+def measure(triangles, repeats, all_modes=True, only=None, elements=True):
+    """Rows of the tables for a cod-end of about ``triangles`` triangles, and the terms with no closed form.
+
+    ``only``: names of the terms to time (None: all with a closed form); ``elements``: also time the element
+    matrices alone (not only the assembled tangents)."""
     scene = scene_of_size(triangles)
     model = model_lib.active_terms(scene)
     rng = np.random.default_rng(0)
     x = jnp.asarray(np.asarray(scene.nodes.position) + 1e-4 * rng.normal(size=scene.nodes.position.shape))
     state = assemble.states(x, scene, model)
     rows = []
-    covered = [t for t in model if registry.covered(t)]
+    covered = [t for t in model if registry.covered(t) and (only is None or t.name in only)]
     for term in covered:
         family = term.term.family
         conn = assemble.connectivity(scene, family)
         xe, fam = x[conn], getattr(scene, family)
-        fns = element_functions(term, scene, state, all_modes)
+        fns = element_functions(term, scene, state, all_modes) if elements else {}
         for name, fn in fns.items():
             rows.append(dict(elements=int(scene.netting.vertices.shape[0]), term=term.name, level="element",
                              method=name, count=int(conn.shape[0]), **dict(zip(("compile_s", "run_ms", "temp_mb"),

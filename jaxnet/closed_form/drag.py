@@ -130,6 +130,15 @@ def _spread_stiffness(coefficients, jacobians, j_velocity, dc_dcentroid, vertice
     return jnp.broadcast_to(per_vertex[None], (vertices, 3, k, 3)).reshape(3 * vertices, 3 * k)
 
 
+def _twine_parts(x, uv, l0, diameter, cd_normal, cd_tangential, water_velocity, water_density):
+    """What both netting drag stiffnesses start from: the coefficients a, b (U = a @ x, V = b @ x), U, V,
+    the twine count |d|/2, the twine arguments, and each family's :func:`twine_drag_jacobians`."""
+    a, b, d = geometry.twine_coefficients(uv)
+    U, V = a @ x, b @ x
+    args = (l0, diameter, cd_normal, cd_tangential, water_velocity, water_density)
+    return a, b, U, V, geometry.twine_count(d), args, twine_drag_jacobians(U, *args), twine_drag_jacobians(V, *args)
+
+
 def netting_drag_stiffness(x, uv, l0, diameter, cd_normal, cd_tangential, water_velocity, water_density,
                            velocity_slope=None, up=None):
     """(9, 9) drag stiffness K = -∂F/∂x (N/m) of one diamond-mesh triangle, :func:`jaxnet.terms.drag.netting_drag`
@@ -146,12 +155,9 @@ def netting_drag_stiffness(x, uv, l0, diameter, cd_normal, cd_tangential, water_
       up: (3,) unit vertical along which z is measured; None is (0, 0, 1). Only used with velocity_slope.
     Vertex-major layout (entry (3 i + m, 3 j + n): coordinate m of vertex i, n of vertex j).
     """
-    a, b, d = geometry.twine_coefficients(uv)
-    U, V = a @ x, b @ x
-    count = geometry.twine_count(d)
-    args = (l0, diameter, cd_normal, cd_tangential, water_velocity, water_density)
-    ju_axis, ju_c = twine_drag_jacobians(U, *args)
-    jv_axis, jv_c = twine_drag_jacobians(V, *args)
+    a, b, _, _, count, _, (ju_axis, ju_c), (jv_axis, jv_c) = _twine_parts(x, uv, l0, diameter, cd_normal,
+                                                                         cd_tangential, water_velocity,
+                                                                         water_density)
     return _spread_stiffness((a, b), (count * ju_axis, count * jv_axis), count * (ju_c + jv_c),
                              _vertical(velocity_slope, up), 3)
 
@@ -191,12 +197,9 @@ def netting_drag_femnet_catch_stiffness(x, uv, l0, diameter, cd_normal, cd_tange
 
     Args: as :func:`netting_drag_stiffness` (same units, same ``velocity_slope`` and ``up``).
     """
-    a, b, d = geometry.twine_coefficients(uv)
-    U, V = a @ x, b @ x
-    count = geometry.twine_count(d)
-    args = (l0, diameter, cd_normal, cd_tangential, water_velocity, water_density)
-    ju_axis, ju_c = twine_drag_jacobians(U, *args)
-    jv_axis, jv_c = twine_drag_jacobians(V, *args)
+    a, b, U, V, count, args, (ju_axis, ju_c), (jv_axis, jv_c) = _twine_parts(x, uv, l0, diameter, cd_normal,
+                                                                             cd_tangential, water_velocity,
+                                                                             water_density)
     normal_u, tangential_u = _twine_force(U, *args)
     force_u = count * (normal_u + tangential_u)
     c = water_velocity

@@ -87,16 +87,7 @@ def knot_contact_stiffness(x, uv, l0, knot_size, stiffness=None, *, ea=None, ban
       both_diagonals: also resist the closure towards α = π/2 (a Python bool).
       form: "book" or "femnet" (a Python str).
     """
-    if form not in knot.FORMS:
-        raise ValueError(f"knot_contact_stiffness: form must be one of {knot.FORMS}, not {form!r}")
-    femnet = form == "femnet"
-    if femnet and band is not None:
-        raise ValueError("knot_contact_stiffness: FEMNET's contact has no band; leave band=None with form='femnet'")
-    if stiffness is None:
-        if ea is None:
-            raise ValueError("knot_contact_stiffness: the default stiffness (eq. 4.280 or FEMNET's) needs ea, "
-                             "the twine EA (N)")
-        stiffness = (knot.femnet_knot_stiffness if femnet else knot.default_knot_stiffness)(l0, knot_size, ea)
+    femnet, stiffness = knot.contact_options(form, band, stiffness, ea, l0, knot_size, "knot_contact_stiffness")
 
     if femnet:
         contact = knot.femnet_contact_half_angle(l0, knot_size)

@@ -159,6 +159,22 @@ def femnet_penalty(alpha, contact_angle):
     return 4.0 * ((alpha - contact_angle) * jnp.sin(alpha) + jnp.cos(alpha) - jnp.cos(contact_angle))
 
 
+def contact_options(form, band, stiffness, ea, l0, knot_size, caller):
+    """Check a knot contact's options (:func:`knot_contact_energy`'s, also those of its closed-form stiffness)
+    and resolve the default stiffness: returns (femnet, H) with femnet True for FEMNET's form and H in N·m/rad.
+    ``caller`` names the function in the error messages."""
+    if form not in FORMS:
+        raise ValueError(f"{caller}: form must be one of {FORMS}, not {form!r}")
+    femnet = form == "femnet"
+    if femnet and band is not None:
+        raise ValueError(f"{caller}: FEMNET's contact has no band; leave band=None with form='femnet'")
+    if stiffness is None:
+        if ea is None:
+            raise ValueError(f"{caller}: the default stiffness (eq. 4.280 or FEMNET's) needs ea, the twine EA (N)")
+        stiffness = (femnet_knot_stiffness if femnet else default_knot_stiffness)(l0, knot_size, ea)
+    return femnet, stiffness
+
+
 def knot_contact_energy(x, uv, l0, knot_size, stiffness=None, *, ea=None, band=None, both_diagonals=True,
                         form="book"):
     """Energy (J) of the knot contacts of one diamond-mesh triangle.
@@ -185,16 +201,7 @@ def knot_contact_energy(x, uv, l0, knot_size, stiffness=None, *, ea=None, band=N
         a Python bool.
       form: "book" or "femnet", a Python str.
     """
-    if form not in FORMS:
-        raise ValueError(f"knot_contact_energy: form must be one of {FORMS}, not {form!r}")
-    femnet = form == "femnet"
-    if femnet and band is not None:
-        raise ValueError("knot_contact_energy: FEMNET's contact has no band; leave band=None with form='femnet'")
-    if stiffness is None:
-        if ea is None:
-            raise ValueError("knot_contact_energy: the default stiffness (eq. 4.280 or FEMNET's) needs ea, "
-                             "the twine EA (N)")
-        stiffness = (femnet_knot_stiffness if femnet else default_knot_stiffness)(l0, knot_size, ea)
+    femnet, stiffness = contact_options(form, band, stiffness, ea, l0, knot_size, "knot_contact_energy")
     alpha, d, valid = half_angle(x, uv)
     if femnet:
         contact = femnet_contact_half_angle(l0, knot_size)
