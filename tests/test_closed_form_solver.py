@@ -167,3 +167,18 @@ def test_both_paths_reach_the_same_equilibrium(name):
     size = np.ptp(np.asarray(a.x), axis=0).max()
     # both converge to tol (1e-3 N); their positions differ by what that residual allows
     assert np.max(np.abs(np.asarray(a.x) - np.asarray(c.x))) < 1e-6 * size
+
+
+def test_jitted_newton_loop_runs_on_the_closed_form():
+    """The one-program Newton (``statics.newton_loop``, for traced callers) takes the switch too, and is the
+    same iteration as the host loop."""
+    scene = hanging_panel(meshes=6, step=0.05).build()
+    solver = jn.Newton(stiffness="closed_form", stall_window=None)
+    host, _ = statics.solve(scene, solver)
+    m = model.active_terms(scene)
+    pattern = assemble.build_pattern(scene, m)
+    x0 = jnp.asarray(np.asarray(scene.nodes.position).ravel()[np.asarray(pattern.free)])
+    jitted = statics._newton_jit(x0, scene, pattern, model=m, opts=solver)
+    assert int(jitted.status) == statics.CONVERGED
+    assert int(jitted.iterations) == int(host.iterations)
+    np.testing.assert_allclose(np.asarray(jitted.x), np.asarray(host.x), atol=1e-9)
