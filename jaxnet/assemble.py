@@ -23,6 +23,11 @@ enclosed volume is the catch volume): each such term's ``state(x, scene)`` is co
 evaluation and handed to its elements; the tangent treats it as constant (a quasi-Newton
 approximation of that one coupling, stated where it is used).
 
+In a time step (:mod:`jaxnet.solve.dynamics`) the drag terms depend on the vertices' velocities too,
+(x - x_previous)/Δt by the book's backward difference (4.266): ``forces`` and ``tangent`` then take a
+:class:`Motion`, and the velocity is formed inside the differentiated element function, so the tangent
+holds the drag's damping (1/Δt) dF/dv as well as its dependence on the positions.
+
 Sign convention: ``force`` is the out-of-balance force on the nodes (N), zero at equilibrium;
 ``tangent`` is K = -d force / dx (book eq. 4.46).
 """
@@ -39,6 +44,14 @@ from jaxnet.model import ActiveTerm
 
 #: the two ways of computing the tangent stiffness (:func:`tangent`)
 STIFFNESS_PATHS = ("autodiff", "closed_form")
+
+class Motion(eqx.Module):
+    """The past of an implicit time step, for velocity-dependent forces: the positions x_previous (N, 3) in
+    m at the last time and the step Δt (s) to the new one; a vertex's velocity is (x - x_previous)/Δt."""
+
+    x_previous: jax.Array
+    time_step: jax.Array
+
 
 def connectivity(scene, family):
     """(E, k) node indices of the elements of a family ("nodes": each node is its own element)."""
@@ -146,14 +159,26 @@ def _family_energy(model, family, elastic_scale=1.0):
 def _family_force(model, family):
     terms = [t for t in model if t.term.family == family and t.term.kind == "force"]
 
-    def force(x, p, env, state):
+    def force(x, p, env, state, velocity=None):
         total = jnp.zeros_like(x)
         for t in terms:
+            # the vertices' velocities (m/s) go to the terms that feel them, in dynamics
+            extra = {"velocity": velocity} if t.term.moving and t.kwargs().get("moving") else {}
             with jax.named_scope(t.name):
-                total = total + t.term.element(x, p, env, state.get(t.name), **t.kwargs())
+                total = total + t.term.element(x, p, env, state.get(t.name), **t.kwargs(), **extra)
         return total
 
     return force
+
+
+def _velocity(x, x_previous, motion):
+    """Vertex velocities (k, 3) in m/s by the backward difference (4.266, sign corrected), None in statics."""
+    return None if motion is None else (x - x_previous) / motion.time_step
+
+
+def _previous(scene, conn, motion):
+    """The elements' vertex positions at the last time (E, k, 3), or a placeholder in statics."""
+    return jnp.zeros((conn.shape[0], 0)) if motion is None else motion.x_previous[conn]
 
 
 def states(x, scene, model):
@@ -195,14 +220,20 @@ def potential(x, scene, model, load):
     return energy(x, scene, model) - jnp.sum(load * x)
 
 
-def forces(x, scene, model, state=None):
-    """(N, 3) nodal forces (N) of the force terms (drag, pressure: not conservative) at positions x."""
+def forces(x, scene, model, state=None, motion: Motion | None = None):
+    """(N, 3) nodal forces (N) of the force terms (drag, pressure: not conservative) at positions x;
+    ``motion``: in a time step, the past that gives the vertices' velocities (drag on relative velocity)."""
     state = states(x, scene, model) if state is None else state
     total = jnp.zeros_like(x)
     for family in _families(model, "force"):
         conn = connectivity(scene, family)
         fam = getattr(scene, family)
-        f = jax.vmap(_family_force(model, family), in_axes=(0, 0, None, None))(x[conn], fam, scene.environment, state)
+        force = _family_force(model, family)
+
+        def element(xe, p, xp, force=force):
+            return force(xe, p, scene.environment, state, _velocity(xe, xp, motion))
+
+        f = jax.vmap(element)(x[conn], fam, _previous(scene, conn, motion))
         total = total.at[conn.ravel()].add(f.reshape(-1, 3))
     return total
 
@@ -233,14 +264,16 @@ def term_forces(x, scene, model):
     return out
 
 
-def scatter_hessians(x, scene, pattern, element_energies, element_forces=None, state=None, element_blocks=None):
+def scatter_hessians(x, scene, pattern, element_energies, element_forces=None, state=None, element_blocks=None,
+                     motion: Motion | None = None):
     """CSR entries (nnz,) of the stiffness of per-element energies and forces.
 
     ``element_energies[family](x, p, env)`` (J) is differentiated twice (``jax.jacfwd`` of ``jax.grad``)
     on its own vertices; ``element_forces[family](x, p, env, state)`` (N) once (``jax.jacfwd``), with
     the sign of K = -dF/dx; ``element_blocks[family](x, p, env, state)`` gives (3k, 3k) element matrices
     directly (the closed-form path); all vmapped over the family, their entries summed into the pattern's
-    slots (entries on fixed coordinates are dropped).
+    slots (entries on fixed coordinates are dropped). ``motion``: in a time step, the forces' vertex velocities
+    (x - x_previous)/Δt are formed inside the differentiated function.
     """
     data = jnp.zeros(pattern.nnz + 1)
     element_forces = element_forces or {}
@@ -251,19 +284,22 @@ def scatter_hessians(x, scene, pattern, element_energies, element_forces=None, s
         k = conn.shape[1]
         energy_fn, force_fn, block_fn = element_energies.get(family), element_forces.get(family), element_blocks.get(family)
 
-        def stiffness(xe, p, energy_fn=energy_fn, force_fn=force_fn, block_fn=block_fn, k=k):
+        def stiffness(xe, p, xp, energy_fn=energy_fn, force_fn=force_fn, block_fn=block_fn, k=k):
             block = jnp.zeros((3 * k, 3 * k))
             if energy_fn is not None:
                 flat = lambda v: energy_fn(v.reshape(k, 3), p, scene.environment)  # noqa: E731
                 block = block + jax.jacfwd(jax.grad(flat))(xe.ravel())
             if force_fn is not None:
-                flat = lambda v: force_fn(v.reshape(k, 3), p, scene.environment, state).ravel()  # noqa: E731
+                def flat(v):
+                    v = v.reshape(k, 3)
+                    return force_fn(v, p, scene.environment, state, _velocity(v, xp, motion)).ravel()
+
                 block = block - jax.jacfwd(flat)(xe.ravel())
             if block_fn is not None:
                 block = block + block_fn(xe, p, scene.environment, state)
             return block
 
-        blocks = jax.vmap(stiffness)(x[conn], fam)
+        blocks = jax.vmap(stiffness)(x[conn], fam, _previous(scene, conn, motion))
         data = data + jax.ops.segment_sum(blocks.reshape(-1), pattern.slots[family].reshape(-1), pattern.nnz + 1)
     return data[:-1]
 
@@ -288,7 +324,7 @@ def _family_closed_form(model, family, elastic_scale=1.0):
     return block
 
 
-def tangent(x, scene, model, pattern, state=None, elastic_scale=1.0, stiffness="autodiff"):
+def tangent(x, scene, model, pattern, state=None, elastic_scale=1.0, stiffness="autodiff", motion: Motion | None = None):
     """CSR entries (nnz,) of the tangent K = -d force / dx over the free coordinates.
 
     ``elastic_scale``: factor on the elastic terms' energy, as in :func:`energy`.
@@ -299,6 +335,8 @@ def tangent(x, scene, model, pattern, state=None, elastic_scale=1.0, stiffness="
     ``stiffness``: ``"autodiff"`` (every term by ``jax.jacfwd``) or ``"closed_form"``: the terms with a
     hand-derived stiffness (:mod:`jaxnet.closed_form`) use it, the others autodiff
     (:func:`jaxnet.closed_form.registry.paths` says which is which). A Python str.
+
+    ``motion``: in a time step, the past of the velocity-dependent forces (:class:`Motion`).
     """
     if stiffness not in STIFFNESS_PATHS:
         raise ValueError(f"stiffness must be one of {STIFFNESS_PATHS}, not {stiffness!r}")
@@ -310,4 +348,4 @@ def tangent(x, scene, model, pattern, state=None, elastic_scale=1.0, stiffness="
     # global states (the catch front) are held fixed in the tangent: see the module docstring
     if _families(model, "force"):
         state = jax.lax.stop_gradient(states(x, scene, model) if state is None else state)
-    return scatter_hessians(x, scene, pattern, energies, element_forces, state, blocks)
+    return scatter_hessians(x, scene, pattern, energies, element_forces, state, blocks, motion)

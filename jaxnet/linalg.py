@@ -29,6 +29,8 @@ takes a zero pivot, it takes the column's largest entry instead.
 
 from __future__ import annotations
 
+import hashlib
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -53,9 +55,25 @@ def matvec(data, rows, indices, v):
     return jax.ops.segment_sum(data * v[indices], rows, num_segments=v.shape[0], indices_are_sorted=True)
 
 
+#: solvers of the structures seen by :func:`solve`'s callback (structure digest -> HostSolver): a jitted loop
+#: of Newton solves (dynamics: thousands of time steps) then computes each structure's ordering once.
+_SOLVERS: dict = {}
+_MAX_SOLVERS = 8
+
+
+def _host_solver(indptr, indices):
+    indptr, indices = np.asarray(indptr), np.asarray(indices)
+    key = hashlib.blake2b(indptr.tobytes() + indices.tobytes(), digest_size=16).digest()
+    solver = _SOLVERS.get(key)
+    if solver is None:
+        if len(_SOLVERS) >= _MAX_SOLVERS:
+            _SOLVERS.pop(next(iter(_SOLVERS)))
+        solver = _SOLVERS[key] = HostSolver(indptr, indices)
+    return solver
+
+
 def _host_solve(data, rhs, indptr, indices):
-    # A fresh solver: its ordering is computed from this matrix and is not reused between callbacks.
-    x, ok = HostSolver(np.asarray(indptr), np.asarray(indices)).solve(data, rhs)
+    x, ok = _host_solver(indptr, indices).solve(data, rhs)
     return x, np.asarray(ok)
 
 

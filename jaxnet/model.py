@@ -15,6 +15,14 @@ Kinds of terms:
   * ``"force"``: a non-conservative element force (drag, catch pressure): ``(k, 3)`` nodal forces (N) of
     the element's vertex positions; stiffness minus its ``jax.jacfwd``. A force term may need a global
     ``state`` of the whole net (the catch front), computed once per evaluation.
+
+Statics and dynamics. In statics the net is at rest and the water's velocity is the current's, taken at
+the element's centroid. In dynamics (``active_terms(scene, dynamic=True)``) the drag terms are *moving*
+(:attr:`Term.moving`): they are present wherever their coefficients are, even in still water (a net
+moving through still water is dragged), and each vertex takes its share of the element's drag with the
+velocity of the water *relative to that vertex* (book 4.272-4.276): the current at the vertex and at the
+environment's time, plus the waves' orbital velocity there (``Environment.waves``), minus the vertex's
+velocity, which the dynamic solver gives the element (``velocity``, (k, 3) m/s).
 """
 
 from __future__ import annotations
@@ -42,6 +50,9 @@ class Term:
     elastic: for an energy, True if it is the net's own elastic energy (twines, bars, mesh opening, knots,
       bending), which the static solver's stiffness continuation scales; False for the potentials of
       loads (weight and buoyancy at the surface) and of the surroundings (the sea bed).
+    moving: for a force, True if it depends on the element's velocity relative to the water (drag): its
+      ``options(scene, dynamic)`` takes the dynamic flag, and in dynamics its element takes the vertex
+      velocities as the keyword ``velocity`` ((k, 3) m/s).
     """
 
     name: str
@@ -51,6 +62,7 @@ class Term:
     options: Callable
     state: Callable | None = None
     elastic: bool = False
+    moving: bool = False
 
 
 # -- element adapters: map a family row onto the term functions ------------------------------------
@@ -138,6 +150,25 @@ def _water_velocity(x, env):
                                     env.profile_factor, env.surface_level)
 
 
+def water_velocity_at(points, env, waves):
+    """Velocity (..., 3) in m/s of the water at ``points`` (..., 3) and at the environment's time: the
+    current at each point's depth, plus the waves' orbital velocity when ``waves`` (static) is True."""
+    z = points @ env.up
+    c = current.current_velocity(z, env.current_speed, env.current_direction, env.profile_depth,
+                                 env.profile_factor, env.surface_level)
+    if waves:
+        c = c + env.waves.velocity(points, env.time)
+    return c
+
+
+def _per_vertex(force, x, env, velocity, waves):
+    """Dynamics (book 4.272-4.276): vertex i of an element takes its share of the element's drag computed
+    with the water's velocity relative to vertex i. ``force(c) -> (k, 3)`` is the element's drag shared
+    over its k vertices for a uniform relative velocity c; row i of force(c_i) is vertex i's share."""
+    relative = water_velocity_at(x, env, waves) - velocity
+    return jnp.stack([force(relative[i])[i] for i in range(x.shape[0])])
+
+
 #: netting drag models (``Netting.drag_model`` codes), each a function of (x, p, c, rho) -> (3, 3) N
 NETTING_DRAG = {
     0: ("twine_drag", lambda x, p, c, rho: drag.netting_drag(x, p.uv, p.l0, p.diameter, p.cd_normal,
@@ -154,13 +185,15 @@ NETTING_DRAG = {
 TWINE_DRAG_MODELS = (0, 3)
 
 
-def _netting_drag(x, p, env, state, models, shielded):
-    c = _water_velocity(x, env)
+def _netting_drag(x, p, env, state, models, shielded, moving=False, waves=False, velocity=None):
     total = jnp.zeros((3, 3))
     for code in models:
         name, force = NETTING_DRAG[code]
         with jax.named_scope(name):
-            f = force(x, p, c, env.water_density)
+            if moving:
+                f = _per_vertex(lambda c: force(x, p, c, env.water_density), x, env, velocity, waves)
+            else:
+                f = force(x, p, _water_velocity(x, env), env.water_density)
         total = total + (f if len(models) == 1 else jnp.where(p.drag_model == code, f, 0.0))
     if shielded:
         # netting behind the catch front is backed by fish: the water does not flow through it, and the
@@ -177,17 +210,25 @@ def _drag_state(x, scene):
     return None if scene.catch is None else _catch_state(x, scene)
 
 
-def _bar_drag(x, p, env, state):
-    return drag.bar_drag(x, p.rest_length, p.diameter, p.cd_normal, p.tangential_ratio * p.cd_normal,
-                         _water_velocity(x, env), env.water_density)
+def _bar_drag(x, p, env, state, moving=False, waves=False, velocity=None):
+    def force(c):
+        return drag.bar_drag(x, p.rest_length, p.diameter, p.cd_normal, p.tangential_ratio * p.cd_normal, c,
+                             env.water_density)
+
+    return _per_vertex(force, x, env, velocity, waves) if moving else force(_water_velocity(x, env))
 
 
-def _node_drag(x, p, env, state):
-    return drag.node_drag(p.drag_area, _water_velocity(x, env), env.water_density)[None, :]
+def _node_water_velocity(x, env, moving, waves, velocity):
+    return water_velocity_at(x[0], env, waves) - velocity[0] if moving else _water_velocity(x, env)
 
 
-def _node_box_drag(x, p, env, state, floating):
-    c = _water_velocity(x, env)
+def _node_drag(x, p, env, state, moving=False, waves=False, velocity=None):
+    c = _node_water_velocity(x, env, moving, waves, velocity)
+    return drag.node_drag(p.drag_area, c, env.water_density)[None, :]
+
+
+def _node_box_drag(x, p, env, state, floating, moving=False, waves=False, velocity=None):
+    c = _node_water_velocity(x, env, moving, waves, velocity)
     # only with a free surface can a body be partly immersed; without one it is wholly under water
     f = drag.box_immersed_fraction(jnp.dot(x[0], env.up), p.drag_length[2], env.surface_level) if floating else 1.0
     return drag.box_drag(p.drag_length, p.drag_coefficient, c, env.water_density, f)[None, :]
@@ -306,38 +347,51 @@ def _current(scene):
     return scene.environment.current_speed > 0
 
 
-def _netting_drag_options(scene):
+def _flow(scene, dynamic):
+    """Does water move relative to the net? In statics where there is a current; in dynamics always (the
+    net moves, the current may start later, the waves move the water)."""
+    return dynamic or _current(scene)
+
+
+def _moving(scene, dynamic):
+    """Static options of a moving (drag) term: per-vertex relative velocities in dynamics, and waves."""
+    return {"moving": True, "waves": scene.environment.waves is not None} if dynamic else {}
+
+
+def _netting_drag_options(scene, dynamic=False):
     net = scene.netting
-    if net is None or not _current(scene) or net.drag_model is None:
+    if net is None or not _flow(scene, dynamic) or net.drag_model is None:
         return None
     codes = np.asarray(net.drag_model)
     has_cd = (np.asarray(net.cd_normal) != 0) if net.cd_normal is not None else np.zeros(codes.shape, bool)
     screens = set(codes[~np.isin(codes, TWINE_DRAG_MODELS)].tolist())
     twines = {m for m in TWINE_DRAG_MODELS if np.any((codes == m) & has_cd)}
     models = tuple(sorted(screens | twines))
-    return {"models": models, "shielded": scene.catch is not None} if models else None
-
-
-def _bar_drag_options(scene):
-    bars = scene.bars
-    if bars is None or not _current(scene) or bars.cd_normal is None or not _any(bars.cd_normal):
+    if not models:
         return None
-    return {}
+    return {"models": models, "shielded": scene.catch is not None, **_moving(scene, dynamic)}
 
 
-def _node_drag_options(scene):
+def _bar_drag_options(scene, dynamic=False):
+    bars = scene.bars
+    if bars is None or not _flow(scene, dynamic) or bars.cd_normal is None or not _any(bars.cd_normal):
+        return None
+    return _moving(scene, dynamic)
+
+
+def _node_drag_options(scene, dynamic=False):
     n = scene.nodes
-    return {} if _current(scene) and n.drag_area is not None and _any(n.drag_area) else None
+    return _moving(scene, dynamic) if _flow(scene, dynamic) and n.drag_area is not None and _any(n.drag_area) else None
 
 
-def _node_box_drag_options(scene):
+def _node_box_drag_options(scene, dynamic=False):
     n = scene.nodes
-    if not _current(scene) or n.drag_length is None or n.drag_coefficient is None:
+    if not _flow(scene, dynamic) or n.drag_length is None or n.drag_coefficient is None:
         return None
     length, cd = np.abs(np.asarray(n.drag_length, dtype=float)), np.asarray(n.drag_coefficient, dtype=float)
     # Cd times the area of each face (the vertical one counts when it has any size)
     faces = np.stack([length[:, 1] * length[:, 2], length[:, 0] * length[:, 2], length[:, 0] * length[:, 1]], axis=1)
-    return {"floating": _floating(scene)} if _any(cd * faces) else None
+    return {"floating": _floating(scene), **_moving(scene, dynamic)} if _any(cd * faces) else None
 
 
 def _limits(scene):
@@ -379,10 +433,10 @@ TERMS = (
     Term("mesh_opening", "netting", "energy", _opening, _netting_parameter_options("opening_stiffness"), elastic=True),
     Term("knot_contact", "netting", "energy", _knot_contact, _knot_options, elastic=True),
     Term("twine_bending", "hinges", "energy", _twine_bending, _hinge_options, elastic=True),
-    Term("netting_drag", "netting", "force", _netting_drag, _netting_drag_options, state=_drag_state),
-    Term("bar_drag", "bars", "force", _bar_drag, _bar_drag_options),
-    Term("node_drag", "nodes", "force", _node_drag, _node_drag_options),
-    Term("node_box_drag", "nodes", "force", _node_box_drag, _node_box_drag_options),
+    Term("netting_drag", "netting", "force", _netting_drag, _netting_drag_options, state=_drag_state, moving=True),
+    Term("bar_drag", "bars", "force", _bar_drag, _bar_drag_options, moving=True),
+    Term("node_drag", "nodes", "force", _node_drag, _node_drag_options, moving=True),
+    Term("node_box_drag", "nodes", "force", _node_box_drag, _node_box_drag_options, moving=True),
     Term("bottom_contact", "nodes", "energy", _bottom_contact, _bottom_contact_options),
     Term("bottom_friction", "nodes", "force", _bottom_friction, _bottom_friction_options),
     Term("catch_pressure", "netting", "force", _catch_pressure, _catch_options, state=_catch_state),
@@ -404,11 +458,12 @@ class ActiveTerm:
         return dict(self.options)
 
 
-def active_terms(scene) -> tuple[ActiveTerm, ...]:
-    """The terms this scene uses, with their static options, in registry order."""
+def active_terms(scene, dynamic=False) -> tuple[ActiveTerm, ...]:
+    """The terms this scene uses, with their static options, in registry order; ``dynamic``: for a time
+    step (the drag terms then act on the velocity relative to the water, see the module docstring)."""
     active = []
     for term in TERMS:
-        opts = term.options(scene)
+        opts = term.options(scene, dynamic) if term.moving else term.options(scene)
         if opts is not None:
             active.append(ActiveTerm(term, tuple(sorted(opts.items()))))
     return tuple(active)

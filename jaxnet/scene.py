@@ -56,6 +56,9 @@ class Nodes(eqx.Module):
     limit_sense: (N, 3) int, which side of the limit is forbidden (FEMNET "Limits sense X,Y,Z"): +1 the
       coordinate must stay >= the limit (a floor: the sea bed when along up), -1 it must stay <= the limit
       (a ceiling), 0 no limit. Penetration is resisted by ``Environment.bottom_stiffness``.
+  Optional, dynamics only:
+    added_mass: (N, 3) added mass (kg) of what is attached, along x, y, z (FEMNET "Added mass X,Y,Z"):
+      the mass of water it carries along when it accelerates relative to the water (book 4.265's M_a).
     """
 
     position: np.ndarray
@@ -69,6 +72,7 @@ class Nodes(eqx.Module):
     drag_coefficient: np.ndarray | None = None
     limit: np.ndarray | None = None
     limit_sense: np.ndarray | None = None
+    added_mass: np.ndarray | None = None
 
 
 class Netting(eqx.Module):
@@ -214,6 +218,13 @@ class Environment(eqx.Module):
     bottom_friction: friction coefficient mu (dimensionless) of the sea bed *sliding under the net* in the
       current's direction (FEMNET's "wearing coefficient" with ``input moving_bottom``: a towed gear on
       the bottom); 0 for a still bottom, which in FEMNET's statics exerts no friction at all.
+    time: the time (s) at which the surroundings are taken (dynamics: the current's history and the waves
+      are evaluated at it; 0 in statics).
+    waves: regular waves (:class:`jaxnet.waves.Airy`), or None for none. Only dynamics feels them: their
+      velocity adds to the current's in the drag, their acceleration gives the inertia force of the water.
+    added_mass_coefficient: Ca (dimensionless): the added mass of twines and bars is Ca rho V, V their
+      volume (book 4.265's M_a, for which the book gives no formula; 1 is the potential-flow value of a
+      cylinder moving across its axis, taken in every direction). Dynamics only.
     bottom_band: width (m) of the band of penetration over which the contact stiffness rises from 0 to
       ``bottom_stiffness`` (a C² penalty, :mod:`jaxnet.terms.bottom`); beyond it the contact force is
       FEMNET's k p exactly; 0 for FEMNET's plain penalty (stiffness jumps at contact). The default 1 mm
@@ -232,6 +243,9 @@ class Environment(eqx.Module):
     bottom_stiffness: float = 0.0
     bottom_friction: float = 0.0
     bottom_band: float = 1e-3
+    time: float = 0.0
+    waves: object | None = None
+    added_mass_coefficient: float = 1.0
 
 
 class Scene(eqx.Module):

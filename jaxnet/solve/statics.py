@@ -175,10 +175,12 @@ def _progress(it, res, damping, step):
 # -- the pieces of one iteration, shared by the two drivers (jitted loop and host loop) ----------------
 
 
-def _evaluate(x, f_frozen, load, scale, scene, pattern, model):
+def _evaluate(x, f_frozen, load, scale, scene, pattern, model, step=None):
     """At free coordinates x: the residual and what the line search needs, in one traced evaluation.
     ``load``: the (N, 3) constant nodal loads (N), computed once per solve; ``scale``: the factor on the
-    elastic energies (1, or less during the stiffness continuation).
+    elastic energies (1, or less during the stiffness continuation); ``step``: None in statics, in a time
+    step its past and masses (:class:`jaxnet.solve.dynamics.TimeStep`: the inertia energy joins the stored
+    energy, the drag takes the vertices' velocities).
 
     Returns (energy, force, f_nc, merit, state): the stored energy (J); the out-of-balance force (N, 3)
     at every node (at fixed coordinates minus the reactions); the non-conservative nodal forces (N, 3);
@@ -186,16 +188,23 @@ def _evaluate(x, f_frozen, load, scale, scene, pattern, model):
     terms' global states (the catch front), reused by the tangent at the same point.
     """
     X = assemble.positions(x, scene, pattern)
-    e, grad = jax.value_and_grad(assemble.energy)(X, scene, model, scale)
+    e, grad = jax.value_and_grad(_stored_energy)(X, scene, model, scale, step)
     if any(t.term.kind == "force" for t in model):
         state = assemble.states(X, scene, model)
-        f_nc = assemble.forces(X, scene, model, state)
+        f_nc = assemble.forces(X, scene, model, state, None if step is None else step.motion)
         # strongly typed, as the placeholders the tangent is compiled with (a weakly typed leaf, from a
         # Python scalar, would make a second compilation of the tangent at the first iteration)
         state = jax.tree.map(lambda a: jax.lax.convert_element_type(a, jnp.result_type(a)), state)
     else:
         state, f_nc = {}, jnp.zeros_like(X)
     return e, load - grad + f_nc, f_nc, _merit(e, X, load + f_frozen), state
+
+
+def _stored_energy(X, scene, model, scale, step):
+    """The energy (J) the Newton iteration minimises, loads apart: the terms' (elastic ones scaled), plus in a
+    time step the inertia's ½ (M + M_a)/Δt² |x - x_predicted|², whose gradient is the force of inertia."""
+    e = assemble.energy(X, scene, model, scale)
+    return e if step is None else e + step.inertia_energy(X)
 
 
 def _merit(e_stored, X, frozen_load):
@@ -205,10 +214,15 @@ def _merit(e_stored, X, frozen_load):
     return e_stored - jnp.sum(frozen_load * X)
 
 
-def _tangent(x, state, scale, scene, pattern, model, stiffness="autodiff"):
+def _tangent(x, state, scale, scene, pattern, model, stiffness="autodiff", step=None):
     """CSR entries of the tangent K = -dF/dx at free coordinates x (force terms' states given, the elastic
-    energies scaled by ``scale``; ``stiffness``: its path, see :class:`Newton`)."""
-    return assemble.tangent(assemble.positions(x, scene, pattern), scene, model, pattern, state, scale, stiffness)
+    energies scaled by ``scale``; ``stiffness``: its path, see :class:`Newton`; ``step``: in a time step, its
+    inertia (M + M_a)/Δt² on the diagonal (4.271) and the drag's dependence on the velocities)."""
+    X = assemble.positions(x, scene, pattern)
+    if step is None:
+        return assemble.tangent(X, scene, model, pattern, state, scale, stiffness)
+    data = assemble.tangent(X, scene, model, pattern, state, scale, stiffness, step.motion)
+    return data.at[pattern.diagonal].add(step.inertia_stiffness().ravel()[pattern.free])
 
 
 def _accepts(m_try, f_try, e, alpha, slope, roundoff, res_now, xp):
@@ -240,9 +254,12 @@ def _status(it, res, e, opts, xp):
     return xp.where(~finite, NON_FINITE, xp.where(res <= opts.tol, CONVERGED, xp.where(it >= opts.max_iter, MAX_ITERATIONS, RUNNING)))
 
 
-def newton_loop(x0, scene, pattern, model, opts: Newton):
+def newton_loop(x0, scene, pattern, model, opts: Newton, step=None):
     """The whole Newton iteration as one jittable program (``jax.lax.while_loop``), from free coordinates
-    ``x0``; returns an :class:`Equilibrium`. ``model`` (active terms) and ``opts`` are static.
+    ``x0``; returns an :class:`Equilibrium`. ``model`` (active terms) and ``opts`` are static. ``step``: None
+    for a static equilibrium; for an implicit time step, its past and masses
+    (:class:`jaxnet.solve.dynamics.TimeStep`), which add the force of inertia, the water's acceleration and
+    the drag on relative velocities to the same iteration.
 
     :func:`solve` drives the same iteration from the host instead (:func:`host_loop`): its compiled pieces
     are smaller and cacheable on disk. This form is for callers who need the solve inside a traced
@@ -250,10 +267,12 @@ def newton_loop(x0, scene, pattern, model, opts: Newton):
     """
     n_nodes = scene.nodes.position.shape[0]
     load = assemble.loads(scene, model)
+    if step is not None:
+        load = load + step.water_load
     free = pattern.free
 
     def evaluate(x, f_frozen):
-        e, force, f_nc, m, state = _evaluate(x, f_frozen, load, 1.0, scene, pattern, model)
+        e, force, f_nc, m, state = _evaluate(x, f_frozen, load, 1.0, scene, pattern, model, step)
         return e, force.ravel()[free], f_nc, m, state
 
     def status_of(it, f, e):
@@ -274,7 +293,7 @@ def newton_loop(x0, scene, pattern, model, opts: Newton):
         x, f, e_stored, f_nc, s, mu, it, _, hist = state
         X = assemble.positions(x, scene, pattern)
         e = _merit(e_stored, X, load + f_nc)
-        data = _tangent(x, s, 1.0, scene, pattern, model, opts.stiffness)
+        data = _tangent(x, s, 1.0, scene, pattern, model, opts.stiffness, step)
         dx, ok = linalg.solve(data + mu * springs, f, pattern.indptr, pattern.indices)
         # FEMNET's displacement limit: scale the step so that no node moves more than max_step.
         biggest = jnp.max(_nodal_norm(dx, pattern, n_nodes))
@@ -314,7 +333,7 @@ def newton_loop(x0, scene, pattern, model, opts: Newton):
     X = assemble.positions(x, scene, pattern)
     return Equilibrium(
         x=X,
-        force=load - jax.grad(assemble.energy)(X, scene, model) + f_nc,
+        force=load - jax.grad(_stored_energy)(X, scene, model, 1.0, step) + f_nc,
         residual_N=jnp.max(nodal),
         iterations=it,
         status=st,

@@ -70,6 +70,24 @@ def inertia_force(x, x_previous, x_previous2, time_step, mass, added_mass, volum
     return added_mass * (water_acceleration - gamma) + (water_density * volume) * water_acceleration - mass * gamma
 
 
+def inertia_energy(x, x_previous, velocity, time_step, mass):
+    """The potential (J) whose gradient is minus the force of inertia -(M + M_a) γ of the implicit step:
+
+        E = (M + M_a)/(2 Δt²) |x - x_previous - Δt v_previous|²,    γ = (x - x_previous - Δt v_previous)/Δt²,
+
+    with v_previous = (x_previous - x_previous2)/Δt the velocity of the last step, so that γ is 4.268's
+    (x - 2 x1 + x2)/Δt² for a constant step; written with the velocity, it also holds when the step
+    changes (a step retried with a smaller Δt). Its Hessian is 4.271's (M + M_a)/Δt² per axis. Added to
+    the net's stored energy it lets the static Newton iteration, with its energy line search, solve the
+    time step.
+
+    Args (any leading shape, last axis 3): x, x_previous (m); velocity (m/s); time_step Δt (s); mass
+      M + M_a (kg), broadcast against x (per node and axis).
+    """
+    gap = x - x_previous - time_step * velocity
+    return 0.5 * jnp.sum(mass * gap * gap) / time_step**2
+
+
 def netting_vertex_mass(uv, l0, diameter, density):
     """(mass in kg, volume in m³) of the netting carried by each vertex of one triangle: one third of the
     element's |d| twine vectors of length l0 (m) and diameter D (m), |d| π D²/4 l0 / 3 (the twine volume

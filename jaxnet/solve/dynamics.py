@@ -1,0 +1,493 @@
+"""Dynamics: the book's implicit time stepping (eqs 4.265-4.276), each step solved by the static Newton iteration.
+
+The scheme. At the new time t + Δt the positions x are the unknown; the velocity and the acceleration are
+backward differences (4.266-4.268, with the signs corrected: ``docs/errata.md``),
+
+    v = (x - x_n)/Δt,        γ = (v - v_n)/Δt = (x - x_n - Δt v_n)/Δt²,
+
+x_n, v_n the positions and velocity at t (for a constant step γ is 4.268's (x - 2 x_n + x_{n-1})/Δt²). The
+step solves "sum of forces = 0" at t + Δt: the static out-of-balance force (twines, bars, weight, ...), the
+drag on the velocity of the water relative to each vertex (4.272-4.276: current and waves at the vertex,
+minus v), and the force of inertia 4.265,
+
+    F_i = M_a (γ_h - γ) + ρ V γ_h - M γ = -(M + M_a) γ + (M_a + ρ V) γ_h,
+
+per node and axis, with the masses lumped at the nodes (:func:`lumped_masses`: a third of each triangle's
+netting per vertex as the book says, half of each bar per end, the nodes' own bodies). Its first part is
+minus the gradient of ½ (M + M_a)/Δt² |x - x_n - Δt v_n|² (:func:`jaxnet.terms.inertia.inertia_energy`), so
+the step is the static problem with that energy added: :func:`jaxnet.solve.statics.newton_loop` solves it
+unchanged (the same damped Newton, energy line search and stop reasons), its tangent gaining the inertia
+(M + M_a)/Δt² on the diagonal (4.271) and the drag's damping (1/Δt) ∂F/∂v (autodiff of the drag with v
+formed inside). The water's acceleration γ_h (the current's time derivative, the waves' local
+acceleration) is taken at the start of the step, at the nodes' positions x_n: a load during the step.
+
+Why this scheme is stable. Backward differences are the first-order backward differentiation formula
+(implicit Euler on positions and velocities): A-stable and L-stable, so stiff twines (EA up to 1e9 N) do not
+limit Δt; the price is numerical damping of oscillations with periods not well above Δt (an oscillator of
+frequency ω loses amplitude as (1 + (ω Δt)²)^(-1/2) per step, and its period lengthens by O(ω Δt)), and
+first-order accuracy: the error is proportional to Δt. :mod:`jaxnet.solve.reference` integrates the same
+equations with an error-controlled higher-order method to measure it.
+
+Robustness. Each step starts Newton from the constant-velocity prediction x_n + Δt v_n. A step whose
+Newton does not converge is retried with half the step (counted in ``retries``, reported); the step grows
+back (doubling, up to ``time_step``) after each success. Below ``min_time_step`` the run stops with
+:class:`DynamicsError` naming the time, the node with the largest residual and Newton's reason. Nothing
+non-finite is accepted (Newton's NON_FINITE status is a failure).
+
+The loop. :func:`advance` is one jitted program (``lax.while_loop`` over steps, Newton's
+``lax.while_loop`` inside, the factorisation a host callback); :func:`simulate` calls it once per record
+interval, writes each record at once (:mod:`jaxnet.io.timeseries`: time series and VTK), shows progress,
+and can resume a stopped run from its last record.
+
+Loading in time (:class:`Loading`): a current whose speed follows a history (:mod:`jaxnet.forcing`),
+regular waves (``Environment.waves``, :mod:`jaxnet.waves`), and prescribed motions of nodes (a towing
+speed, the heave of a collar): those nodes are held (fixed in the scene) at start + displacement(t).
+
+Units: m, s, kg, N.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import pathlib
+import time as _time
+from typing import Callable
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxnet import assemble, geometry, model as model_lib, scene as scene_lib
+from jaxnet.solve import statics
+from jaxnet.terms import inertia
+
+#: stop reasons of a dynamic run (``State.status``)
+RUNNING, DONE, STEP_FAILED = 0, 1, 2
+
+
+class DynamicsError(RuntimeError):
+    """A dynamic run could not go on; ``.state`` holds the last accepted state."""
+
+    def __init__(self, message, state):
+        super().__init__(message)
+        self.state = state
+
+
+@dataclasses.dataclass(frozen=True)
+class Implicit:
+    """Options of the implicit time stepping (hashable: part of the compiled program's identity).
+
+    time_step: Δt (s), the step the run takes when Newton converges.
+    min_time_step: the smallest step a failed step may be retried with (s); below it the run stops.
+    newton: the options of each step's Newton iteration (:class:`jaxnet.solve.statics.Newton`): by default
+      nearly undamped (inertia makes the step's tangent regular) and without the static continuation.
+    """
+
+    time_step: float = 0.01
+    min_time_step: float = 1e-7
+    newton: statics.Newton = statics.Newton(tol=1e-3, max_iter=30, damping=1e-12, stall_window=None, line_search=20)
+
+    def __post_init__(self):
+        for name in ("time_step", "min_time_step"):
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value > 0):
+                raise ValueError(f"Implicit: {name} must be finite and > 0, got {value!r}")
+        if self.min_time_step > self.time_step:
+            raise ValueError(f"Implicit: min_time_step ({self.min_time_step}) exceeds time_step ({self.time_step})")
+
+
+class Loading(eqx.Module):
+    """What changes with time besides the net (pytree: its numbers can be traced and differentiated).
+
+    current_speed: a history t -> speed (m/s) of the current (:mod:`jaxnet.forcing`), scaling the
+      environment's current (its direction and depth profile kept); None: the environment's constant speed.
+    motions: prescribed motions (:class:`jaxnet.forcing.PrescribedMotion`): each moves its nodes, which must
+      be fixed in the scene, to their start positions plus its displacement at t.
+    """
+
+    current_speed: Callable | None = None
+    motions: tuple = ()
+
+
+class TimeStep(eqx.Module):
+    """The past and the masses of one implicit step, handed to the static Newton iteration
+    (:func:`jaxnet.solve.statics.newton_loop`'s ``step``).
+
+    x_previous, velocity: (N, 3) positions (m) and velocities (m/s) at the start of the step.
+    time_step: Δt (s). mass: (N, 3) M + M_a per node and axis (kg). water_load: (N, 3) (M_a + ρV) γ_h (N).
+    """
+
+    x_previous: jax.Array
+    velocity: jax.Array
+    time_step: jax.Array
+    mass: jax.Array
+    water_load: jax.Array
+
+    @property
+    def motion(self):
+        return assemble.Motion(self.x_previous, self.time_step)
+
+    def inertia_energy(self, x):
+        return inertia.inertia_energy(x, self.x_previous, self.velocity, self.time_step, self.mass)
+
+    def inertia_stiffness(self):
+        """(N, 3) the diagonal (M + M_a)/Δt² (N/m) of the inertia's stiffness (4.271)."""
+        return self.mass / self.time_step**2
+
+
+class State(eqx.Module):
+    """The state of a run between steps (pytree, the loop's carry).
+
+    x, v: (N, 3) positions (m) and velocities (m/s) at time t (s). next_step: the Δt the next step tries (s).
+    last_step: the Δt of the last accepted step (s). force: (N, 3) the last step's out-of-balance force (N);
+    at fixed coordinates minus the reactions (inertia of the fixed nodes included). steps, iterations,
+    retries: accepted steps, Newton iterations (of accepted and failed steps) and retried steps so far.
+    status: RUNNING / DONE / STEP_FAILED. newton_status, worst_node, residual_N: of the last Newton solve.
+    """
+
+    x: jax.Array
+    v: jax.Array
+    t: jax.Array
+    next_step: jax.Array
+    last_step: jax.Array
+    force: jax.Array
+    steps: jax.Array
+    iterations: jax.Array
+    retries: jax.Array
+    status: jax.Array
+    newton_status: jax.Array
+    worst_node: jax.Array
+    residual_N: jax.Array
+
+    @classmethod
+    def start(cls, x, v, t, opts: Implicit):
+        x = jnp.asarray(x, dtype=float)
+        i = jnp.asarray(0)
+        return cls(x=x, v=jnp.asarray(v, dtype=float), t=jnp.asarray(t, dtype=float),
+                   next_step=jnp.asarray(opts.time_step), last_step=jnp.asarray(opts.time_step),
+                   force=jnp.zeros_like(x), steps=i, iterations=i, retries=i, status=jnp.asarray(RUNNING),
+                   newton_status=jnp.asarray(statics.CONVERGED), worst_node=i, residual_N=jnp.asarray(0.0))
+
+
+# -- masses --------------------------------------------------------------------------------------------
+
+
+def lumped_masses(scene):
+    """Per node and axis, (M + M_a, M_a + ρV): the inertia (kg) and the water's inertia coefficient (kg).
+
+    M: a third of each triangle's netting per vertex (4.265; twine volume of the weight 4.277, diamond and
+    hexagonal), half of each bar per end, plus the nodes' own masses. V: the same volumes, plus the nodes'
+    displaced volumes. M_a: ``Environment.added_mass_coefficient`` × ρ × the volume of twines and bars, plus
+    the nodes' ``added_mass`` (per axis). Numpy arrays (N, 3).
+    """
+    env = scene.environment
+    n = scene.n_nodes
+    rho, ca = float(env.water_density), float(env.added_mass_coefficient)
+    mass, volume, added = np.zeros(n), np.zeros(n), np.zeros((n, 3))
+    net = scene.netting
+    if net is not None:
+        m, v = jax.vmap(inertia.netting_vertex_mass)(net.uv, net.l0, net.diameter, net.density)
+        tri = np.asarray(net.vertices)
+        np.add.at(mass, tri.ravel(), np.repeat(np.asarray(m), 3))
+        np.add.at(volume, tri.ravel(), np.repeat(np.asarray(v), 3))
+    hexa = scene.hexagonal
+    if hexa is not None:
+        d = np.abs(np.asarray(jax.vmap(geometry.twine_determinant)(hexa.uv)))
+        v = d * np.pi * np.asarray(hexa.diameter) ** 2 / 4.0 * np.asarray(hexa.l0).sum(axis=1) / 3.0
+        tri = np.asarray(hexa.vertices)
+        np.add.at(mass, tri.ravel(), np.repeat(np.asarray(hexa.density) * v, 3))
+        np.add.at(volume, tri.ravel(), np.repeat(v, 3))
+    bars = scene.bars
+    if bars is not None:
+        v = np.pi * np.asarray(bars.diameter) ** 2 / 4.0 * np.asarray(bars.rest_length) / 2.0
+        ends = np.asarray(bars.ends)
+        np.add.at(mass, ends.ravel(), np.repeat(np.asarray(bars.density) * v, 2))
+        np.add.at(volume, ends.ravel(), np.repeat(v, 2))
+    added += (ca * rho * volume)[:, None]
+    nodes = scene.nodes
+    if nodes.added_mass is not None:
+        added += np.asarray(nodes.added_mass, dtype=float)
+    mass = mass + np.asarray(nodes.mass, dtype=float)
+    volume = volume + np.asarray(nodes.volume, dtype=float)
+    return mass[:, None] + added, added + (rho * volume)[:, None]
+
+
+# -- the surroundings at a time ------------------------------------------------------------------------
+
+
+def scene_at(scene, loading: Loading, t):
+    """The scene at time t: the environment's time and current speed, the prescribed nodes moved."""
+    env = scene.environment
+    speed = env.current_speed if loading.current_speed is None else loading.current_speed(t)
+    env = eqx.tree_at(lambda e: (e.time, e.current_speed), env, (t, speed))
+    position = jnp.asarray(scene.nodes.position)
+    for prescribed in loading.motions:
+        nodes = jnp.asarray(prescribed.nodes)
+        position = position.at[nodes].set(jnp.asarray(scene.nodes.position)[nodes] + prescribed.motion(t))
+    return eqx.tree_at(lambda s: (s.environment, s.nodes.position), scene, (env, position))
+
+
+def water_acceleration(points, scene_t, loading: Loading, waves: bool):
+    """(..., 3) acceleration (m/s²) of the water at ``points`` at the scene's time: the current's
+    d(speed)/dt along its direction and profile, plus the waves' local acceleration."""
+    env = scene_t.environment
+    accel = jnp.zeros_like(points)
+    if loading.current_speed is not None:
+        rate = jax.jacfwd(loading.current_speed)(env.time)
+        per_speed = model_lib.water_velocity_at(points, eqx.tree_at(lambda e: e.current_speed, env, 1.0), False)
+        accel = accel + rate * per_speed
+    if waves:
+        accel = accel + env.waves.acceleration(points, env.time)
+    return accel
+
+
+def out_of_balance(x, v, t, scene, masses, loading: Loading, model):
+    """(N, 3) force (N) on every node at positions x (m), velocities v (m/s) and time t (s), the net's own
+    inertia -(M + M_a) a left out: the loads, the water's inertia (M_a + ρV) γ_h, minus the gradient of the
+    stored energy, and the force terms with the drag on the water's velocity relative to v. The equations
+    of motion are (M + M_a) a = out_of_balance(x, v, t) at the free coordinates: what
+    :mod:`jaxnet.solve.reference` integrates, and what the implicit step balances with a = γ."""
+    scene_t = scene_at(scene, loading, t)
+    waves = scene.environment.waves is not None
+    f = assemble.loads(scene_t, model) - jax.grad(assemble.energy)(x, scene_t, model)
+    if waves or loading.current_speed is not None:
+        f = f + jnp.asarray(masses[1]) * water_acceleration(x, scene_t, loading, waves)
+    if any(t.term.kind == "force" for t in model):
+        # a unit "step" from x - v: the force terms see the velocity v itself
+        f = f + assemble.forces(x, scene_t, model, None, assemble.Motion(x - v, jnp.asarray(1.0)))
+    return f
+
+
+def prescribed_velocity(scene, loading: Loading, t):
+    """(N, 3) velocity (m/s) of every node held by a prescribed motion at time t (zero elsewhere)."""
+    return jax.jacfwd(lambda s: scene_at(scene, loading, s).nodes.position)(jnp.asarray(t, dtype=float))
+
+
+# -- the step loop -----------------------------------------------------------------------------------
+
+
+def advance(state: State, t_end, scene, pattern, masses, loading: Loading, time_step, min_time_step, model,
+            newton: statics.Newton) -> State:
+    """Steps from ``state`` until time ``t_end`` (the last step adjusted to land on it) or a step failing
+    below ``min_time_step`` (s). ``time_step``: the step taken when Newton converges (s). Jittable; ``model``
+    (the dynamic active terms, ``active_terms(scene, dynamic=True)``) and ``newton`` (each step's options)
+    are static, the steps are not (a study over Δt compiles once). ``masses``: :func:`lumped_masses`."""
+    mass, water_mass = (jnp.asarray(m) for m in masses)
+    free = pattern.free
+    waves = scene.environment.waves is not None
+    moving_water = waves or loading.current_speed is not None
+    end = jnp.asarray(t_end, dtype=float)
+    state = eqx.tree_at(lambda s: s.status, state, jnp.asarray(RUNNING))
+
+    def cond(s):
+        return (s.status == RUNNING) & (s.t < end)
+
+    def body(s):
+        # the step that would end within 1 % of t_end lands on it exactly: no sliver of a step is left
+        # (a step of 1e-14 s would scale the inertia by 1/Δt² = 1e28 and drown the step in rounding)
+        remaining = end - s.t
+        land = remaining <= 1.01 * s.next_step
+        h = jnp.where(land, remaining, s.next_step)
+        t_new = jnp.where(land, end, s.t + h)
+        scene_t = scene_at(scene, loading, t_new)
+        load = water_mass * water_acceleration(s.x, scene_t, loading, waves) if moving_water else jnp.zeros_like(s.x)
+        step = TimeStep(s.x, s.v, h, mass, load)
+        x_guess = (s.x + h * s.v).ravel()[free]
+        eq = statics.newton_loop(x_guess, scene_t, pattern, model, newton, step)
+        ok = eq.status == statics.CONVERGED
+        failed = ~ok & (0.5 * h < min_time_step)
+        pick = lambda a, b: jnp.where(ok, a, b)  # noqa: E731
+        return State(
+            x=pick(eq.x, s.x),
+            v=pick((eq.x - s.x) / h, s.v),
+            t=pick(t_new, s.t),
+            next_step=pick(jnp.minimum(time_step, 2.0 * s.next_step), 0.5 * h),
+            last_step=pick(h, s.last_step),
+            force=pick(eq.force, s.force),
+            steps=s.steps + ok,
+            iterations=s.iterations + eq.iterations,
+            retries=s.retries + ~ok,
+            status=jnp.where(failed, STEP_FAILED, RUNNING),
+            newton_status=eq.status,
+            worst_node=eq.worst_node,
+            residual_N=eq.residual_N,
+        )
+
+    out = jax.lax.while_loop(cond, body, state)
+    return eqx.tree_at(lambda s: s.status, out, jnp.where(out.status == RUNNING, DONE, out.status))
+
+
+_advance_jit = jax.jit(advance, static_argnames=("model", "newton"))
+
+
+# -- what a record holds ---------------------------------------------------------------------------------
+
+#: the drag groups of a record: name -> terms
+DRAG_GROUPS = {"drag_netting_N": ("netting_drag",), "drag_cables_N": ("bar_drag",),
+               "drag_nodes_N": ("node_drag", "node_box_drag")}
+
+
+def _drag_totals(state: State, scene, loading, model):
+    """(3,) total drag (N) of each :data:`DRAG_GROUPS` group at the state (relative velocities included)."""
+    scene_t = scene_at(scene, loading, state.t)
+    motion = assemble.Motion(state.x - state.last_step * state.v, state.last_step)
+    out = {}
+    for group, names in DRAG_GROUPS.items():
+        terms = tuple(t for t in model if t.name in names)
+        if terms:
+            out[group] = jnp.sum(assemble.forces(state.x, scene_t, terms, None, motion), axis=0)
+    return out
+
+
+_drag_totals_jit = jax.jit(_drag_totals, static_argnames=("model",))
+
+
+def record_figures(state: State, scene, loading, model, fixed_nodes):
+    """The figures of one record (numpy): reactions at the fixed nodes (F, 3) and their total (3,) in N,
+    drag totals (3,) in N per group, the volume held (m³) for an enclosure, the run's counters."""
+    force = np.asarray(state.force)
+    fixed = np.asarray(scene.nodes.fixed)
+    reaction = np.where(fixed, -force, 0.0)
+    figures = {"reaction_N": reaction[fixed_nodes], "reaction_total_N": reaction.sum(axis=0)}
+    figures.update({k: np.asarray(v) for k, v in _drag_totals_jit(state, scene, loading, model=model).items()})
+    if scene.enclosure is not None and scene.netting is not None:
+        from jaxnet import figures as figures_lib
+
+        figures["volume_m3"] = np.asarray(figures_lib.enclosed_volume(scene, np.asarray(state.x)))
+    figures.update(steps=np.asarray(int(state.steps)), newton_iterations=np.asarray(int(state.iterations)),
+                   retries=np.asarray(int(state.retries)), time_step_s=np.asarray(float(state.last_step)))
+    return figures
+
+
+# -- the run -------------------------------------------------------------------------------------------
+
+
+@dataclasses.dataclass
+class Trajectory:
+    """A finished run: ``times`` (R,), ``positions`` (R, N, 3), ``velocities`` (R, N, 3), ``figures`` name ->
+    (R, ...), the final :class:`State`, and the wall time (s) and compile time (s)."""
+
+    times: np.ndarray
+    positions: np.ndarray
+    velocities: np.ndarray
+    figures: dict
+    state: State
+    wall_s: float
+    compile_s: float
+
+    @property
+    def steps(self):
+        return int(self.state.steps)
+
+    @property
+    def mean_iterations(self):
+        """Newton iterations per accepted step."""
+        return int(self.state.iterations) / max(int(self.state.steps), 1)
+
+
+def _check_loading(scene, loading: Loading):
+    fixed = np.asarray(scene.nodes.fixed)
+    for k, prescribed in enumerate(loading.motions):
+        nodes = np.asarray(prescribed.nodes)
+        if nodes.size and (nodes.min() < 0 or nodes.max() >= scene.n_nodes):
+            raise scene_lib.SceneError(f"prescribed motion {k}: node index outside 0..{scene.n_nodes - 1}")
+        loose = nodes[~fixed[nodes].all(axis=1)]
+        if loose.size:
+            raise scene_lib.SceneError(f"prescribed motion {k}: node {int(loose[0])} is not fixed on every axis; "
+                                       "a prescribed node must be held (fixed) in the scene")
+
+
+def simulate(scene, end_time, solver: Implicit | None = None, loading: Loading | None = None, record_every=None,
+             out=None, resume=False, x0=None, v0=None, progress=True, vtk=True):
+    """Runs ``scene`` from time 0 (or from the last record of ``out`` when ``resume``) to ``end_time`` (s).
+
+    Args:
+      scene: a :class:`jaxnet.scene.Scene` (validated here, before anything is compiled).
+      end_time: the time to reach (s).
+      solver: :class:`Implicit` options. loading: :class:`Loading` (histories, prescribed motions).
+      record_every: the interval between records (s); default: every step.
+      out: a directory to write the records to as the run goes (:mod:`jaxnet.io.timeseries`: raw series,
+        ``series.npz`` at the end, ``checkpoint.npz``, VTK ``series.pvd`` when ``vtk``); None keeps them in memory.
+      resume: continue the run in ``out`` from its last record (same scene and options).
+      x0, v0: (N, 3) start positions and velocities (default: the scene's positions, at rest).
+      progress: show a progress bar (simulated time, steps per second, Newton iterations per step).
+    Returns:
+      a :class:`Trajectory`. Raises :class:`DynamicsError` when a step fails below the smallest step.
+    """
+    from jaxnet.io import timeseries
+
+    solver = solver or Implicit()
+    loading = loading or Loading()
+    scene_lib.validate(scene)
+    _check_loading(scene, loading)
+    if not (np.isfinite(end_time) and end_time > 0):
+        raise ValueError(f"simulate: end_time must be finite and > 0, got {end_time!r}")
+    record_every = solver.time_step if record_every is None else float(record_every)
+    if not (np.isfinite(record_every) and record_every > 0):
+        raise ValueError(f"simulate: record_every must be finite and > 0, got {record_every!r}")
+    model = model_lib.active_terms(scene, dynamic=True)
+    pattern = assemble.build_pattern(scene, model)
+    masses = tuple(jnp.asarray(m) for m in lumped_masses(scene))
+    fixed_nodes = np.flatnonzero(np.asarray(scene.nodes.fixed).any(axis=1))
+    x_start = np.asarray(scene_at(scene, loading, 0.0).nodes.position if x0 is None else x0, dtype=float)
+    state = State.start(x_start, np.zeros_like(x_start) if v0 is None else v0, 0.0, solver)
+    times, positions, velocities, figures = [], [], [], {}
+    writer = None
+    if out is not None:
+        writer = timeseries.SeriesWriter(pathlib.Path(out), scene, vtk=vtk, resume=resume)
+        if resume and writer.resumed is not None:
+            _, checkpoint = writer.resumed
+            state = State(**{f.name: jnp.asarray(checkpoint[f.name]) for f in dataclasses.fields(State)})
+
+    def keep(s):
+        fig = record_figures(s, scene, loading, model, fixed_nodes)
+        times.append(float(s.t))
+        positions.append(np.asarray(s.x))
+        velocities.append(np.asarray(s.v))
+        for k, v in fig.items():
+            figures.setdefault(k, []).append(v)
+        if writer is not None:
+            record = timeseries.Record(time=float(s.t), step=int(s.steps), position=np.asarray(s.x),
+                                       velocity=np.asarray(s.v), figures=fig)
+            writer.write(record, _checkpoint(s))
+
+    t0 = _time.perf_counter()
+    compile_s = 0.0
+    if float(state.t) == 0.0:
+        keep(state)
+    iterations = int(state.iterations)
+    # record times k * record_every, the same whichever record a run resumes from (so is each step)
+    targets = np.minimum(record_every * np.arange(1, int(np.ceil(end_time / record_every - 1e-9)) + 1), end_time)
+    targets = targets[targets > float(state.t) + 1e-9 * record_every]
+    bar = timeseries.Progress(float(state.t), end_time, disable=not progress, steps0=int(state.steps))
+    try:
+        with bar:
+            for k, target in enumerate(targets):
+                t_call = _time.perf_counter()
+                state = _advance_jit(state, float(target), scene, pattern, masses, loading, solver.time_step,
+                                     solver.min_time_step, model=model, newton=solver.newton)
+                jax.block_until_ready(state)
+                if k == 0:
+                    compile_s = _time.perf_counter() - t_call  # the first call compiles (and runs one interval)
+                if int(state.status) == STEP_FAILED:
+                    node = int(state.worst_node)
+                    raise DynamicsError(
+                        f"dynamic step failed at t = {float(state.t):.6g} s: Newton "
+                        f"({statics.REASONS[int(state.newton_status)]}) with the step halved down to "
+                        f"{solver.min_time_step:g} s; largest residual {float(state.residual_N):.4g} N at node {node}",
+                        state)
+                keep(state)
+                bar.update(float(state.t), int(state.steps), int(state.iterations) - iterations)
+                iterations = int(state.iterations)
+    finally:
+        if writer is not None:
+            writer.close()
+    return Trajectory(times=np.asarray(times), positions=np.asarray(positions), velocities=np.asarray(velocities),
+                      figures={k: np.asarray(v) for k, v in figures.items()}, state=state,
+                      wall_s=_time.perf_counter() - t0, compile_s=compile_s)
+
+
+def _checkpoint(state: State):
+    """The state as numpy arrays by field name: what a resumed run starts from, exactly."""
+    return {f.name: np.asarray(getattr(state, f.name)) for f in dataclasses.fields(State)}

@@ -1,0 +1,249 @@
+"""The book's implicit time stepping (4.265-4.276): exact discrete solutions, the scheme's energy identity,
+settling to the static equilibrium, resume, retries, stiff twines, and the step's tangent."""
+
+import numpy as np
+import jax
+import jax.numpy as jnp
+import pytest
+
+import jaxnet  # noqa: F401  (float64)
+from jaxnet import assemble, model as model_lib
+from jaxnet.scene import Bars, Environment, Nodes, Scene
+from jaxnet.solve import dynamics, statics
+
+TIGHT = statics.Newton(tol=1e-9, max_iter=30, damping=1e-12, stall_window=None)
+
+
+def spring_mass(m=2.0, L=1.0, ea=800.0, delta=0.01, drag_area=None, current=0.0, gravity=0.0, free_axes="x"):
+    """A body of mass m on a bar of rest length L, the bar's far end held at the origin. The bar is
+    massless (density ~0) and the water adds no mass, so k = EA/L and ω = sqrt(k/m) exactly."""
+    pos = np.array([[0.0, 0.0, 0.0], [L + delta, 0.0, 0.0]])
+    fixed = np.array([[True] * 3, [a not in free_axes for a in "xyz"]])
+    nodes = Nodes(position=pos, fixed=fixed, mass=np.array([0.0, m]), volume=np.zeros(2), force=np.zeros((2, 3)),
+                  drag_area=None if drag_area is None else np.array([0.0, drag_area]))
+    bars = Bars(ends=np.array([[0, 1]]), rest_length=np.array([L]), ea_traction=np.array([ea]),
+                ea_compression=np.array([ea]), diameter=np.array([1e-3]), density=np.array([1e-9]), cable=np.array([0]))
+    env = Environment(gravity=gravity, added_mass_coefficient=0.0, current_speed=current)
+    return Scene(nodes=nodes, bars=bars, environment=env)
+
+
+def recurrence(x0, omega, h, n):
+    """The book scheme's exact discrete solution of x'' = -ω² x from rest: (x_{k+1} - 2 x_k + x_{k-1})/h² =
+    -ω² x_{k+1}, with x_{-1} = x_0 (start at rest: v_0 = (x_0 - x_{-1})/h = 0)."""
+    out = [x0, x0 / (1 + (omega * h) ** 2)]
+    for _ in range(n - 1):
+        out.append((2 * out[-1] - out[-2]) / (1 + (omega * h) ** 2))
+    return np.array(out)
+
+
+def test_spring_follows_the_schemes_exact_discrete_solution():
+    m, ea, L, delta = 2.0, 800.0, 1.0, 0.01
+    omega = np.sqrt(ea / L / m)
+    h = 2 * np.pi / omega / 25
+    tr = dynamics.simulate(spring_mass(m, L, ea, delta), 40 * h, dynamics.Implicit(time_step=h, newton=TIGHT),
+                           progress=False)
+    x = tr.positions[:, 1, 0] - L
+    np.testing.assert_allclose(tr.times, h * np.arange(41), rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(x, recurrence(delta, omega, h, 40), rtol=0, atol=1e-10 * delta)
+    assert tr.mean_iterations == 1.0  # a linear problem: one Newton step per time step
+
+
+def test_spring_period_and_damping_converge_at_the_schemes_order():
+    """Period of the discrete oscillation 2π h / atan(ω h) (the scheme's eigenvalues (1 ± iωh)/(1 + ω²h²)):
+    its error falls at second order as Δt halves; the numerical damping rate ln(1 + ω²h²)/(2h) ~ ω²h/2 at
+    first order. The damping is measured on I_n = x_n² - p x_n x_{n-1} + q x_{n-1}², which the scheme's
+    recurrence x_{n+1} = p x_n - q x_{n-1} multiplies by q = |eigenvalue|² at every step."""
+    m, ea, L, delta = 2.0, 800.0, 1.0, 0.01
+    omega = np.sqrt(ea / L / m)
+    period = 2 * np.pi / omega
+    period_errors, damping_rates = [], []
+    for n in (20, 40, 80):
+        h = period / n
+        tr = dynamics.simulate(spring_mass(m, L, ea, delta), 3 * period, dynamics.Implicit(time_step=h, newton=TIGHT),
+                               progress=False)
+        x = tr.positions[:, 1, 0] - L
+        s = np.sign(x)
+        up = np.flatnonzero((s[:-1] < 0) & (s[1:] >= 0))
+        crossings = tr.times[up] - x[up] * h / (x[up + 1] - x[up])
+        measured = np.mean(np.diff(crossings))
+        assert measured == pytest.approx(2 * np.pi * h / np.arctan(omega * h), rel=1e-3)
+        period_errors.append(measured / period - 1)
+        a = (omega * h) ** 2
+        p, q = 2 / (1 + a), 1 / (1 + a)
+        invariant = x[1:] ** 2 - p * x[1:] * x[:-1] + q * x[:-1] ** 2
+        rate = -np.log(invariant[-1] / invariant[0]) / (2 * (tr.times[-1] - tr.times[1]))
+        assert rate == pytest.approx(np.log(1 + a) / (2 * h), rel=1e-6)
+        damping_rates.append(rate)
+    ratios = np.array(period_errors[:-1]) / np.array(period_errors[1:])
+    np.testing.assert_allclose(ratios, 4.0, rtol=0.05)
+    rate_ratios = np.array(damping_rates[:-1]) / np.array(damping_rates[1:])
+    assert np.all((rate_ratios > 1.8) & (rate_ratios < 2.0))
+
+
+def _potential(scene, model, x):
+    load = assemble.loads(scene, model)
+    return float(assemble.energy(jnp.asarray(x), scene, model) - jnp.sum(load * x))
+
+
+def test_energy_changes_exactly_as_the_scheme_dissipates():
+    """Backward differences dissipate, per step, ½ m |v_{n+1} - v_n|² plus the Bregman gap of the potential
+    D(x_n, x_{n+1}) = V(x_n) - V(x_{n+1}) - ∇V(x_{n+1}).(x_n - x_{n+1}): an identity of the scheme, checked
+    on a swinging elastic pendulum (gravity, large angle, nonlinear)."""
+    m, L = 1.5, 1.0
+    scene = spring_mass(m=m, L=L, ea=2e4, delta=0.0, gravity=9.81, free_axes="xz")
+    h = 0.01
+    tr = dynamics.simulate(scene, 0.6, dynamics.Implicit(time_step=h, newton=TIGHT), progress=False)
+    model = model_lib.active_terms(scene, dynamic=True)
+    x, v = tr.positions, tr.velocities
+    V = np.array([_potential(scene, model, xi) for xi in x])
+    grad = np.array([np.asarray(jax.grad(lambda y: assemble.energy(y, scene, model))(jnp.asarray(xi))) for xi in x])
+    grad -= np.asarray(assemble.loads(scene, model))
+    E = 0.5 * m * np.sum(v[:, 1] ** 2, axis=1) + V
+    dv = v[1:, 1] - v[:-1, 1]
+    bregman = V[:-1] - V[1:] - np.sum(grad[1:] * (x[:-1] - x[1:]), axis=(1, 2))
+    predicted = -0.5 * m * np.sum(dv**2, axis=1) - bregman
+    assert np.all(np.diff(E) < 0)  # it swings 45 cm down: real dissipation, not rounding
+    np.testing.assert_allclose(np.diff(E), predicted, rtol=0, atol=1e-7 * abs(E[0] - E[-1]) + 1e-9)
+
+
+def test_current_settles_to_the_static_equilibrium():
+    """A body held by a spring in a current, starting at rest: the dynamic run settles on the statics
+    solver's equilibrium (drag on the relative velocity is what damps it)."""
+    scene = spring_mass(m=3.0, ea=500.0, delta=0.0, drag_area=0.2, current=1.0)
+    eq, _ = statics.solve(scene, tol=1e-9)
+    tr = dynamics.simulate(scene, 20.0, dynamics.Implicit(time_step=0.05, newton=TIGHT), record_every=1.0,
+                           progress=False)
+    drag = 0.5 * 1025.0 * 0.2 * 1.0**2
+    assert float(eq.x[1, 0]) == pytest.approx(1.0 + drag / 500.0, rel=1e-9)
+    assert tr.positions[-1, 1, 0] == pytest.approx(float(eq.x[1, 0]), abs=1e-7)
+    assert abs(tr.velocities[-1, 1, 0]) < 1e-6
+    # the reaction at the held end carries the drag
+    assert tr.figures["reaction_total_N"][-1][0] == pytest.approx(-drag, rel=1e-6)
+    np.testing.assert_allclose(tr.figures["drag_nodes_N"][-1], [drag, 0, 0], rtol=1e-6)
+
+
+def test_resumed_run_equals_an_uninterrupted_one(tmp_path):
+    scene = spring_mass(m=2.0, ea=800.0, delta=0.02, drag_area=0.05, current=0.5)
+    opts = dynamics.Implicit(time_step=0.01, newton=TIGHT)
+    whole = dynamics.simulate(scene, 0.5, opts, record_every=0.05, out=tmp_path / "whole", progress=False, vtk=False)
+    dynamics.simulate(scene, 0.25, opts, record_every=0.05, out=tmp_path / "part", progress=False, vtk=False)
+    resumed = dynamics.simulate(scene, 0.5, opts, record_every=0.05, out=tmp_path / "part", resume=True,
+                                progress=False, vtk=False)
+    from jaxnet.io import timeseries
+
+    a, b = timeseries.read_series(tmp_path / "whole"), timeseries.read_series(tmp_path / "part")
+    assert len(a["time"]) == len(b["time"]) == 11
+    np.testing.assert_allclose(b["time"], a["time"], rtol=1e-14)
+    np.testing.assert_array_equal(b["position"], a["position"])
+    np.testing.assert_array_equal(b["velocity"], a["velocity"])
+    assert int(resumed.state.steps) == int(whole.state.steps) == 50
+
+
+def test_failed_steps_are_retried_smaller_and_reported():
+    """Newton allowed 2 iterations: the big steps of a swinging pendulum fail, are halved until they pass."""
+    scene = spring_mass(m=1.0, ea=1e4, delta=0.0, gravity=9.81, free_axes="xz")
+    newton = statics.Newton(tol=1e-9, max_iter=2, damping=1e-12, stall_window=None)
+    tr = dynamics.simulate(scene, 0.4, dynamics.Implicit(time_step=0.05, newton=newton), record_every=0.05,
+                           progress=False)
+    assert int(tr.state.retries) > 0
+    assert tr.figures["time_step_s"].min() < 0.05
+    assert tr.times[-1] == pytest.approx(0.4, abs=1e-14)
+    assert np.all(np.isfinite(tr.positions))
+    with pytest.raises(dynamics.DynamicsError, match=r"node 1"):
+        dynamics.simulate(scene, 0.4, dynamics.Implicit(time_step=0.05, min_time_step=0.05,
+                                                        newton=statics.Newton(tol=1e-9, max_iter=1, damping=1e-12,
+                                                                              stall_window=None)),
+                          progress=False)
+
+
+@pytest.mark.parametrize("h", [1e-4, 1e-2, 1.0])
+def test_stiff_twines_stay_stable_at_any_step(h):
+    """EA = 1e9 N on 1 kg (ω = 3e4 rad/s: ωΔt from 3 to 3e4): the scheme is L-stable, the amplitude never
+    grows and is damped by (1 + ω²h²)^(-1/2) per step."""
+    m, ea, delta = 1.0, 1e9, 1e-6
+    omega = np.sqrt(ea / m)
+    tr = dynamics.simulate(spring_mass(m=m, ea=ea, delta=delta), 10 * h,
+                           dynamics.Implicit(time_step=h, newton=statics.Newton(tol=1e-6, max_iter=30, damping=1e-12,
+                                                                                stall_window=None)),
+                           progress=False)
+    x = tr.positions[:, 1, 0] - 1.0
+    assert np.all(np.isfinite(x))
+    np.testing.assert_allclose(x, recurrence(delta, omega, h, 10), rtol=0, atol=1e-6 / ea + 1e-15)
+
+
+def _small_net():
+    from jaxnet.scenes.panel import hanging_panel
+
+    net = hanging_panel(meshes=6, step=0.05)
+    net.environment = Environment(current_speed=0.7, current_direction=np.array([1.0, 0.2, 0.0]))
+    return net.build()
+
+
+def test_the_steps_tangent_is_the_derivative_of_its_residual():
+    """Inertia (M + M_a)/Δt² and the drag's damping (1/Δt) ∂F/∂v in the tangent: against central
+    differences of the step's out-of-balance force, with the net moving through a current."""
+    scene = _small_net()
+    model = model_lib.active_terms(scene, dynamic=True)
+    pattern = assemble.build_pattern(scene, model)
+    mass, water = (jnp.asarray(a) for a in dynamics.lumped_masses(scene))
+    rng = np.random.default_rng(0)
+    x_prev = jnp.asarray(scene.nodes.position) + 0.01 * rng.normal(size=scene.nodes.position.shape)
+    v_prev = jnp.asarray(0.3 * rng.normal(size=x_prev.shape))
+    h = 0.02
+    step = dynamics.TimeStep(x_prev, v_prev, jnp.asarray(h), mass, jnp.zeros_like(x_prev))
+    free = np.asarray(pattern.free)
+    x = (x_prev + h * v_prev + 1e-3 * rng.normal(size=x_prev.shape)).ravel()[free]
+    state = assemble.states(assemble.positions(jnp.asarray(x), scene, pattern), scene, model)
+    load = assemble.loads(scene, model)
+
+    def residual(y):
+        return statics._evaluate(y, jnp.zeros_like(load), load, 1.0, scene, pattern, model, step)[1].ravel()[free]
+
+    data = statics._tangent(jnp.asarray(x), state, 1.0, scene, pattern, model, "autodiff", step)
+    import scipy.sparse as sp
+
+    K = sp.csr_matrix((np.asarray(data), np.asarray(pattern.indices), np.asarray(pattern.indptr))).toarray()
+    eps = 1e-6
+    cols = rng.choice(len(x), min(12, len(x)), replace=False)
+    for j in cols:
+        e = np.zeros(len(x))
+        e[j] = eps
+        fd = -(np.asarray(residual(jnp.asarray(x + e))) - np.asarray(residual(jnp.asarray(x - e)))) / (2 * eps)
+        np.testing.assert_allclose(K[:, j], fd, rtol=1e-6, atol=1e-6 * np.abs(fd).max())
+    # the inertia alone is (M + M_a)/Δt² on the diagonal (4.271): jax.hessian of the inertia energy agrees
+    H = jax.hessian(step.inertia_energy)(x_prev)
+    np.testing.assert_allclose(np.asarray(H).reshape(x_prev.size, -1), np.diag(np.asarray(mass).ravel()) / h**2,
+                               rtol=1e-12, atol=1e-9)
+
+
+def test_drag_at_rest_is_the_static_drag():
+    """Each vertex's share computed with its own relative velocity (4.272) equals the statics' drag for a
+    uniform current and a net at rest."""
+    scene = _small_net()
+    static, moving = model_lib.active_terms(scene), model_lib.active_terms(scene, dynamic=True)
+    x = jnp.asarray(scene.nodes.position)
+    pick = lambda model: tuple(t for t in model if t.name in ("netting_drag", "bar_drag"))  # noqa: E731
+    f_static = assemble.forces(x, scene, pick(static))
+    f_moving = assemble.forces(x, scene, pick(moving), None, assemble.Motion(x, jnp.asarray(0.1)))
+    np.testing.assert_allclose(np.asarray(f_moving), np.asarray(f_static), rtol=1e-12, atol=1e-14)
+    # and moving with the water cancels it
+    c = scene.environment.current_speed * scene.environment.current_direction / np.linalg.norm(scene.environment.current_direction)
+    f_carried = assemble.forces(x, scene, pick(moving), None, assemble.Motion(x - 0.1 * c, jnp.asarray(0.1)))
+    np.testing.assert_allclose(np.asarray(f_carried), 0.0, atol=1e-12)
+
+
+def test_lumped_masses_sum_to_the_nets_mass():
+    scene = _small_net()
+    mass, water = dynamics.lumped_masses(scene)
+    net, bars, env = scene.netting, scene.bars, scene.environment
+    uv = np.asarray(net.uv)
+    d = (uv[:, 1, 0] - uv[:, 0, 0]) * (uv[:, 2, 1] - uv[:, 0, 1]) - (uv[:, 2, 0] - uv[:, 0, 0]) * (uv[:, 1, 1] - uv[:, 0, 1])
+    v_net = np.sum(np.abs(d) * np.pi * net.diameter**2 / 4 * net.l0)
+    v_bar = np.sum(np.pi * bars.diameter**2 / 4 * bars.rest_length)
+    m_net = np.sum(np.abs(d) * np.pi * net.diameter**2 / 4 * net.l0 * net.density)
+    m_bar = np.sum(np.pi * bars.diameter**2 / 4 * bars.rest_length * bars.density)
+    ca, rho = env.added_mass_coefficient, env.water_density
+    expected = m_net + m_bar + np.sum(scene.nodes.mass) + ca * rho * (v_net + v_bar)
+    np.testing.assert_allclose(mass.sum(axis=0), expected, rtol=1e-12)
+    np.testing.assert_allclose(water.sum(axis=0), (ca + 1) * rho * (v_net + v_bar) + rho * np.sum(scene.nodes.volume),
+                               rtol=1e-12)
