@@ -10,6 +10,13 @@ laws where they differ from the book's (``docs/errata.md``), so that it gives FE
 Writes DIR/result.json (figures, see README), DIR/net.vtu (ParaView) and DIR/net.png, prints one line
 per Newton iteration and a short summary. Exit status 0 on convergence, 1 on a failed solve, 2 on bad input.
 
+``--dynamic`` runs the scene in time instead (:mod:`jaxnet.solve.dynamics`, the book's implicit scheme):
+from its static equilibrium (computed first), to ``--end`` seconds with steps of ``--dt`` seconds, a record
+every ``--record`` seconds written to DIR as it goes (series.json + raw/ arrays, series.npz at the end,
+series.pvd + net_NNNNN.vtu for ParaView, checkpoint.npz; ``--resume`` continues a stopped run from its last
+record), with a progress bar. A FEMNET case takes its own time settings; the built-in ``cage_waves`` (the
+default with ``--dynamic``) is the cage in regular waves, its collar heaving.
+
 Compiled programs are kept on disk (JAX's persistent compilation cache, in ``--cache DIR``, default
 ``$XDG_CACHE_HOME/jaxnet`` or ``~/.cache/jaxnet``; ``--no-cache`` to switch it off; a
 ``JAX_COMPILATION_CACHE_DIR`` set by the user wins): a second run of a case of the same shape and terms —
@@ -49,6 +56,10 @@ def _run(args):
     from jaxnet.io import femnet
     from jaxnet.scene import SceneError
 
+    if args.dynamic:
+        return _run_dynamic(args)
+    if args.scene is None and args.builtin not in BUILT_IN:
+        raise SceneError(f"the built-in scene '{args.builtin}' is a dynamic one: run it with --dynamic")
     femnet_info = None
     if args.mesh is not None and (args.scene is None or not str(args.scene).endswith(".don")):
         raise SceneError("--mesh (FEMNET's .mdg mesh) goes with a FEMNET case CASE.don")
@@ -101,8 +112,69 @@ def _run(args):
     return 0
 
 
+def _run_dynamic(args):
+    import numpy as np
+
+    from jaxnet.io import femnet, scene_file
+    from jaxnet.scene import SceneError
+    from jaxnet.scenes import DYNAMIC, DYNAMIC_DEFAULT
+    from jaxnet.solve import dynamics
+    from jaxnet.solve.statics import solve
+
+    loading, settings = dynamics.Loading(), {}
+    if args.scene is None:
+        name = args.builtin if args.builtin in DYNAMIC else DYNAMIC_DEFAULT
+        make, description = DYNAMIC[name]
+        scene, loading, settings = make()
+        label = f"built-in dynamic scene '{name}': {description}"
+    elif str(args.scene).endswith(".don"):
+        if args.mesh is not None:
+            scene, _, info = femnet.read_mdg(args.mesh, args.scene, femnet_laws=not args.jaxnet_laws)
+        else:
+            net, _, info = femnet.read_don(args.scene, femnet_laws=not args.jaxnet_laws)
+            scene = net.build()
+        if any(any(v > 0 for v in m) for m in info["added_mass"].values()):
+            raise SceneError(f"{args.scene}: node types with an added mass ({info['added_mass']}) are not yet mapped "
+                             "onto jaxnet's nodes for dynamics")
+        if info["dynamic"] is not None:
+            d = info["dynamic"]
+            settings = {"time_step": d["time_step_s"], "end_time": d["end_time_s"], "record_every": d["record_every_s"]}
+        label = f"FEMNET case {args.scene}"
+    else:
+        net, _ = scene_file.read(args.scene)
+        scene, label = net.build(), str(args.scene)
+    for key, value in (("time_step", args.dt), ("end_time", args.end), ("record_every", args.record)):
+        if value is not None:
+            settings[key] = value
+    if "end_time" not in settings:
+        raise SceneError("--dynamic: give the end time (--end, s); the scene has none")
+    time_step = settings.get("time_step", 0.01)
+    out = pathlib.Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    print(f"jaxnet: {label}")
+    print(f"  {scene.n_nodes} nodes, {scene.n_elements} elements, {scene.n_dof} unknowns; dynamics to "
+          f"{settings['end_time']:g} s, step {time_step:g} s")
+    x0 = None
+    if not args.resume:
+        eq, _ = solve(dynamics.scene_at(scene, loading, 0.0), verbose=False, raise_on_failure=False)
+        print(f"  start: static equilibrium {'converged' if eq.converged else 'NOT converged (' + eq.reason + ')'}"
+              f" in {int(eq.iterations)} iterations")
+        x0 = np.asarray(eq.x)
+    solver = dynamics.Implicit(time_step=time_step)
+    try:
+        run = dynamics.simulate(scene, settings["end_time"], solver, loading, record_every=settings.get("record_every"),
+                                out=out, resume=args.resume, x0=x0, progress=not args.quiet)
+    except dynamics.DynamicsError as err:
+        print(f"jaxnet: {err}", file=sys.stderr)
+        return 1
+    print(f"  {run.steps} steps, {run.mean_iterations:.2f} Newton iterations per step, {int(run.state.retries)} "
+          f"retried; wall {run.wall_s:.2f} s (first interval with compilation {run.compile_s:.2f} s)")
+    print(f"  wrote {out / 'series.npz'}, {out / 'series.pvd'}")
+    return 0
+
+
 def main(argv=None):
-    from jaxnet.scenes import BUILT_IN, DEFAULT
+    from jaxnet.scenes import BUILT_IN, DEFAULT, DYNAMIC
 
     parser = argparse.ArgumentParser(prog="jaxnet", description="Static equilibrium of nets (Priour's netting element) on JAX.")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -111,7 +183,7 @@ def main(argv=None):
                          description=f"Built-in scenes ({DEFAULT} by default): {listing}.")
     run.add_argument("scene", nargs="?", help="scene file (.json or .toml) or FEMNET case (.don)")
     run.add_argument("--mesh", help="with a FEMNET case: solve on FEMNET's mesh (CASE.mdg) instead of jaxnet's")
-    run.add_argument("--scene", dest="builtin", choices=sorted(BUILT_IN), default=DEFAULT,
+    run.add_argument("--scene", dest="builtin", choices=sorted(set(BUILT_IN) | set(DYNAMIC)), default=DEFAULT,
                      help=f"built-in scene to solve when no file is given (default: {DEFAULT})")
     run.add_argument("--out", default="jaxnet-out", help="output directory (default: jaxnet-out)")
     run.add_argument("--tol", type=float, help="convergence threshold on the largest nodal force (N)")
@@ -123,6 +195,12 @@ def main(argv=None):
     run.add_argument("--jaxnet-laws", action="store_true", dest="jaxnet_laws",
                      help="with a FEMNET case: jaxnet's own laws (the book's, corrected) where FEMNET's differ (knot "
                           "contact, netting drag with a catch: docs/errata.md), instead of FEMNET's")
+    run.add_argument("--dynamic", action="store_true",
+                     help="run in time (implicit dynamics) from the static equilibrium; built-in default: cage_waves")
+    run.add_argument("--end", type=float, help="with --dynamic: end time (s)")
+    run.add_argument("--dt", type=float, help="with --dynamic: time step (s), default 0.01 or the case's")
+    run.add_argument("--record", type=float, help="with --dynamic: time between records (s), default every step")
+    run.add_argument("--resume", action="store_true", help="with --dynamic: continue the run in --out from its last record")
     default_cache = pathlib.Path(os.environ.get("XDG_CACHE_HOME") or pathlib.Path.home() / ".cache") / "jaxnet"
     run.add_argument("--cache", default=str(default_cache),
                      help=f"directory of compiled programs kept between runs (default: {default_cache})")

@@ -166,7 +166,9 @@ def _per_vertex(force, x, env, velocity, waves):
     with the water's velocity relative to vertex i. ``force(c) -> (k, 3)`` is the element's drag shared
     over its k vertices for a uniform relative velocity c; row i of force(c_i) is vertex i's share."""
     relative = water_velocity_at(x, env, waves) - velocity
-    return jnp.stack([force(relative[i])[i] for i in range(x.shape[0])])
+    # one batched evaluation (not k unrolled copies: a third of the program to compile)
+    shares = jax.vmap(force)(relative)  # (k, k, 3): [i] the shares of all vertices for vertex i's velocity
+    return shares[jnp.arange(x.shape[0]), jnp.arange(x.shape[0])]
 
 
 #: netting drag models (``Netting.drag_model`` codes), each a function of (x, p, c, rho) -> (3, 3) N

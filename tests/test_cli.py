@@ -97,3 +97,30 @@ def test_compiled_programs_are_kept_on_disk_and_reused(tmp_path):
     assert solver_pieces(entries_after) == solver_pieces(entries)  # found on disk: nothing new compiled
     assert second["iterations"] == first["iterations"]
     np.testing.assert_allclose(second["reaction_N"], first["reaction_N"], rtol=1e-12)
+
+
+def test_dynamic_run_of_a_net_at_rest_stays_at_rest_and_resumes(tmp_path):
+    """`jaxnet run SCENE --dynamic`: started at its static equilibrium under constant loads, a net stays there
+    (reactions constant, no motion); a stopped run resumed with a later end time continues its records."""
+    w = 0.5
+    doc = {
+        "environment": {"gravity": 0.0},
+        "twines": {"pa": {"l0": 0.02, "ea": 1000.0, "diameter": 0.001}},
+        "panels": [{"name": "wall", "step": 0.1, "twine": "pa",
+                    "corners": [[0, 0, 0, 0, 0], [w, 0, 0, 10, -10], [w, 0, w, 20, 0], [0, 0, w, 10, 10]]}],
+        "fix": [{"at": {"panel": "wall", "side": 2}}, {"at": {"panel": "wall", "side": 1}}, {"at": {"panel": "wall", "side": 3}}],
+        "attach": [{"at": {"panel": "wall", "side": 0}, "force": [0, 0, -2.0]}],
+    }
+    path = tmp_path / "scene.json"
+    path.write_text(json.dumps(doc))
+    out = tmp_path / "dyn"
+    args = ["run", str(path), "--dynamic", "--dt", "0.01", "--record", "0.05", "--out", str(out), "--quiet", "--no-cache"]
+    assert cli.main(args + ["--end", "0.1"]) == 0
+    assert cli.main(args + ["--end", "0.2", "--resume"]) == 0
+    from jaxnet.io import timeseries
+
+    series = timeseries.read_series(out)
+    np.testing.assert_allclose(series["time"], [0.0, 0.05, 0.1, 0.15, 0.2], atol=1e-12)
+    assert np.abs(series["position"] - series["position"][:1]).max() < 1e-6
+    np.testing.assert_allclose(series["reaction_total_N"], np.tile([0.0, 0.0, 2.0], (5, 1)), atol=5e-3)
+    assert (out / "series.pvd").exists() and (out / "series.npz").exists()

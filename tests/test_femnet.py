@@ -465,3 +465,31 @@ def test_meshing_order_shorthand(tmp_path):
         path, _ = _edit(tmp_path, "c2", [("Meshing order:\nel:1    pa:     1  ", f"Meshing order: {word}")])
         net, _, _ = femnet.read_don(path)
         assert len(net.build().bars.ends) == bars
+
+
+def test_dynamic_settings_and_waves_are_read(tmp_path):
+    """A FEMNET case with an end time and waves: the time settings go to info["dynamic"], the waves to the
+    environment (linear waves with FEMNET's period, height and heading); a zero record step is an error."""
+    lines = (DATA / "nr_netting.don").read_text().splitlines()
+
+    def edit(label, value):
+        k = next(i for i, line in enumerate(lines) if line.startswith(label))
+        lines[k] = lines[k].rsplit(":", 1)[0] + ":\t" + value
+
+    edit("Dynamic: End time of record", "30.0")
+    edit("Wave height", "1.5")
+    edit("Wave direction", "90.0")
+    path = tmp_path / "waves.don"
+    path.write_text("\n".join(lines) + "\n")
+    net, _, info = femnet.read_don(path)
+    assert info["dynamic"] == {"time_step_s": 0.1, "record_every_s": 0.2, "record_start_s": 0.0, "end_time_s": 30.0}
+    waves = net.environment.waves
+    assert float(waves.height) == 1.5 and float(waves.period) == 10.0
+    np.testing.assert_allclose(np.asarray(waves.direction), [0.0, 1.0, 0.0], atol=1e-15)
+    # deep-water dispersion at T = 10 s where FEMNET's depth is 0 or large: L = g T² / (2π)
+    if not np.isfinite(float(waves.depth)):
+        assert float(waves.wavelength) == pytest.approx(9.81 * 100 / (2 * np.pi), rel=1e-12)
+    edit("Dynamic: Record time step", "0.0")
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(SceneError, match=r"waves.don:\d+: dynamic record time step 0.0 s"):
+        femnet.read_don(path)

@@ -106,9 +106,12 @@ NaN/inf, a negative stiffness or length (a node box's height excepted: it hangs 
 zero-length cable, a panel whose (U, V) contour has no area, positions, limits and node box sizes beyond
 1e5 m, meshes of more than 50000 nodes per panel or cables of more than 5000 bars (FEMNET's own limits are
 20000 nodes and 5000 bars in all), a link to a part that does not exist, and every FEMNET feature it does
-not model when it is used (waves, node boxes with a volume or reaching above z = 0, sea-bed limits
-without a stiffness, hexagonal netting in a current, twines meshed as bars, sliding cables, winches,
-dynamics, anisotropic node mass, unknown ``input`` commands, ...). :func:`read_don` also builds the net it
+not model when it is used (node boxes with a volume or reaching above z = 0, sea-bed limits without a
+stiffness, hexagonal netting in a current, twines meshed as bars, sliding cables, winches, anisotropic node
+mass, unknown ``input`` commands, ...). Dynamic cases (an end time > 0) and waves are read: the time settings
+go to ``info["dynamic"]`` (``jaxnet run CASE.don --dynamic``), the waves to ``Environment.waves`` (linear
+waves on FEMNET's surface z = 0, a depth of 0 taken as deep water); the node types' added masses are read
+into ``info["added_mass"]``, and a dynamic run of a case that has any stops with an error (not yet mapped). :func:`read_don` also builds the net it
 returns, so that errors of meshing and of the scene (a net held nowhere, ...) come named with the file and
 a line too. "Meshing order" may be FEMNET's shorthand: a word beginning with ``a`` (cables, then panels,
 then hexagonal panels) or ``b`` (panels, hexagonal panels, cables).
@@ -125,6 +128,7 @@ import re
 
 import numpy as np
 
+from jaxnet import waves as waves_lib
 from jaxnet.net import DRAG_MODELS, KNOT_FORMS, HexTwine, Net, Rope, Side, Twine, knot_stiffness, outward
 from jaxnet.scene import Bars, Catch, Environment, Netting, Nodes, Scene, SceneError, validate
 from jaxnet.solve.statics import Newton
@@ -496,16 +500,18 @@ def parse_don(path) -> Case:
                       ("record_end", "dynamic end time of record and calculation")):
         numeric[key] = r.field(key, what)
     if numeric["record_end"].value > 0:
-        raise r.error(f"dynamic end time {numeric['record_end'].value!r} s: dynamic calculations are not supported "
-                      "(only statics: end time 0)", numeric["record_end"].line)
+        for key, what in (("dt", "dynamic time step"), ("record_dt", "dynamic record time step")):
+            if not numeric[key].value > 0:
+                raise r.error(f"{what} {numeric[key].value!r} s: a dynamic case (end time "
+                              f"{numeric['record_end'].value!r} s) needs it > 0", numeric[key].line)
     ocean = {}
     for key, what, check in (("current_direction", "current direction", None), ("current_speed", "current speed", ">=0"),
                              ("wave_period", "wave period", None), ("wave_height", "wave height", ">=0"),
                              ("wave_direction", "wave direction", None), ("depth", "depth", ">=0")):
         ocean[key] = r.field(key, what, check)
-    if ocean["wave_height"].value > 0:
-        raise r.error(f"wave height {ocean['wave_height'].value!r} m: waves are not supported (only 0)",
-                      ocean["wave_height"].line)
+    if ocean["wave_height"].value > 0 and not ocean["wave_period"].value > 0:
+        raise r.error(f"wave period {ocean['wave_period'].value!r} s: waves of height {ocean['wave_height'].value!r} m "
+                      "need a period > 0", ocean["wave_period"].line)
     catch = {}
     for key, what, check in (("catch_volume", "catch volume", ">=0"), ("catch_accuracy", "accuracy on the catch volume", ">=0"),
                              ("catch_cd", "drag coefficient of the catch", ">=0")):
@@ -802,11 +808,19 @@ def _environment(case: Case) -> Environment:
     angle = math.radians(case.ocean["current_direction"].value)
     rho = case.inputs["water_density"].value if "water_density" in case.inputs else WATER_DENSITY
     friction = case.ocean["bottom_friction"].value if "moving_bottom" in case.inputs else 0.0
+    waves = None
+    if case.ocean["wave_height"].value > 0:
+        # regular linear waves on FEMNET's surface z = 0 (felt in dynamics only); a depth of 0 is deep water
+        heading = math.radians(case.ocean["wave_direction"].value)
+        depth = case.ocean["depth"].value
+        waves = waves_lib.Airy(case.ocean["wave_height"].value, case.ocean["wave_period"].value,
+                               direction=(math.cos(heading), math.sin(heading), 0.0),
+                               depth=depth if depth > 0 else float("inf"), surface_level=0.0, gravity=GRAVITY)
     return Environment(gravity=GRAVITY, water_density=float(rho), up=np.array([0.0, 0.0, 1.0]),
                        current_speed=case.ocean["current_speed"].value,
                        current_direction=np.array([math.cos(angle), math.sin(angle), 0.0]),
                        bottom_stiffness=float(case.ocean["bottom_stiffness"].value), bottom_friction=float(friction),
-                       bottom_band=0.0)
+                       bottom_band=0.0, waves=waves)
 
 
 def _node_type_fields(case: Case, position, node_type):
@@ -1191,6 +1205,10 @@ def _info(case, planes, catch, plan=None):
         "joined": [] if plan is None else plan.joined,
         # FEMNET's added mass acts in dynamics only (lectureDo4.c): read, kept here, without effect in statics
         "added_mass": {t: list(nt.added_mass) for t, nt in sorted(case.types.items())},
+        # FEMNET's dynamic settings (None for a static case): what `jaxnet run CASE.don --dynamic` uses
+        "dynamic": None if not case.numeric["record_end"].value > 0 else {
+            "time_step_s": case.numeric["dt"].value, "record_every_s": case.numeric["record_dt"].value,
+            "record_start_s": case.numeric["record_start"].value, "end_time_s": case.numeric["record_end"].value},
         "sea_bed": {"stiffness_N_per_m": case.ocean["bottom_stiffness"].value,
                     "moving_bottom": "moving_bottom" in case.inputs,
                     "friction": _environment(case).bottom_friction,

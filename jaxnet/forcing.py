@@ -1,0 +1,404 @@
+"""Time histories for dynamics: scalar histories (the speed of the current) and prescribed motions of nodes
+(towing, the heave or surge of a collar).
+
+Every history is an equinox Module (a pytree: its numbers are leaves, so a study can trace or
+differentiate them) called as ``f(t)`` with t a scalar time (s); each is a pure jnp function of t,
+jittable and differentiable in t (``jax.grad``/``jax.jacfwd``), and also gives its derivative in closed
+form (the tests check both agree):
+
+* scalar histories, ``f(t)`` in the unit of the quantity (m/s for a current speed), ``f.rate(t)`` its
+  time derivative (unit/s; the dynamics takes d(speed)/dt for the water's acceleration γ_h of 4.265):
+  :class:`Constant`, :class:`Ramp`, :class:`Step`, :class:`Oscillation`;
+* motions, ``m(t)`` the displacement (3,) (m) of nodes from their start positions, ``m.velocity(t)`` its
+  time derivative (3,) (m/s): :class:`Towing`, :class:`Harmonic`;
+* :class:`Sum` (also ``a + b``) adds histories, or motions;
+* :class:`PrescribedMotion` pairs node indices with a motion: the dynamics holds those nodes at
+  start + m(t).
+
+Smoothness, and why it matters. The implicit step takes the water's acceleration from the derivative of
+the current's speed, and a prescribed node's velocity from the derivative of its displacement; a kink in a
+history is a jump of those, i.e. a sudden load that rings through a stiff net and costs Newton iterations
+or halved steps. Hence the half-cosine ramp r(s) = (1 - cos πs)/2 (s from 0 to 1), whose slope is 0 at
+both ends (C¹; the peak slope is π/2 times the linear ramp's): :class:`Ramp` uses it by default
+(``smooth=True``; ``smooth=False`` gives the linear ramp of FEMNET-like inputs, whose rate jumps), and
+:class:`Towing` and :class:`Harmonic` use it for their optional ``ramp`` (s) up. :class:`Step` is a true
+jump: its rate is 0 (the Dirac impulse at the jump is not represented), so a current switched on by a Step
+gives the net no water-acceleration load; prefer a short Ramp.
+
+Clamps are written with ``where`` so that derivatives are exactly those of the active piece and never NaN;
+at a junction the autodiff derivative and ``rate``/``velocity`` take the same side.
+
+Validation: constructing a history with concrete numbers raises ValueError naming the parameter for NaN
+or inf, a wrong shape, a non-positive period, a negative ramp or a ramp that ends before it starts. Traced
+values (a history built inside ``jit``) are not checked.
+
+Units: s, m, m/s, rad.
+"""
+
+from __future__ import annotations
+
+import abc
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+
+# -- helpers ---------------------------------------------------------------------------------------------
+
+
+def _as_float(value):
+    return jnp.asarray(value, dtype=float)
+
+
+def _is_concrete(value):
+    """True when ``value`` holds numbers, not tracers: only then can it be validated."""
+    return not any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree_util.tree_leaves(value))
+
+
+def _check(owner, name, value, shape=(), lower=None, strict=True):
+    """Raise ValueError naming ``owner``'s parameter ``name`` if ``value`` (concrete) has the wrong shape,
+    is NaN or infinite, or is not above ``lower`` (``strict``) / at least ``lower``."""
+    if not _is_concrete(value):
+        return
+    array = np.asarray(value, dtype=float)
+    if array.shape != shape:
+        raise ValueError(f"{owner}: {name} must have shape {shape}, got {array.shape}")
+    if not np.isfinite(array).all():
+        raise ValueError(f"{owner}: {name} must be finite (no NaN or inf), got {array.tolist()}")
+    if lower is not None and not (array > lower if strict else array >= lower).all():
+        raise ValueError(f"{owner}: {name} must be {'>' if strict else '>='} {lower}, got {array.tolist()}")
+
+
+def _clamp_unit(s):
+    """s clamped to [0, 1] with slope exactly 1 inside (ends included) and 0 outside."""
+    return jnp.where(s < 0.0, 0.0, jnp.where(s > 1.0, 1.0, s))
+
+
+def _inside_unit(s):
+    """1.0 where the clamp of :func:`_clamp_unit` passes s through (slope 1), else 0.0."""
+    return jnp.where((s >= 0.0) & (s <= 1.0), 1.0, 0.0)
+
+
+def _half_cosine(s):
+    """Smooth 0 → 1 step (1 - cos πs)/2 of s clamped to [0, 1], and its derivative in s (C¹: 0 at both
+    ends and outside)."""
+    c = _clamp_unit(s)
+    return 0.5 * (1.0 - jnp.cos(jnp.pi * c)), 0.5 * jnp.pi * jnp.sin(jnp.pi * c) * _inside_unit(s)
+
+
+# -- base classes ----------------------------------------------------------------------------------------
+
+
+class AbstractHistory(eqx.Module):
+    """A scalar function of time: ``f(t)`` (the quantity's unit), ``f.rate(t)`` (unit/s)."""
+
+    @abc.abstractmethod
+    def __call__(self, t):
+        raise NotImplementedError
+
+    @abc.abstractmethod
+    def rate(self, t):
+        raise NotImplementedError
+
+    def __add__(self, other):
+        return Sum(self, other)
+
+
+class AbstractMotion(eqx.Module):
+    """A displacement (3,) (m) as a function of time: ``m(t)``, ``m.velocity(t)`` (m/s)."""
+
+    @abc.abstractmethod
+    def __call__(self, t):
+        raise NotImplementedError
+
+    @abc.abstractmethod
+    def velocity(self, t):
+        raise NotImplementedError
+
+    def displacement(self, t):
+        """Displacement (3,) (m) at time t (s); the same as calling the motion."""
+        return self(t)
+
+    def __add__(self, other):
+        return Sum(self, other)
+
+
+# -- scalar histories ------------------------------------------------------------------------------------
+
+
+class Constant(AbstractHistory):
+    """f(t) = value, for all t."""
+
+    value: jax.Array = eqx.field(converter=_as_float)
+
+    def __check_init__(self):
+        _check("Constant", "value", self.value)
+
+    def __call__(self, t):
+        # + 0 t: the result is a function of t (a tracer under jit), as every history's is
+        return self.value + 0.0 * jnp.asarray(t, dtype=float)
+
+    def rate(self, t):
+        return jnp.zeros_like(self(t))
+
+
+class Ramp(AbstractHistory):
+    """From ``start_value`` (held before ``start_time``) to ``end_value`` (held after ``end_time``), times in s.
+
+    ``smooth=True`` (default): half-cosine, f = v0 + (v1 - v0) (1 - cos πs)/2, s = (t - t0)/(t1 - t0),
+    C¹ (its rate rises from and falls back to 0). ``smooth=False``: linear, f = v0 + (v1 - v0) s, whose
+    rate jumps to (v1 - v0)/(t1 - t0) at t0 and back at t1. ``end_time`` must exceed ``start_time``
+    (a jump is a :class:`Step`).
+    """
+
+    start_value: jax.Array = eqx.field(converter=_as_float)
+    end_value: jax.Array = eqx.field(converter=_as_float)
+    start_time: jax.Array = eqx.field(converter=_as_float)
+    end_time: jax.Array = eqx.field(converter=_as_float)
+    smooth: bool = eqx.field(default=True, static=True)
+
+    def __check_init__(self):
+        for name in ("start_value", "end_value", "start_time", "end_time"):
+            _check("Ramp", name, getattr(self, name))
+        if _is_concrete((self.start_time, self.end_time)) and not float(self.end_time) > float(self.start_time):
+            raise ValueError(f"Ramp: end_time ({float(self.end_time)}) must be > start_time "
+                             f"({float(self.start_time)}); use Step for a jump")
+
+    def _fraction(self, t):
+        return (jnp.asarray(t, dtype=float) - self.start_time) / (self.end_time - self.start_time)
+
+    def __call__(self, t):
+        s = self._fraction(t)
+        shape = _half_cosine(s)[0] if self.smooth else _clamp_unit(s)
+        return self.start_value + (self.end_value - self.start_value) * shape
+
+    def rate(self, t):
+        s = self._fraction(t)
+        slope = _half_cosine(s)[1] if self.smooth else _inside_unit(s)
+        return (self.end_value - self.start_value) * slope / (self.end_time - self.start_time)
+
+
+class Step(AbstractHistory):
+    """``before`` for t < ``time`` (s), ``after`` from ``time`` on. Its rate is 0 everywhere: the jump's
+    impulse is not represented (see the module docstring; a short :class:`Ramp` is kinder to dynamics)."""
+
+    before: jax.Array = eqx.field(converter=_as_float)
+    after: jax.Array = eqx.field(converter=_as_float)
+    time: jax.Array = eqx.field(converter=_as_float)
+
+    def __check_init__(self):
+        for name in ("before", "after", "time"):
+            _check("Step", name, getattr(self, name))
+
+    def __call__(self, t):
+        t = jnp.asarray(t, dtype=float)
+        return jnp.where(t < self.time, self.before, self.after) + 0.0 * t
+
+    def rate(self, t):
+        return jnp.zeros_like(self(t))
+
+
+class Oscillation(AbstractHistory):
+    """f(t) = mean + amplitude sin(2π t/period + phase); period in s (> 0), phase in rad."""
+
+    mean: jax.Array = eqx.field(converter=_as_float)
+    amplitude: jax.Array = eqx.field(converter=_as_float)
+    period: jax.Array = eqx.field(converter=_as_float)
+    phase: jax.Array = eqx.field(default=0.0, converter=_as_float)
+
+    def __check_init__(self):
+        for name in ("mean", "amplitude", "phase"):
+            _check("Oscillation", name, getattr(self, name))
+        _check("Oscillation", "period", self.period, lower=0.0)
+
+    def __call__(self, t):
+        return self.mean + self.amplitude * jnp.sin(2.0 * jnp.pi * jnp.asarray(t, dtype=float) / self.period
+                                                    + self.phase)
+
+    def rate(self, t):
+        omega = 2.0 * jnp.pi / self.period
+        return self.amplitude * omega * jnp.cos(omega * jnp.asarray(t, dtype=float) + self.phase)
+
+
+# -- motions ---------------------------------------------------------------------------------------------
+
+
+class Towing(AbstractMotion):
+    """Towing at a constant velocity (3,) (m/s), reached after a smooth ramp up.
+
+    Velocity V r(τ), τ = t - start_time: r = 0 before start_time, (1 - cos(πτ/R))/2 during the ramp
+    (R = ``ramp``, s), 1 after. Displacement (m), its integral from the start:
+
+        0 (τ <= 0),   V (τ/2 - R/(2π) sin(πτ/R)) (0 < τ < R),   V (τ - R/2) (τ >= R).
+
+    With R > 0 the displacement is C² (velocity and acceleration continuous), so a net towed from rest
+    starts smoothly; with R = 0 (default) the velocity jumps from 0 to V at start_time.
+
+    Args: velocity: (3,) towing velocity (m/s); start_time: s; ramp: R (s), >= 0.
+    """
+
+    towing_velocity: jax.Array
+    start_time: jax.Array
+    ramp: jax.Array
+
+    def __init__(self, velocity, start_time=0.0, ramp=0.0):
+        _check("Towing", "velocity", velocity, shape=(3,))
+        _check("Towing", "start_time", start_time)
+        _check("Towing", "ramp", ramp, lower=0.0, strict=False)
+        self.towing_velocity = _as_float(velocity)
+        self.start_time = _as_float(start_time)
+        self.ramp = _as_float(ramp)
+
+    def _ramped(self, t):
+        """τ (s), whether the ramp is on (R > 0), and R with 1 in its place when R = 0 (no division by 0)."""
+        tau = jnp.asarray(t, dtype=float) - self.start_time
+        ramped = self.ramp > 0.0
+        return tau, ramped, jnp.where(ramped, self.ramp, 1.0)
+
+    def __call__(self, t):
+        tau, ramped, ramp = self._ramped(t)
+        during = 0.5 * tau - ramp / (2.0 * jnp.pi) * jnp.sin(jnp.pi * tau / ramp)
+        distance = jnp.where(tau >= self.ramp, tau - 0.5 * self.ramp,
+                             jnp.where(ramped & (tau > 0.0), during, 0.0))
+        return distance * self.towing_velocity
+
+    def velocity(self, t):
+        tau, ramped, ramp = self._ramped(t)
+        fraction = jnp.where(tau >= self.ramp, 1.0, jnp.where(ramped & (tau > 0.0), _half_cosine(tau / ramp)[0], 0.0))
+        return fraction * self.towing_velocity
+
+
+class Harmonic(AbstractMotion):
+    """Harmonic displacement amplitude sin(2π t/period + phase) e(t) (m), amplitude (3,) in m, period in s
+    (> 0), phase in rad: the heave or surge of a collar.
+
+    e(t) is an optional smooth envelope rising over ``ramp`` seconds from t = 0: 0 before, (1 - cos(πt/R))/2
+    during, 1 after; ``ramp = 0`` (default) means no envelope (e = 1 at all t). Without it, phase 0 gives a
+    zero displacement at t = 0 but a velocity 2π/period × amplitude: a net starting at rest is jerked into
+    motion; a nonzero phase even displaces the nodes at t = 0. A ramp of a period or two starts the motion
+    with zero displacement and zero velocity.
+    """
+
+    amplitude: jax.Array
+    period: jax.Array
+    phase: jax.Array
+    ramp: jax.Array
+
+    def __init__(self, amplitude, period, phase=0.0, ramp=0.0):
+        _check("Harmonic", "amplitude", amplitude, shape=(3,))
+        _check("Harmonic", "period", period, lower=0.0)
+        _check("Harmonic", "phase", phase)
+        _check("Harmonic", "ramp", ramp, lower=0.0, strict=False)
+        self.amplitude = _as_float(amplitude)
+        self.period = _as_float(period)
+        self.phase = _as_float(phase)
+        self.ramp = _as_float(ramp)
+
+    def _envelope(self, t):
+        """e(t) and de/dt (1/s)."""
+        ramped = self.ramp > 0.0
+        ramp = jnp.where(ramped, self.ramp, 1.0)
+        value, slope = _half_cosine(t / ramp)
+        return jnp.where(ramped, value, 1.0), jnp.where(ramped, slope / ramp, 0.0)
+
+    def __call__(self, t):
+        t = jnp.asarray(t, dtype=float)
+        envelope, _ = self._envelope(t)
+        return self.amplitude * (jnp.sin(2.0 * jnp.pi * t / self.period + self.phase) * envelope)
+
+    def velocity(self, t):
+        t = jnp.asarray(t, dtype=float)
+        omega = 2.0 * jnp.pi / self.period
+        envelope, envelope_rate = self._envelope(t)
+        angle = omega * t + self.phase
+        return self.amplitude * (omega * jnp.cos(angle) * envelope + jnp.sin(angle) * envelope_rate)
+
+
+# -- composition -----------------------------------------------------------------------------------------
+
+
+class Sum(eqx.Module):
+    """The sum of histories (``rate`` sums their rates) or of motions (``velocity`` sums their velocities),
+    e.g. ``Towing(...) + Harmonic(...)``: towing a net whose head rope heaves."""
+
+    parts: tuple
+
+    def __init__(self, *parts):
+        if not parts:
+            raise ValueError("Sum: parts must not be empty")
+        for k, part in enumerate(parts):
+            if not isinstance(part, (AbstractHistory, AbstractMotion, Sum)):
+                raise ValueError(f"Sum: parts[{k}] must be a history or a motion of jaxnet.forcing, got "
+                                 f"{type(part).__name__}")
+        self.parts = tuple(parts)
+
+    def __call__(self, t):
+        return sum(part(t) for part in self.parts)
+
+    def rate(self, t):
+        return sum(part.rate(t) for part in self.parts)
+
+    def velocity(self, t):
+        return sum(part.velocity(t) for part in self.parts)
+
+    def displacement(self, t):
+        return self(t)
+
+    def __add__(self, other):
+        return Sum(*self.parts, other)
+
+
+# -- prescribed motion of nodes --------------------------------------------------------------------------
+
+
+def _as_nodes(value):
+    if _is_concrete(value):
+        array = np.asarray(value)
+        return array.astype(np.int64) if array.dtype.kind in "iu" else array
+    return jnp.asarray(value)
+
+
+class PrescribedMotion(eqx.Module):
+    """Node indices paired with a motion: the dynamics holds node i (fixed in the scene) at
+    start_i + motion(t).
+
+    nodes: (K,) integer indices (>= 0) of nodes into the scene. motion: a motion of this module
+    (:class:`Towing`, :class:`Harmonic`, a :class:`Sum` of them) or any pytree callable t -> (3,)
+    displacement (m) with a ``velocity(t)``.
+    """
+
+    nodes: np.ndarray | jax.Array = eqx.field(converter=_as_nodes)
+    motion: AbstractMotion | Sum
+
+    def __check_init__(self):
+        if _is_concrete(self.nodes):
+            nodes = np.asarray(self.nodes)
+            if nodes.ndim != 1:
+                raise ValueError(f"PrescribedMotion: nodes must be a 1-D array of node indices, got shape "
+                                 f"{nodes.shape}")
+            if nodes.dtype.kind not in "iu":
+                raise ValueError(f"PrescribedMotion: nodes must be integers, got dtype {nodes.dtype}")
+            if (nodes < 0).any():
+                raise ValueError(f"PrescribedMotion: nodes must be >= 0, got {int(nodes.min())}")
+        if not callable(self.motion) or not hasattr(self.motion, "velocity"):
+            raise ValueError(f"PrescribedMotion: motion must be callable t -> (3,) displacement with a "
+                             f"velocity(t), got {type(self.motion).__name__}")
+        shape = jax.eval_shape(self.motion, jnp.zeros(())).shape
+        if shape != (3,):
+            raise ValueError(f"PrescribedMotion: motion must return a (3,) displacement, got shape {shape}")
+
+    def displacement(self, t):
+        """Displacement (3,) (m) of the nodes from their start positions at time t (s)."""
+        return self.motion(t)
+
+    def velocity(self, t):
+        """Velocity (3,) (m/s) of the nodes at time t (s)."""
+        return self.motion.velocity(t)
+
+
+__all__ = [
+    "AbstractHistory", "AbstractMotion", "Constant", "Ramp", "Step", "Oscillation", "Towing", "Harmonic", "Sum",
+    "PrescribedMotion",
+]
