@@ -247,3 +247,30 @@ def test_lumped_masses_sum_to_the_nets_mass():
     np.testing.assert_allclose(mass.sum(axis=0), expected, rtol=1e-12)
     np.testing.assert_allclose(water.sum(axis=0), (ca + 1) * rho * (v_net + v_bar) + rho * np.sum(scene.nodes.volume),
                                rtol=1e-12)
+
+
+def test_towing_through_still_water_is_the_current_seen_from_the_net():
+    """Galilean invariance: a net towed at speed U through still water (its top held and moved by a prescribed
+    motion, reaching U after a smooth ramp) settles, seen from the towing point, on the static shape of the
+    same net held in a current U."""
+    from jaxnet import forcing
+    from jaxnet.scenes.panel import hanging_panel
+
+    speed = 0.4
+    net = hanging_panel(meshes=4, step=0.1)
+    net.environment = Environment(current_speed=speed, current_direction=np.array([1.0, 0.0, 0.0]))
+    in_current = net.build()
+    eq, _ = statics.solve(in_current, tol=1e-8)
+    net.environment = Environment()
+    still = net.build()
+    held = np.flatnonzero(np.asarray(still.nodes.fixed).all(axis=1))
+    towing = forcing.Towing(velocity=(-speed, 0.0, 0.0), ramp=2.0)
+    loading = dynamics.Loading(motions=(forcing.PrescribedMotion(held, towing),))
+    start, _ = statics.solve(still, tol=1e-8)
+    end = 40.0
+    newton = statics.Newton(tol=1e-6, max_iter=30, damping=1e-12, stall_window=None)
+    tr = dynamics.simulate(still, end, dynamics.Implicit(time_step=0.05, newton=newton), loading, record_every=5.0,
+                           x0=np.asarray(start.x), progress=False)
+    seen = tr.positions[-1] - np.asarray(towing(end))
+    np.testing.assert_allclose(seen, np.asarray(eq.x), atol=2e-4)
+    np.testing.assert_allclose(tr.velocities[-1], np.tile([-speed, 0.0, 0.0], (still.n_nodes, 1)), atol=1e-4)

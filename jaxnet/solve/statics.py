@@ -263,34 +263,27 @@ def newton_loop(x0, scene, pattern, model, opts: Newton, step=None):
 
     :func:`solve` drives the same iteration from the host instead (:func:`host_loop`): its compiled pieces
     are smaller and cacheable on disk. This form is for callers who need the solve inside a traced
-    function, and it is what the tests lower to see which terms a scene compiles.
+    function (the dynamic step loop), and it is what the tests lower to see which terms a scene compiles.
+
+    Its shape: one ``while_loop`` whose every pass evaluates the residual once, at the start point first,
+    then at the line search's trial points; when a line search ends (or at the start) the tangent is
+    assembled and factorised for the next direction (a ``lax.cond``). So the program holds the evaluation
+    and the tangent once each: the start, the trials and the final force share them (compiling them twice
+    would double the program), and the last accepted evaluation gives the returned force.
     """
     n_nodes = scene.nodes.position.shape[0]
     load = assemble.loads(scene, model)
     if step is not None:
         load = load + step.water_load
     free = pattern.free
-
-    def evaluate(x, f_frozen):
-        e, force, f_nc, m, state = _evaluate(x, f_frozen, load, 1.0, scene, pattern, model, step)
-        return e, force.ravel()[free], f_nc, m, state
+    springs = spring_network.stiffness(scene, model, pattern)
 
     def status_of(it, f, e):
         res = jnp.max(_nodal_norm(f, pattern, n_nodes))
         return res, _status(it, res, e, opts, jnp)
 
-    springs = spring_network.stiffness(scene, model, pattern)
-    zero = jnp.zeros_like(load)
-    e0, f0, nc0, m0, s0 = evaluate(x0, zero)
-    res0, st0 = status_of(0, f0, e0)
-    hist0 = jnp.full(opts.max_iter + 1, jnp.nan).at[0].set(res0)
-    state0 = (x0, f0, e0, nc0, s0, jnp.asarray(opts.damping), jnp.asarray(0), st0, hist0)
-
-    def cond(state):
-        return state[7] == RUNNING
-
-    def body(state):
-        x, f, e_stored, f_nc, s, mu, it, _, hist = state
+    def direction(x, f, e_stored, f_nc, s, mu):
+        """The damped Newton step at x and what the line search needs to judge its trials."""
         X = assemble.positions(x, scene, pattern)
         e = _merit(e_stored, X, load + f_nc)
         data = _tangent(x, s, 1.0, scene, pattern, model, opts.stiffness, step)
@@ -303,43 +296,75 @@ def newton_loop(x0, scene, pattern, model, opts: Newton, step=None):
         predicted = slope - 0.5 * curvature  # decrease predicted by the undamped quadratic model
         usable = ok & (slope > 0)
         roundoff = 1e-12 * (jnp.abs(e) + jnp.abs(jnp.sum((load + f_nc) * X)))
-        res_now = jnp.linalg.norm(f)
+        return dx, slope, predicted, usable, e, roundoff, jnp.linalg.norm(f)
 
-        def ls_cond(c):
-            return usable & (c[0] < opts.line_search) & ~c[-1]
+    zero_free = jnp.zeros_like(x0)
+    zero = jnp.zeros_like(load)
+    # placeholders of the right types for the accepted iterate and its direction, filled by the first pass
+    s0 = jax.tree.map(lambda a: jnp.zeros(a.shape, a.dtype), jax.eval_shape(
+        lambda: _evaluate(x0, zero, load, 1.0, scene, pattern, model, step)[4]))
+    f64 = jnp.asarray(0.0)
+    carry0 = dict(
+        x=x0, f=zero_free, force=zero, e_stored=f64, f_nc=zero, s=s0, mu=jnp.asarray(opts.damping), it=jnp.asarray(0),
+        st=jnp.asarray(RUNNING), hist=jnp.full(opts.max_iter + 1, jnp.nan),
+        dx=zero_free, slope=f64, predicted=f64, usable=jnp.asarray(False), e=f64, roundoff=f64, res_now=f64,
+        k=jnp.asarray(0), alpha=jnp.asarray(1.0), started=jnp.asarray(False))
 
-        def ls_body(c):
-            k, alpha = c[0], c[1]
-            alpha = jnp.where(k == 0, 1.0, 0.5 * alpha)
-            e_try, f_try, nc_try, m_try, s_try = evaluate(x + alpha * dx, f_nc)
-            done = _accepts(m_try, f_try, e, alpha, slope, roundoff, res_now, jnp)
-            return k + 1, alpha, m_try, e_try, f_try, nc_try, s_try, done
+    def cond(c):
+        return c["st"] == RUNNING
 
-        first = (jnp.asarray(0), jnp.asarray(1.0), jnp.asarray(jnp.inf), e_stored, f, f_nc, s, jnp.asarray(False))
-        trials, alpha, m_new, e_try, f_try, nc_try, s_try, accepted = jax.lax.while_loop(ls_cond, ls_body, first)
-        accepted = usable & accepted
-        keep = lambda new, old: jax.tree.map(lambda a, b: jnp.where(accepted, a, b), new, old)  # noqa: E731
-        x_new, f_new, e_new, nc_new, s_new = keep((x + alpha * dx, f_try, e_try, nc_try, s_try), (x, f, e_stored, f_nc, s))
-        res, st = status_of(it + 1, f_new, jnp.where(accepted, m_new, e))
-        mu_next = _next_damping(mu, accepted, trials, e, m_new, predicted, res / jnp.maximum(hist[it], 1e-300), opts, jnp)
-        st = jnp.where((st == RUNNING) & ~accepted & (mu >= opts.max_damping), STALLED, st)
-        hist = hist.at[it + 1].set(res)
+    def body(c):
+        started, usable = c["started"], c["usable"]
+        alpha = jnp.where(c["k"] == 0, 1.0, 0.5 * c["alpha"])
+        # the start point first; an unusable direction is judged without a trial (its pass re-evaluates x)
+        x_try = c["x"] + jnp.where(started & usable, alpha, 0.0) * c["dx"]
+        e_try, force_try, nc_try, m_try, s_try = _evaluate(x_try, jnp.where(started, c["f_nc"], zero), load, 1.0,
+                                                           scene, pattern, model, step)
+        f_try = force_try.ravel()[free]
+        done = usable & _accepts(m_try, f_try, c["e"], alpha, c["slope"], c["roundoff"], c["res_now"], jnp)
+        trials = jnp.where(usable, c["k"] + 1, 0)
+        ends = ~started | done | ~usable | (trials >= opts.line_search)  # this pass ends an iteration
+        accepted = ~started | done
+        keep = lambda new, old: jnp.where(accepted, new, old)  # noqa: E731
+        x, f, force = keep(x_try, c["x"]), keep(f_try, c["f"]), keep(force_try, c["force"])
+        e_stored, f_nc = keep(e_try, c["e_stored"]), keep(nc_try, c["f_nc"])
+        s = jax.tree.map(keep, s_try, c["s"])
+        it = jnp.where(started & ends, c["it"] + 1, c["it"])
+        res, st = status_of(it, f, jnp.where(started, jnp.where(done, m_try, c["e"]), e_try))
+        mu = _next_damping(c["mu"], done, trials, c["e"], m_try, c["predicted"],
+                           res / jnp.maximum(c["hist"][c["it"]], 1e-300), opts, jnp)
+        mu = jnp.where(started & ends, mu, c["mu"])
+        st = jnp.where(started & (st == RUNNING) & ~done & (c["mu"] >= opts.max_damping), STALLED, st)
+        st = jnp.where(ends, st, RUNNING)
+        hist = jnp.where(ends, c["hist"].at[it].set(res), c["hist"])
         if opts.verbose:
-            jax.debug.callback(_progress, it + 1, res, mu, jnp.where(accepted, alpha, 0.0), ordered=True)
-        return x_new, f_new, e_new, nc_new, s_new, mu_next, it + 1, st, hist
+            jax.lax.cond(started & ends, lambda: jax.debug.callback(
+                _progress, it, res, c["mu"], jnp.where(done, alpha, 0.0), ordered=False), lambda: None)
 
-    x, f, e_stored, f_nc, _, mu, it, st, hist = jax.lax.while_loop(cond, body, state0)
-    nodal = _nodal_norm(f, pattern, n_nodes)
-    X = assemble.positions(x, scene, pattern)
+        def new_direction(_):
+            return direction(x, f, e_stored, f_nc, s, mu)
+
+        def same_direction(_):
+            return c["dx"], c["slope"], c["predicted"], usable, c["e"], c["roundoff"], c["res_now"]
+
+        dx, slope, predicted, usable_next, e, roundoff, res_now = jax.lax.cond(
+            ends & (st == RUNNING), new_direction, same_direction, None)
+        return dict(x=x, f=f, force=force, e_stored=e_stored, f_nc=f_nc, s=s, mu=mu, it=it, st=st, hist=hist,
+                    dx=dx, slope=slope, predicted=predicted, usable=usable_next, e=e, roundoff=roundoff,
+                    res_now=res_now, k=jnp.where(ends, 0, trials), alpha=alpha, started=jnp.asarray(True))
+
+    c = jax.lax.while_loop(cond, body, carry0)
+    X = assemble.positions(c["x"], scene, pattern)
+    nodal = _nodal_norm(c["f"], pattern, n_nodes)
     return Equilibrium(
         x=X,
-        force=load - jax.grad(_stored_energy)(X, scene, model, 1.0, step) + f_nc,
+        force=c["force"],
         residual_N=jnp.max(nodal),
-        iterations=it,
-        status=st,
+        iterations=c["it"],
+        status=c["st"],
         worst_node=jnp.argmax(nodal),
-        history=hist,
-        energy=_merit(e_stored, X, load + f_nc),
+        history=c["hist"],
+        energy=_merit(c["e_stored"], X, load + c["f_nc"]),
     )
 
 
