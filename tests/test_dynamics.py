@@ -196,6 +196,7 @@ def test_the_steps_tangent_is_the_derivative_of_its_residual():
     state = assemble.states(assemble.positions(jnp.asarray(x), scene, pattern), scene, model)
     load = assemble.loads(scene, model)
 
+    @jax.jit
     def residual(y):
         return statics._evaluate(y, jnp.zeros_like(load), load, 1.0, scene, pattern, model, step)[1].ravel()[free]
 

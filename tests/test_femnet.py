@@ -94,7 +94,7 @@ def _line_of(text, needle):
     ("Unstretched length (m):\t\t\t0.022000", "Unstretched length (m):\t\t\tnan", "nan", "not a finite number"),
     ("Traction stiffness (N):\t\t\t6000.000000", "Traction stiffness (N):\t\t\t-6000.000000", "-6000", "must be >= 0"),
     ("L: 1.97", "L: 0.0", "L: 0.0", "must be > 0"),
-    ("Wave height (m):                    0.000000", "Wave height (m):                    1.5", "1.5", "waves"),
+    # (waves and dynamic settings are read: test_dynamic_settings_and_waves_are_read checks their errors)
     # a node box with a volume floats in FEMNET (flotteur2.c: buoyancy of its immersed part), which jaxnet does
     # not model: refused (a box with a zero length is read: drag only, tests/test_femnet_nodes.py)
     ("Length X,Y,Z (m):        0.000000  0.000000  0.000000\nDrag coefficient X,Y,Z:        1.200000  1.200000  1.200000\nExternal forces X,Y,Z (N):    0.000000  0.000000  0.000000\nDisplacement X,Y,Z:        0 0 0",
@@ -489,6 +489,11 @@ def test_dynamic_settings_and_waves_are_read(tmp_path):
     # deep-water dispersion at T = 10 s where FEMNET's depth is 0 or large: L = g T² / (2π)
     if not np.isfinite(float(waves.depth)):
         assert float(waves.wavelength) == pytest.approx(9.81 * 100 / (2 * np.pi), rel=1e-12)
+    edit("Wave period", "0.0")
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(SceneError, match=r"waves.don:\d+: wave period 0.0 s: waves of height 1.5 m need a period > 0"):
+        femnet.read_don(path)
+    edit("Wave period", "10.0")
     edit("Dynamic: Record time step", "0.0")
     path.write_text("\n".join(lines) + "\n")
     with pytest.raises(SceneError, match=r"waves.don:\d+: dynamic record time step 0.0 s"):

@@ -1,16 +1,17 @@
 """Error against run time of jaxnet's dynamics: the book's implicit scheme and the diffrax reference.
 
-    python validation/dynamics_cost.py [--sizes 1.6 1.0 0.6] [--cage-end 3.0] [--no-cage]
+    python validation/dynamics_cost.py [--sizes 1.6 1.0 0.5] [--cage-end 3.0] [--no-cage] [--plot FILE.png]
 
 1. Pendulum (a 1.5 kg mass on an elastic bar, EA = 2e4 N, released horizontal under gravity): the mass's
    position at t = 1 s, against diffrax's Kvaerno5 at rtol 1e-10 (the reference solution). Rows: the book
    scheme at Δt = 20 ms ... 0.625 ms; the reference integrator at rtol 1e-4 ... 1e-8. Error (m), wall time
-   (s, compiled: the second run), steps, Newton iterations per step, and the observed order.
+   (s, compiled: the second run), steps, Newton iterations per step, and the observed order; a plot of
+   error against wall time (``--plot``).
 2. The cage in waves (``jaxnet.scenes.cage_in_waves(step=1.6)``, 339 unknowns: the size of FEMNET's dynamic
    cage benchmark), from its static equilibrium: the peak vertical reaction on the collar and the volume
    held at the end, for Δt = 40 ... 5 ms against Δt = 2.5 ms (the finest run: the book scheme converges at
    first order, so its own fine run is the reference for the coarse ones), with wall time, steps per second
-   and Newton iterations per step.
+   and Newton iterations per step; then, at Δt = 10 ms, the cost per step with each stiffness path.
 3. Cost against size: steps per second and Newton iterations per step of the cage in waves meshed finer
    and finer (``--sizes``, meshing steps in m), after compilation, with the compile time.
 
@@ -21,6 +22,7 @@ of a 351-DOF cage in waves at Δt = 0.01 s (6800 steps: 108 ms per step) on this
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import time
 
 import numpy as np
@@ -47,12 +49,34 @@ def timed(run):
     return out, time.perf_counter() - t0
 
 
+def plot(pendulum_rows, path):
+    """Work-precision plot of the pendulum: error against wall time, one line per method."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for method, marker in (("book scheme", "o-"), ("Kvaerno5 (diffrax)", "s-")):
+        rows = [(w, e) for m, w, e in pendulum_rows if m == method]
+        ax.loglog([w for w, _ in rows], [e for _, e in rows], marker, label=method)
+    ax.set_xlabel("wall time (s)")
+    ax.set_ylabel("error of the position at t = 1 s (m)")
+    ax.set_title("Pendulum: error against run time")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    print(f"\nwrote {path}")
+
+
 def pendulum_table(end=1.0):
     scene = pendulum()
     exact = reference.reference(scene, end, saveat=[0.0, end], rtol=1e-10, atol=1e-12).positions[-1, 1]
     print(f"\n## Pendulum: position of the mass at t = {end} s (reference: Kvaerno5, rtol 1e-10)\n")
     print("| method | setting | error (m) | order | wall (s) | steps | Newton it./step |")
     print("|---|---|---|---|---|---|---|")
+    rows = []
     last = None
     for n in (50, 100, 200, 400, 800, 1600):
         h = end / n
@@ -61,11 +85,14 @@ def pendulum_table(end=1.0):
         err = float(np.linalg.norm(tr.positions[-1, 1] - exact))
         order = "" if last is None else f"{np.log2(last / err):.2f}"
         last = err
+        rows.append(("book scheme", wall, err))
         print(f"| book scheme | Δt = {h * 1e3:.3g} ms | {err:.3e} | {order} | {wall:.3f} | {tr.steps} | {tr.mean_iterations:.2f} |")
     for rtol in (1e-4, 1e-6, 1e-8):
         ref, wall = timed(lambda: reference.reference(scene, end, saveat=[0.0, end], rtol=rtol, atol=rtol * 1e-2))
         err = float(np.linalg.norm(ref.positions[-1, 1] - exact))
+        rows.append(("Kvaerno5 (diffrax)", wall, err))
         print(f"| Kvaerno5 (diffrax) | rtol = {rtol:g} | {err:.3e} | | {wall:.3f} | {ref.steps_accepted} (+{ref.steps_rejected} rejected) | |")
+    return rows
 
 
 def cage_table(end):
@@ -91,10 +118,15 @@ def cage_table(end):
         vol = tr.figures["volume_m3"][-1]
         print(f"| {h * 1e3:g} | {peak:.1f} | {abs(peak - peak_ref) / abs(peak_ref):.2e} | {vol:.3f} | "
               f"{abs(vol - volume_ref) / volume_ref:.2e} | {wall:.2f} | {tr.steps / wall:.1f} | {tr.mean_iterations:.2f} |")
-    tr, wall = runs[0.01]
-    per_step = wall / tr.steps
-    print(f"\nAt Δt = 10 ms: {per_step * 1e3:.1f} ms per step, {tr.mean_iterations:.2f} Newton iterations per step; "
-          f"FEMNET 108 ms per step, 55 iterations: {0.108 / per_step:.1f}x faster per step.")
+    print(f"\nAt Δt = 10 ms, per step (the same run, each stiffness path; FEMNET: 108 ms and 55 iterations per step):\n")
+    print("| stiffness | ms per step | Newton it./step | vs FEMNET |")
+    print("|---|---|---|---|")
+    for path in ("closed_form", "autodiff"):
+        opts = dynamics.Implicit(time_step=0.01, newton=dataclasses.replace(dynamics.Implicit().newton, stiffness=path))
+        tr, wall = timed(lambda: dynamics.simulate(scene, end, opts, loading, record_every=0.05, x0=x0, progress=False))
+        per_step = wall / tr.steps
+        print(f"| {path} | {per_step * 1e3:.1f} | {tr.mean_iterations:.2f} | {0.108 / per_step:.1f}x |")
+    return runs
 
 
 def size_table(steps):
@@ -118,11 +150,12 @@ def size_table(steps):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--sizes", type=float, nargs="*", default=[1.6, 1.0, 0.6])
+    parser.add_argument("--sizes", type=float, nargs="*", default=[1.6, 1.0, 0.5])
     parser.add_argument("--cage-end", type=float, default=3.0)
     parser.add_argument("--no-cage", action="store_true")
+    parser.add_argument("--plot", default="validation/dynamics_work_precision.png")
     args = parser.parse_args()
-    pendulum_table()
+    plot(pendulum_table(), args.plot)
     if not args.no_cage:
         cage_table(args.cage_end)
     if args.sizes:
