@@ -55,9 +55,9 @@ def test_closed_form_stiffness_gives_the_same_answer(tmp_path):
     np.testing.assert_allclose(c["bounding_box_m"], a["bounding_box_m"], rtol=1e-9, atol=1e-9)
 
 
-def test_scene_file_and_bad_scene_file(tmp_path, capsys):
-    w = 0.5
-    doc = {
+def wall_scene(w=0.5):
+    """A scene file: a weightless square wall held on three sides, pulled down by 2 N along the fourth."""
+    return {
         "environment": {"gravity": 0.0},
         "twines": {"pa": {"l0": 0.02, "ea": 1000.0, "diameter": 0.001}},
         "panels": [{"name": "wall", "step": 0.1, "twine": "pa",
@@ -65,6 +65,10 @@ def test_scene_file_and_bad_scene_file(tmp_path, capsys):
         "fix": [{"at": {"panel": "wall", "side": 2}}, {"at": {"panel": "wall", "side": 1}}, {"at": {"panel": "wall", "side": 3}}],
         "attach": [{"at": {"panel": "wall", "side": 0}, "force": [0, 0, -2.0]}],
     }
+
+
+def test_scene_file_and_bad_scene_file(tmp_path, capsys):
+    doc = wall_scene()
     path = tmp_path / "scene.json"
     path.write_text(json.dumps(doc))
     assert cli.main(["run", str(path), "--out", str(tmp_path / "out"), "--quiet", "--no-cache"]) == 0
@@ -102,15 +106,7 @@ def test_compiled_programs_are_kept_on_disk_and_reused(tmp_path):
 def test_dynamic_run_of_a_net_at_rest_stays_at_rest_and_resumes(tmp_path):
     """`jaxnet run SCENE --dynamic`: started at its static equilibrium under constant loads, a net stays there
     (reactions constant, no motion); a stopped run resumed with a later end time continues its records."""
-    w = 0.5
-    doc = {
-        "environment": {"gravity": 0.0},
-        "twines": {"pa": {"l0": 0.02, "ea": 1000.0, "diameter": 0.001}},
-        "panels": [{"name": "wall", "step": 0.1, "twine": "pa",
-                    "corners": [[0, 0, 0, 0, 0], [w, 0, 0, 10, -10], [w, 0, w, 20, 0], [0, 0, w, 10, 10]]}],
-        "fix": [{"at": {"panel": "wall", "side": 2}}, {"at": {"panel": "wall", "side": 1}}, {"at": {"panel": "wall", "side": 3}}],
-        "attach": [{"at": {"panel": "wall", "side": 0}, "force": [0, 0, -2.0]}],
-    }
+    doc = wall_scene()
     path = tmp_path / "scene.json"
     path.write_text(json.dumps(doc))
     out = tmp_path / "dyn"
