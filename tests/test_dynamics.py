@@ -275,3 +275,25 @@ def test_towing_through_still_water_is_the_current_seen_from_the_net():
     seen = tr.positions[-1] - np.asarray(towing(end))
     np.testing.assert_allclose(seen, np.asarray(eq.x), atol=2e-4)
     np.testing.assert_allclose(tr.velocities[-1], np.tile([-speed, 0.0, 0.0], (still.n_nodes, 1)), atol=1e-4)
+
+
+def test_an_accelerating_current_pushes_by_the_waters_inertia():
+    """A body (mass M, volume V, added mass M_a along x, no drag) in a current whose speed rises at a steady
+    rate a: the water's inertia (M_a + ρV) a (4.265's γ_h terms) accelerates it at (M_a + ρV)/(M + M_a) a, and
+    the scheme from rest puts it at A h² n(n+1)/2 after n steps (its exact response to a constant force)."""
+    from jaxnet import forcing
+
+    M, V, Ma, rate = 4.0, 2e-3, 1.5, 0.3
+    # held by a bar of negligible stiffness and size (validation wants every node held by something)
+    nodes = Nodes(position=np.array([[-1.0, 0.0, 0.0], [0.0, 0.0, 0.0]]), fixed=np.array([[True] * 3, [False, True, True]]),
+                  mass=np.array([0.0, M]), volume=np.array([0.0, V]), force=np.zeros((2, 3)),
+                  added_mass=np.array([[0.0] * 3, [Ma, 0.0, 0.0]]))
+    bars = Bars(ends=np.array([[0, 1]]), rest_length=np.array([1.0]), ea_traction=np.array([1e-9]),
+                ea_compression=np.array([1e-9]), diameter=np.array([1e-9]), density=np.array([1e-9]), cable=np.array([0]))
+    scene = Scene(nodes=nodes, bars=bars, environment=Environment(gravity=0.0, current_direction=np.array([1.0, 0.0, 0.0])))
+    loading = dynamics.Loading(current_speed=forcing.Ramp(0.0, 10 * rate, 0.0, 10.0, smooth=False))
+    h, n = 0.05, 40
+    tr = dynamics.simulate(scene, n * h, dynamics.Implicit(time_step=h, newton=TIGHT), loading, progress=False)
+    A = (Ma + 1025.0 * V) / (M + Ma) * rate
+    k = np.arange(n + 1)
+    np.testing.assert_allclose(tr.positions[:, 1, 0], A * h**2 * k * (k + 1) / 2, rtol=1e-8, atol=1e-14)

@@ -118,7 +118,7 @@ def cage_table(end):
         vol = tr.figures["volume_m3"][-1]
         print(f"| {h * 1e3:g} | {peak:.1f} | {abs(peak - peak_ref) / abs(peak_ref):.2e} | {vol:.3f} | "
               f"{abs(vol - volume_ref) / volume_ref:.2e} | {wall:.2f} | {tr.steps / wall:.1f} | {tr.mean_iterations:.2f} |")
-    print(f"\nAt Δt = 10 ms, per step (the same run, each stiffness path; FEMNET: 108 ms and 55 iterations per step):\n")
+    print("\nAt Δt = 10 ms, per step (the same run, each stiffness path; FEMNET: 108 ms and 55 iterations per step):\n")
     print("| stiffness | ms per step | Newton it./step | vs FEMNET |")
     print("|---|---|---|---|")
     for path in ("closed_form", "autodiff"):

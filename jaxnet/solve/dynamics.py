@@ -76,7 +76,8 @@ class DynamicsError(RuntimeError):
 
 @dataclasses.dataclass(frozen=True)
 class Implicit:
-    """Options of the implicit time stepping (hashable: part of the compiled program's identity).
+    """Options of the implicit time stepping (hashable). Only ``newton`` is part of the compiled program's
+    identity: the steps are arguments, so a study over Δt compiles once.
 
     time_step: Δt (s), the step the run takes when Newton converges.
     min_time_step: the smallest step a failed step may be retried with (s); below it the run stops.
@@ -85,7 +86,7 @@ class Implicit:
       the hand-derived stiffness where a term has one (``stiffness="closed_form"``: the same matrix as
       autodiff to rounding, tested; the drag, which depends on the velocities here, stays on autodiff). Why
       not autodiff as in statics: a time step is a few iterations, so the tangent is most of its cost, and
-      the closed forms make the 339-unknown cage in waves 1.3-1.6x faster per step
+      the closed forms made the 339-unknown cage in waves 1.1-1.6x faster per step
       (``validation/dynamics_cost.py``).
     """
 
@@ -234,7 +235,7 @@ def scene_at(scene, loading: Loading, t):
     position = jnp.asarray(scene.nodes.position)
     for prescribed in loading.motions:
         nodes = jnp.asarray(prescribed.nodes)
-        position = position.at[nodes].set(jnp.asarray(scene.nodes.position)[nodes] + prescribed.motion(t))
+        position = position.at[nodes].set(jnp.asarray(scene.nodes.position)[nodes] + prescribed.displacement(t))
     return eqx.tree_at(lambda s: (s.environment, s.nodes.position), scene, (env, position))
 
 
