@@ -72,15 +72,22 @@ def _host_solver(indptr, indices):
     return solver
 
 
-def _host_solve(data, rhs, indptr, indices):
-    x, ok = _host_solver(indptr, indices).solve(data, rhs)
+def _host_solve(data, rhs, indptr, indices, transpose=False):
+    x, ok = _host_solver(indptr, indices).solve(data, rhs, transpose)
     return x, np.asarray(ok)
 
 
-def solve(data, rhs, indptr, indices):
-    """Solve A x = rhs for the CSR matrix (data, indices, indptr). Returns (x, ok); ok False if singular."""
+def _host_solve_transposed(data, rhs, indptr, indices):
+    return _host_solve(data, rhs, indptr, indices, transpose=True)
+
+
+def solve(data, rhs, indptr, indices, transpose=False):
+    """Solve A x = rhs (A^T x = rhs if ``transpose``, a Python bool) for the CSR matrix (data, indices,
+    indptr). Returns (x, ok); ok False if singular. Consecutive solves with the same ``data`` share one
+    factorisation (see :meth:`HostSolver.solve`)."""
     out = (jax.ShapeDtypeStruct(rhs.shape, rhs.dtype), jax.ShapeDtypeStruct((), jnp.bool_))
-    return jax.pure_callback(_host_solve, out, data, rhs, indptr, indices, vmap_method="sequential")
+    host = _host_solve_transposed if transpose else _host_solve
+    return jax.pure_callback(host, out, data, rhs, indptr, indices, vmap_method="sequential")
 
 
 def host_matvec(data, indptr, indices, v):
@@ -198,55 +205,66 @@ class HostSolver:
 
     # -- solves -----------------------------------------------------------------------------------------
 
-    def apply(self, rhs):
-        """x solving A x = rhs with the stored factor; ``rhs`` of shape (n,) or (n, k) (k right-hand
-        sides, each checked and refined on its own). Switches to a partially pivoted factor (kept for
-        later calls) if a column stays inaccurate. Returns zeros, never NaN, and sets ``ok`` False when
-        there is no usable factor or the solution is not finite."""
+    def apply(self, rhs, transpose=False):
+        """x solving A x = rhs (A^T x = rhs if ``transpose``) with the stored factor; ``rhs`` of shape (n,)
+        or (n, k) (k right-hand sides, each checked and refined on its own). Switches to a partially
+        pivoted factor (kept for later calls) if a column stays inaccurate. Returns zeros, never NaN, and
+        sets ``ok`` False when there is no usable factor or the solution is not finite."""
         b = np.asarray(rhs, dtype=float)
         if self._lu is None:
             self.ok = False
             return np.zeros_like(b)
-        x, error = self._refined(b)
+        x, error = self._refined(b, transpose)
         if not np.all(error <= self.tolerance) and not self._pivoted and self._factor_pivoted():
-            x, error = self._refined(b)
+            x, error = self._refined(b, transpose)
         if self._lu is None or not np.all(np.isfinite(x)):
             self._lu, self.ok = None, False
             return np.zeros_like(b)
         self.backward_error = float(np.max(error, initial=0.0))
         return x
 
-    def solve(self, data, rhs):
-        """x solving A x = rhs for the CSR entries ``data``; (x, ok) with ok False (x zeros) if singular."""
-        if not self.factorize(data):
+    def solve(self, data, rhs, transpose=False):
+        """x solving A x = rhs (A^T x = rhs if ``transpose``) for the CSR entries ``data``; (x, ok) with ok
+        False (x zeros) if singular. The factor is kept: a later solve with the same ``data`` (the
+        sensitivities of an equilibrium: one system, many right-hand sides, either side) reuses it."""
+        data = np.asarray(data, dtype=float)
+        same = self._lu is not None and self._a.data.shape == data.shape and np.array_equal(self._a.data, data)
+        if not same and not self.factorize(data):
             return np.zeros_like(np.asarray(rhs, dtype=float)), False
-        x = self.apply(rhs)
+        x = self.apply(rhs, transpose)
         return x, self.ok
 
-    def _refined(self, b):
-        """Solution of A x = b and its backward error per column, after up to ``max_refinements`` steps of
-        iterative refinement on the columns above the tolerance (needed after large pivot growth)."""
-        x = self._lu_solve(b)
-        error, r = self._backward_error(x, b)
+    def _refined(self, b, transpose=False):
+        """Solution of A x = b (A^T x = b if ``transpose``) and its backward error per column, after up to
+        ``max_refinements`` steps of iterative refinement on the columns above the tolerance (needed after
+        large pivot growth)."""
+        x = self._lu_solve(b, transpose)
+        error, r = self._backward_error(x, b, transpose)
         for _ in range(self.max_refinements):
             if np.all(error <= self.tolerance) or not np.all(np.isfinite(x)):
                 break
             self.refinements += 1
-            x = x + self._lu_solve(r)
-            error, r = self._backward_error(x, b)
+            x = x + self._lu_solve(r, transpose)
+            error, r = self._backward_error(x, b, transpose)
         return x, error
 
-    def _lu_solve(self, b):
-        """A^-1 b with the stored factor (of A^T, in the stored order when ``_perm`` is set)."""
+    def _lu_solve(self, b, transpose=False):
+        """A^-1 b (A^-T b if ``transpose``) with the stored factor (of A^T, in the stored order when
+        ``_perm`` is set: a symmetric permutation, so the transposed system takes the same one)."""
+        trans = "N" if transpose else "T"
         if self._perm is None:
-            return self._lu.solve(b, trans="T")
+            return self._lu.solve(b, trans=trans)
         x = np.empty_like(b)
-        x[self._perm] = self._lu.solve(b[self._perm], trans="T")
+        x[self._perm] = self._lu.solve(b[self._perm], trans=trans)
         return x
 
-    def _backward_error(self, x, b):
+    def _backward_error(self, x, b, transpose=False):
         """Normwise backward error |b - A x|_inf / (|A|_inf |x|_inf + |b|_inf) of each column (NaN if x is
-        not finite) and the residual b - A x."""
-        r = b - self._a @ x
-        scale = self._norm * np.max(np.abs(x), axis=0, initial=0.0) + np.max(np.abs(b), axis=0, initial=0.0)
+        not finite) and the residual b - A x (A^T in place of A if ``transpose``)."""
+        if transpose:
+            r = b - self._a.T @ x
+            norm = float(np.max(np.asarray(abs(self._a).sum(axis=0)), initial=0.0))  # |A^T|_inf = |A|_1
+        else:
+            r, norm = b - self._a @ x, self._norm
+        scale = norm * np.max(np.abs(x), axis=0, initial=0.0) + np.max(np.abs(b), axis=0, initial=0.0)
         return np.max(np.abs(r), axis=0, initial=0.0) / np.where(scale > 0, scale, 1.0), r

@@ -115,6 +115,35 @@ class HexTwine:
         return 3.0 * float(np.mean(self.per_family("l0")))
 
 
+@dataclasses.dataclass(frozen=True)
+class Layout:
+    """Where :meth:`Net.build` put each part of the description in the scene it returned (``Net.layout``),
+    for maps from the description to the scene (:mod:`jaxnet.design.space`). Node indices are the scene's.
+
+    meshes: panel name -> its :class:`~jaxnet.mesh.panel.PanelMesh` (weights, triangles, side nodes);
+      twines: panel name -> its material (:class:`Twine` or :class:`HexTwine`).
+    panel_nodes: panel name -> (n,) scene node of each mesh node (merged nodes share one).
+    cable_nodes: cable name -> (k,) scene nodes from its start to its end; cable_sides: cable name -> the
+      panel side it is sewn along (cables sewn along a side only).
+    fixed: per :meth:`Net.fix` call, (reference, scene nodes, axes as 3 bools).
+    attached: per :meth:`Net.attach` call (sinkers and floats included), the scene nodes sharing its amounts;
+      attached_where: the reference of each call.
+    sinkers: (attach call index, mass kg, density kg/m³) per :meth:`Net.sinker` call; floats: (attach call
+      index, buoyancy N, gravity m/s², water density kg/m³, own mass kg) per :meth:`Net.float_` call.
+    """
+
+    meshes: dict
+    twines: dict
+    panel_nodes: dict
+    cable_nodes: dict
+    cable_sides: dict
+    fixed: tuple
+    attached: tuple
+    attached_where: tuple
+    sinkers: tuple
+    floats: tuple
+
+
 # -- references to places in a net that is not built yet ------------------------------------------
 
 
@@ -226,6 +255,12 @@ class Net:
         self._attached: list[tuple[object, float, float, np.ndarray, float, float]] = []
         self._bodies: list[tuple[object, np.ndarray, np.ndarray]] = []   # (where, sizes m, Cd), in call order
         self._limits: list[tuple[object, np.ndarray, np.ndarray]] = []   # (where, limits m, senses), in call order
+        # which attachments are sinkers (attach index, mass, density) and floats (attach index, buoyancy, g,
+        # rho, own mass): the design space (jaxnet.design.space) varies their mass and buoyancy
+        self._sinkers: list[tuple[int, float, float]] = []
+        self._floats: list[tuple[int, float, float, float, float]] = []
+        #: what the last :meth:`build` made of the description (:class:`Layout`); None before any build
+        self.layout: Layout | None = None
 
     # -- description ------------------------------------------------------------------------------
 
@@ -297,12 +332,14 @@ class Net:
     def sinker(self, where, mass, density=11340.0):
         """A sinker of ``mass`` kg of a material of ``density`` (kg/m³, lead by default)."""
         self.attach(where, mass=mass, volume=mass / density)
+        self._sinkers.append((len(self._attached) - 1, float(mass), float(density)))
 
     def float_(self, where, buoyancy_N, mass=0.0, size=0.0, drag_area=0.0):
         """A float pulling up with ``buoyancy_N`` newtons net of its own weight (+ optional mass, kg) when
         immersed; ``size`` (m) its height, for a float at the free surface; ``drag_area`` Cd·A (m²)."""
         g, rho = self.environment.gravity, self.environment.water_density
         self.attach(where, mass=mass, volume=(buoyancy_N / g + mass) / rho, drag_area=drag_area, size=size)
+        self._floats.append((len(self._attached) - 1, float(buoyancy_N), float(g), float(rho), float(mass)))
 
     def body(self, where, length, drag_coefficient):
         """Give the node(s) at ``where`` a box-shaped body with a drag per axis, as FEMNET's node types
@@ -458,6 +495,18 @@ class Net:
         from jaxnet.scene import validate
 
         validate(scene)
+        self.layout = Layout(
+            meshes={name: m for name, (m, _) in meshes.items()},
+            twines={p.name: p.twine for p in self._panels.values()},
+            panel_nodes={name: ids[offset + np.arange(len(m.uv))] for name, (m, offset) in meshes.items()},
+            cable_nodes={name: ids[nodes] for name, nodes in cable_nodes.items()},
+            cable_sides={c.name: c.along for c in self._cables.values() if c.along is not None},
+            fixed=tuple((ref, lookup(ref), axes) for ref, axes in self._fixed),
+            attached=tuple(lookup(ref) for ref, *_ in self._attached),
+            attached_where=tuple(ref for ref, *_ in self._attached),
+            sinkers=tuple(self._sinkers),
+            floats=tuple(self._floats),
+        )
         return scene
 
     # -- helpers of build -------------------------------------------------------------------------

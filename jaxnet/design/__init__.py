@@ -1,0 +1,12 @@
+"""Design of nets by gradients: what a gear designer changes, what is measured, and the optimisation.
+
+- :mod:`jaxnet.design.cut`: panel cuts in the trade's terms (meshes per side, cutting rates, rounding to
+  whole meshes).
+- :mod:`jaxnet.design.space`: :class:`~jaxnet.design.space.DesignSpace`, the differentiable map from design
+  parameters θ (cut, mesh side, twine diameter, EA, hanging ratio, sinkers, floats, cable lengths) to a scene
+  of fixed topology.
+- :mod:`jaxnet.design.objectives`: figures of an equilibrium (drag, volume, opening, shape, tension,
+  material) and constraints, composable.
+- :mod:`jaxnet.design.optimize`: optax optimisation of a design, through the differentiable equilibrium
+  (:mod:`jaxnet.solve.implicit`).
+"""

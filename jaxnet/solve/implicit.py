@@ -1,0 +1,244 @@
+"""Differentiable static equilibrium: the derivative of x*(θ) by the implicit function theorem.
+
+The equilibrium x* of a scene is the root of the out-of-balance force on the free coordinates,
+
+    F(x*, θ) = L(θ) - ∂E/∂x (x*, θ) + F_nc(x*, θ) = 0         (N),
+
+θ standing for every float array of the scene (twine coordinates, mesh side, EA, diameters, masses, fixed
+node positions, current, ...). Differentiating the identity F(x*(θ), θ) = 0 gives
+
+    K dx* = ∂F/∂θ dθ,        K = -∂F/∂x at x*                  (N/m),
+
+the tangent stiffness the Newton solver factorises. So the sensitivity of the equilibrium costs one
+linear solve with K per direction dθ (forward mode, ``jax.jvp``/``jax.jacfwd``) or one solve with K^T per
+output (reverse mode, ``jax.grad``/``jax.vjp``: the adjoint), never a differentiation through the Newton
+iterations: those are neither needed (only x* matters) nor cheap (the while loop, the line search and the
+damping would all be unrolled), and their derivative is not the derivative of the solution until they
+have converged anyway.
+
+How it is wired. :func:`equilibrium` solves by :func:`jaxnet.solve.statics.newton_loop` (the jittable
+iteration, its factorisations a host callback) inside a ``jax.custom_jvp``. Its JVP rule forms the
+right-hand side ∂F/∂θ dθ by ``jax.jvp`` of the residual in θ at the converged x*, assembles K's sparse
+entries at x* (:func:`jaxnet.assemble.tangent`, the same code as the solver: closed-form or autodiff
+stiffness), and solves through ``jax.lax.custom_linear_solve`` with SuperLU on the host
+(:func:`jaxnet.linalg.solve`). ``custom_linear_solve`` is told how to solve with K and with K^T, so JAX
+transposes the rule for reverse mode: the same code gives ``jax.grad``, ``jax.jacfwd``, ``jax.jacrev``,
+under ``jit`` and ``vmap``. The factorisation of K is kept on the host and reused by every later solve
+with the same matrix: K and K^T solves of one equilibrium (a Jacobian's many columns, a gradient's adjoint)
+factorise once.
+
+The matrix. K is the exact Jacobian -∂F/∂x for every term whose tangent is exact: all of them except the
+catch pressure, whose tangent holds the catch front fixed (the front moves with the net so that the
+volume behind it stays the catch's: :mod:`jaxnet.assemble`). With a catch the linear solve is therefore
+*iterated*: x ← x + K⁻¹ (b - J x), J the exact Jacobian-vector product of F (``jax.jvp`` through the
+front's own implicit differentiation), until the relative residual is below 1e-12; the sparse K is then a
+preconditioner, each refinement one residual evaluation and one solve with the stored factor.
+
+Conditions. The derivative exists where K is non-singular: a net whose equilibrium holds a mechanism (a
+slack region with no stiffness: compression EA 0 and no tension, a mesh free to open with no opening
+stiffness) has a singular K and no unique derivative: the sensitivity solve then fails and returns NaN,
+which is the honest answer there (a finite number would be a guess). At a design where twines are exactly at their slack length the force is not differentiable
+(the tension's kink at zero strain); the derivative returned is the one-sided one of the branch the
+tangent takes (slack twines carry the compression stiffness).
+
+Convergence. The derivative is that of the exact root: its accuracy is that of the forward solve, so the
+default tolerance (``DEFAULT_NEWTON.tol``) is tighter than the static solver's 1e-3 N. The solve starts at
+``x0`` (default: the scene's positions): for a design optimisation, start each solve at the last
+equilibrium (:mod:`jaxnet.design.optimize` does), and solve the first from a flat net with
+:func:`jaxnet.solve.statics.solve`, whose stiffness continuation this jittable iteration does not have.
+
+Units: m, N, and whatever θ's units are (the sensitivities are in m per unit of θ).
+"""
+
+from __future__ import annotations
+
+import functools
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxnet import assemble, linalg, model as model_lib, scene as scene_lib
+from jaxnet.solve import statics
+
+#: the forward solve of a differentiable equilibrium: pure Newton steps near the root (no continuation),
+#: converged far below the static solver's 1e-3 N, because the derivative is only as good as the root.
+DEFAULT_NEWTON = statics.Newton(tol=1e-8, max_iter=200, damping=1e-6, stall_window=None, line_search=30)
+
+#: refinements of a linear solve when K is not the exact Jacobian (catch), and their relative tolerance
+REFINEMENTS = 20
+REFINE_RTOL = 1e-12
+
+
+class ImplicitError(RuntimeError):
+    """A differentiable equilibrium did not converge, so neither it nor its derivative is meaningful."""
+
+
+class Structure(eqx.Module):
+    """What a family of designs shares and the differentiable solve needs, computed once on the host from
+    a reference scene: ``model``, the active terms (static: part of the compiled program's identity) and
+    ``pattern``, the sparse structure of the tangent (index arrays: arguments of the compiled program).
+    Every scene solved with it must have the reference's shapes, fixities and connectivity."""
+
+    pattern: assemble.Pattern
+    model: tuple = eqx.field(static=True)
+
+    @property
+    def exact_tangent(self):
+        """True when the assembled K is the exact Jacobian -∂F/∂x (no term with a global state: a catch)."""
+        return not any(t.term.kind == "force" and t.term.state is not None for t in self.model)
+
+
+def structure_of(scene, dynamic=False) -> Structure:
+    """The :class:`Structure` of ``scene`` (validated here): its active terms and tangent pattern."""
+    scene_lib.validate(scene)
+    model = model_lib.active_terms(scene, dynamic=dynamic)
+    return Structure(pattern=assemble.build_pattern(scene, model), model=model)
+
+
+def residual(x_free, scene, structure: Structure):
+    """(n,) out-of-balance force F (N) on the free coordinates at free positions ``x_free`` (m): loads minus
+    the energy's gradient plus the non-conservative forces (drag, catch pressure). Zero at equilibrium."""
+    pattern, model = structure.pattern, structure.model
+    x = assemble.positions(x_free, scene, pattern)
+    force = assemble.nodal_force(x, scene, model, assemble.loads(scene, model))
+    return force.ravel()[pattern.free]
+
+
+def _split(scene):
+    """(float leaves, the rest): the differentiable part of a scene and its structure (ints, bools)."""
+    return eqx.partition(scene, eqx.is_inexact_array)
+
+
+@functools.partial(jax.custom_jvp, nondiff_argnums=(0, 1))
+def _root(model, newton, params, rest, pattern, x0):
+    """Free coordinates of the equilibrium, and the solve's (status, residual_N, iterations, worst_node)."""
+    scene = eqx.combine(params, rest)
+    eq = statics.newton_loop(x0, scene, pattern, model, newton)
+    return eq.x.ravel()[pattern.free], (eq.status, eq.residual_N, eq.iterations, eq.worst_node)
+
+
+def _tangent_solver(x_free, scene, structure, stiffness):
+    """The solves with K = -∂F/∂x at ``x_free`` for ``custom_linear_solve``: (matvec, solve, transpose_solve).
+
+    matvec is the exact Jacobian-vector product J v = -∂F/∂x v (``jax.jvp``, so it transposes); the solves
+    use K's sparse factorisation (one, kept on the host for all of them) and, where K is not exactly J
+    (a catch), refine against J."""
+    pattern = structure.pattern
+    data = jax.lax.stop_gradient(
+        statics._tangent(x_free, None, 1.0, scene, pattern, structure.model, stiffness))
+
+    def matvec(v):
+        return -jax.jvp(lambda x: residual(x, scene, structure), (x_free,), (v,))[1]
+
+    def direct(b, transpose):
+        x, ok = linalg.solve(data, b, pattern.indptr, pattern.indices, transpose=transpose)
+        return jnp.where(ok, x, jnp.nan)  # a singular K gives NaN sensitivities, which check= reports
+
+    def refined(operator, b, transpose):
+        x = direct(b, transpose)
+        if structure.exact_tangent:
+            return x
+        scale = jnp.linalg.norm(b)
+
+        def cond(c):
+            x, r, k = c
+            return (k < REFINEMENTS) & (jnp.linalg.norm(r) > REFINE_RTOL * scale)
+
+        def body(c):
+            x, r, k = c
+            x = x + direct(r, transpose)
+            return x, b - operator(x), k + 1
+
+        return jax.lax.while_loop(cond, body, (x, b - operator(x), 0))[0]
+
+    def solve(operator, b):
+        return refined(operator, b, False)
+
+    def transpose_solve(operator, b):
+        return refined(operator, b, True)
+
+    return matvec, solve, transpose_solve
+
+
+@_root.defjvp
+def _root_jvp(model, newton, primals, tangents):
+    params, rest, pattern, x0 = primals
+    d_params = tangents[0]
+    x_free, info = _root(model, newton, params, rest, pattern, x0)
+    structure_ = Structure(pattern=pattern, model=model)
+    scene = eqx.combine(params, rest)
+    # ∂F/∂θ dθ at the root: the residual's change with the design, the positions held
+    _, rhs = jax.jvp(lambda p: residual(x_free, eqx.combine(p, rest), structure_), (params,), (d_params,))
+    matvec, solve, transpose_solve = _tangent_solver(x_free, scene, structure_, newton.stiffness)
+    dx = jax.lax.custom_linear_solve(matvec, rhs, solve, transpose_solve)
+    zeros = jax.tree.map(
+        lambda a: np.zeros(np.shape(a), jax.dtypes.float0) if not jnp.issubdtype(jnp.result_type(a), jnp.inexact)
+        else jnp.zeros_like(a), info)
+    return (x_free, info), (dx, zeros)
+
+
+def _solve_root(params, rest, pattern, x0, model, newton):
+    return _root(model, newton, params, rest, pattern, x0)
+
+
+# compiled once per scene shape, terms and options: a call from plain Python (a design loop, a test) reuses
+# the program; inside a caller's jit, grad or vmap it is inlined into the caller's program
+_solve = jax.jit(_solve_root, static_argnames=("model", "newton"))
+
+
+def equilibrium(scene, structure: Structure | None = None, x0=None, newton: statics.Newton | None = None,
+                check: bool = True) -> statics.Equilibrium:
+    """The static equilibrium of ``scene``, differentiable with respect to every float array in it.
+
+    Args:
+      scene: a :class:`jaxnet.scene.Scene`, its float leaves possibly traced (under ``jax.grad``, ``jit``,
+        ``vmap``); e.g. the output of :meth:`jaxnet.design.space.DesignSpace.scene`.
+      structure: the :class:`Structure` of a reference scene of the same shapes (:func:`structure_of`); None to
+        compute it from ``scene`` itself, which must then be concrete (not traced).
+      x0: (N, 3) start positions (m), not differentiated; default the scene's positions. Start near the
+        answer (the last design's equilibrium): the iteration is plain damped Newton.
+      newton: the forward solve's options (:class:`jaxnet.solve.statics.Newton`); default
+        :data:`DEFAULT_NEWTON`. Its ``stiffness`` also chooses the tangent of the sensitivity solves.
+      check: raise when the solve did not converge: :class:`ImplicitError` from here when ``scene`` is
+        concrete, an equinox runtime error (``eqx.error_if``) under ``jit``/``vmap``/``grad``. With
+        ``check=False`` the caller reads ``status``/``residual_N``/``worst_node`` of the result.
+    Returns:
+      a :class:`jaxnet.solve.statics.Equilibrium`; its ``x`` (N, 3, m) carries the derivatives (the fixed
+      coordinates are the scene's own, differentiable as such); ``force`` and ``history`` are not computed
+      (zeros / NaN) on this path; the other fields describe the forward solve.
+    """
+    if structure is None:
+        structure = structure_of(scene)
+    newton = newton or DEFAULT_NEWTON
+    pattern = structure.pattern
+    start = jnp.asarray(scene.nodes.position if x0 is None else x0, dtype=float)
+    start = jax.lax.stop_gradient(start.ravel()[pattern.free])
+    params, rest = _split(scene)
+    x_free, (status, residual_N, iterations, worst) = _solve(params, rest, pattern, start, structure.model, newton)
+    converged = status == statics.CONVERGED
+    if check:
+        if isinstance(converged, jax.core.Tracer):
+            x_free = eqx.error_if(x_free, ~converged, "jaxnet.solve.implicit.equilibrium: the Newton solve did not "
+                                  "converge (run with check=False and read status, residual_N and worst_node)")
+        elif not bool(converged):
+            raise ImplicitError(
+                f"differentiable equilibrium: {statics.REASONS[int(status)]} after {int(iterations)} iterations; "
+                f"largest residual {float(residual_N):.4g} N at node {int(worst)} (tolerance {newton.tol:g} N). "
+                "Start nearer the answer (x0: e.g. jaxnet.solve.statics.solve's equilibrium) or loosen newton.tol")
+    x = assemble.positions(x_free, scene, pattern)
+    return statics.Equilibrium(x=x, force=jnp.zeros_like(x), residual_N=residual_N, iterations=iterations, status=status,
+                               worst_node=worst, history=jnp.full(newton.max_iter + 1, jnp.nan),
+                               energy=jnp.asarray(jnp.nan))
+
+
+def solve(scene, newton: statics.Newton | None = None, structure: Structure | None = None):
+    """The equilibrium of a concrete ``scene`` from its flat start, robustly (the host solver's stiffness
+    continuation, :func:`jaxnet.solve.statics.solve`) then polished by :func:`equilibrium` to
+    ``newton.tol``: the usual first solve of a design study. Returns the differentiable path's
+    :class:`~jaxnet.solve.statics.Equilibrium`."""
+    structure = structure or structure_of(scene)
+    first, _ = statics.solve(scene)
+    return equilibrium(scene, structure, x0=first.x, newton=newton)
+
