@@ -97,12 +97,17 @@ def structure_of(scene, dynamic=False) -> Structure:
     return Structure(pattern=assemble.build_pattern(scene, model), model=model)
 
 
-def residual(x_free, scene, structure: Structure):
+def residual(x_free, scene, structure: Structure, step=None):
     """(n,) out-of-balance force F (N) on the free coordinates at free positions ``x_free`` (m): loads minus
-    the energy's gradient plus the non-conservative forces (drag, catch pressure). Zero at equilibrium."""
+    the energy's gradient plus the non-conservative forces (drag, catch pressure); zero at equilibrium. The
+    Newton solver's own evaluation (:func:`jaxnet.solve.statics._evaluate`). ``step``: None, or in an
+    implicit time step its :class:`jaxnet.solve.dynamics.TimeStep` (inertia, the water's acceleration, drag
+    on relative velocities), whose root is the next positions."""
     pattern, model = structure.pattern, structure.model
-    x = assemble.positions(x_free, scene, pattern)
-    force = assemble.nodal_force(x, scene, model, assemble.loads(scene, model))
+    load = assemble.loads(scene, model)
+    if step is not None:
+        load = load + step.water_load
+    force = statics._evaluate(x_free, jnp.zeros_like(load), load, 1.0, scene, pattern, model, step)[1]
     return force.ravel()[pattern.free]
 
 
@@ -112,14 +117,15 @@ def _split(scene):
 
 
 @functools.partial(jax.custom_jvp, nondiff_argnums=(0, 1))
-def _root(model, newton, params, rest, pattern, x0):
-    """Free coordinates of the equilibrium, and the solve's (status, residual_N, iterations, worst_node)."""
+def _root(model, newton, params, rest, pattern, x0, step):
+    """Free coordinates of the equilibrium (of the time step ``step``, if not None), and the solve's
+    (status, residual_N, iterations, worst_node)."""
     scene = eqx.combine(params, rest)
-    eq = statics.newton_loop(x0, scene, pattern, model, newton)
+    eq = statics.newton_loop(x0, scene, pattern, model, newton, step)
     return eq.x.ravel()[pattern.free], (eq.status, eq.residual_N, eq.iterations, eq.worst_node)
 
 
-def _tangent_solver(x_free, scene, structure, stiffness):
+def _tangent_solver(x_free, scene, structure, stiffness, step=None):
     """The solves with K = -∂F/∂x at ``x_free`` for ``custom_linear_solve``: (matvec, solve, transpose_solve).
 
     matvec is the exact Jacobian-vector product J v = -∂F/∂x v (``jax.jvp``, so it transposes); the solves
@@ -127,10 +133,10 @@ def _tangent_solver(x_free, scene, structure, stiffness):
     (a catch), refine against J."""
     pattern = structure.pattern
     data = jax.lax.stop_gradient(
-        statics._tangent(x_free, None, 1.0, scene, pattern, structure.model, stiffness))
+        statics._tangent(x_free, None, 1.0, scene, pattern, structure.model, stiffness, step))
 
     def matvec(v):
-        return -jax.jvp(lambda x: residual(x, scene, structure), (x_free,), (v,))[1]
+        return -jax.jvp(lambda x: residual(x, scene, structure, step), (x_free,), (v,))[1]
 
     def direct(b, transpose):
         x, ok = linalg.solve(data, b, pattern.indptr, pattern.indices, transpose=transpose)
@@ -164,14 +170,15 @@ def _tangent_solver(x_free, scene, structure, stiffness):
 
 @_root.defjvp
 def _root_jvp(model, newton, primals, tangents):
-    params, rest, pattern, x0 = primals
-    d_params = tangents[0]
-    x_free, info = _root(model, newton, params, rest, pattern, x0)
+    params, rest, pattern, x0, step = primals
+    d_params, d_step = tangents[0], tangents[4]
+    x_free, info = _root(model, newton, params, rest, pattern, x0, step)
     structure_ = Structure(pattern=pattern, model=model)
     scene = eqx.combine(params, rest)
-    # ∂F/∂θ dθ at the root: the residual's change with the design, the positions held
-    _, rhs = jax.jvp(lambda p: residual(x_free, eqx.combine(p, rest), structure_), (params,), (d_params,))
-    matvec, solve, transpose_solve = _tangent_solver(x_free, scene, structure_, newton.stiffness)
+    # ∂F/∂θ dθ at the root: the residual's change with the design (and the step's past), the positions held
+    _, rhs = jax.jvp(lambda p, st: residual(x_free, eqx.combine(p, rest), structure_, st), (params, step),
+                     (d_params, d_step))
+    matvec, solve, transpose_solve = _tangent_solver(x_free, scene, structure_, newton.stiffness, step)
     dx = jax.lax.custom_linear_solve(matvec, rhs, solve, transpose_solve)
     zeros = jax.tree.map(
         lambda a: np.zeros(np.shape(a), jax.dtypes.float0) if not jnp.issubdtype(jnp.result_type(a), jnp.inexact)
@@ -179,8 +186,8 @@ def _root_jvp(model, newton, primals, tangents):
     return (x_free, info), (dx, zeros)
 
 
-def _solve_root(params, rest, pattern, x0, model, newton):
-    return _root(model, newton, params, rest, pattern, x0)
+def _solve_root(params, rest, pattern, x0, step, model, newton):
+    return _root(model, newton, params, rest, pattern, x0, step)
 
 
 # compiled once per scene shape, terms and options: a call from plain Python (a design loop, a test) reuses
@@ -189,7 +196,7 @@ _solve = jax.jit(_solve_root, static_argnames=("model", "newton"))
 
 
 def equilibrium(scene, structure: Structure | None = None, x0=None, newton: statics.Newton | None = None,
-                check: bool = True) -> statics.Equilibrium:
+                check: bool = True, step=None) -> statics.Equilibrium:
     """The static equilibrium of ``scene``, differentiable with respect to every float array in it.
 
     Args:
@@ -201,6 +208,10 @@ def equilibrium(scene, structure: Structure | None = None, x0=None, newton: stat
         answer (the last design's equilibrium): the iteration is plain damped Newton.
       newton: the forward solve's options (:class:`jaxnet.solve.statics.Newton`); default
         :data:`DEFAULT_NEWTON`. Its ``stiffness`` also chooses the tangent of the sensitivity solves.
+      step: None for a static equilibrium; for one implicit time step of the book's scheme, its
+        :class:`jaxnet.solve.dynamics.TimeStep` (past positions and velocities, Δt, masses, the water's load:
+        differentiable too), the root then being the positions at the end of the step. ``structure`` must
+        then be the dynamic one (``structure_of(scene, dynamic=True)``).
       check: raise when the solve did not converge: :class:`ImplicitError` from here when ``scene`` is
         concrete, an equinox runtime error (``eqx.error_if``) under ``jit``/``vmap``/``grad``. With
         ``check=False`` the caller reads ``status``/``residual_N``/``worst_node`` of the result.
@@ -216,7 +227,7 @@ def equilibrium(scene, structure: Structure | None = None, x0=None, newton: stat
     start = jnp.asarray(scene.nodes.position if x0 is None else x0, dtype=float)
     start = jax.lax.stop_gradient(start.ravel()[pattern.free])
     params, rest = _split(scene)
-    x_free, (status, residual_N, iterations, worst) = _solve(params, rest, pattern, start, structure.model, newton)
+    x_free, (status, residual_N, iterations, worst) = _solve(params, rest, pattern, start, step, structure.model, newton)
     converged = status == statics.CONVERGED
     if check:
         if isinstance(converged, jax.core.Tracer):

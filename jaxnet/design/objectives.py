@@ -1,0 +1,646 @@
+"""Objectives and constraints of a net design: differentiable figures of an equilibrium, and how to combine them.
+
+Gradient-based design (issue 7) needs scalars of an equilibrium x*(θ) whose gradients flow both into the
+positions x (and from there, by the implicit function theorem of :mod:`jaxnet.solve.implicit`, into θ) and
+directly into the scene's float leaves (twine diameter, l0, EA, ...). A *figure* here is a small equinox
+Module called on an :class:`Outcome` (the positions, the scene, its active terms) and returning a scalar;
+being a pytree, a figure's own settings (a target shape, a direction) are leaves too, and figures nest into
+weighted sums, constraints and penalised objectives that are figures again. Every figure is a pure jnp
+function of the outcome: jit-able, vmap-able over a batch of positions or scenes, with finite gradients
+everywhere (safe norms and double-``where`` at the degenerate points, stated figure by figure).
+
+Nothing physical is recomputed here: drag forces come from :func:`jaxnet.assemble.forces` restricted to
+the model's drag terms, tensions from :mod:`jaxnet.terms.tension`, :mod:`jaxnet.terms.cable` and
+:mod:`jaxnet.terms.hexagonal`, volumes from :func:`jaxnet.catch.enclosed_volume`, twine counts from
+:mod:`jaxnet.geometry` (|d| twines per triangle, eqs 4.25-4.26), so a figure agrees with the solver's
+own physics by construction.
+
+Figures (factories return the Modules; units in each docstring):
+  * :func:`drag` (N), :func:`volume` (m³), :func:`opening` (m²), :func:`shape_distance` (m or m²),
+    :func:`max_tension` (N, a smooth upper bound of the largest tension), :func:`twine_length` (m),
+    :func:`material` (kg, or a cost), :func:`netting_area` (m²);
+  * :func:`weighted` (a weighted sum), :class:`Constraint` (value, violation, exterior penalty),
+    :func:`penalised` (objective + weight × penalties);
+  * :class:`Bounds`: box bounds on a pytree of design parameters, with projection and violation.
+
+Bad settings raise ValueError naming the parameter when the figure is made, or, for what needs the scene
+(node indices, a missing enclosure), when it is first called, i.e. while tracing, before any compilation.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Callable
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxnet import assemble, catch as catch_lib, geometry, model as model_lib
+from jaxnet.terms import cable, hexagonal, tension
+
+#: the terms through which the water acts on the net: twine, bar and node drag and the catch's pressure
+#: (the catch's drag); their sum is the towing resistance of a trawl, the current load of a cage.
+HYDRODYNAMIC_TERMS = ("netting_drag", "bar_drag", "node_drag", "node_box_drag", "catch_pressure")
+
+#: element families that carry tensions (and material): diamond netting, hexagonal netting, cable bars
+TENSION_FAMILIES = ("netting", "hexagonal", "bars")
+
+
+class Outcome(eqx.Module):
+    """What an objective sees: an equilibrium and the design it belongs to.
+
+    x: (N, 3) equilibrium node positions (m).
+    scene: the design's :class:`jaxnet.scene.Scene`; its float leaves may be tracers (design gradients).
+    model: the active terms (static), :func:`jaxnet.model.active_terms` of a *concrete* reference scene
+      (``implicit.structure_of(scene).model``); it decides which drag terms exist, not their values.
+    """
+
+    x: jax.Array
+    scene: Any
+    model: tuple = eqx.field(static=True)
+
+
+def outcome(x, scene, model=None) -> Outcome:
+    """An :class:`Outcome` of positions ``x`` ((N, 3) m, or anything with an ``.x``, e.g. a
+    :class:`jaxnet.solve.statics.Equilibrium`) of ``scene``. ``model``: the active terms; None to read them
+    from ``scene``, which must then be concrete (pass the model when the scene's leaves are traced)."""
+    x = jnp.asarray(getattr(x, "x", x))
+    if x.ndim != 2 or x.shape[-1] != 3:
+        raise ValueError(f"outcome: x must be (N, 3) node positions, got shape {x.shape}")
+    if x.shape[0] != scene.n_nodes:
+        raise ValueError(f"outcome: x has {x.shape[0]} nodes, the scene {scene.n_nodes}")
+    return Outcome(x, scene, model_lib.active_terms(scene) if model is None else tuple(model))
+
+
+class Figure(eqx.Module):
+    """A scalar figure of an :class:`Outcome`: ``figure(outcome) -> ()``."""
+
+    def __call__(self, outcome: Outcome) -> jax.Array:
+        raise NotImplementedError
+
+
+# -- checks (on concrete settings, before anything is traced) ---------------------------------------
+
+
+def _vector(value, what, unit=False):
+    """A concrete (3,) float vector, finite, and non-zero if ``unit`` (then normalised)."""
+    v = np.asarray(value, dtype=float)
+    if v.shape != (3,) or not np.all(np.isfinite(v)):
+        raise ValueError(f"{what} must be 3 finite numbers, got {value!r}")
+    if unit:
+        n = float(np.linalg.norm(v))
+        if n == 0.0:
+            raise ValueError(f"{what} must not be the zero vector")
+        v = v / n
+    return v
+
+
+def _node_indices(nodes, what, at_least):
+    """Node indices as a tuple of ints: a static setting (the figure's shape), so they can be checked
+    against the scene whenever the figure is traced."""
+    idx = np.asarray(nodes)
+    if idx.ndim != 1 or idx.size < at_least or not (idx.size == 0 or np.issubdtype(idx.dtype, np.integer)):
+        raise ValueError(f"{what} must be a 1-D sequence of at least {at_least} node indices, got {nodes!r}")
+    if np.any(idx < 0):
+        raise ValueError(f"{what}: negative node index {int(idx[idx < 0][0])}")
+    return tuple(int(i) for i in idx)
+
+
+def _nodes_of(idx, x, what):
+    """The (M,) index array of static node indices, checked against the N nodes of x."""
+    if max(idx) >= x.shape[0]:
+        raise ValueError(f"{what}: node index {max(idx)} outside 0..{x.shape[0] - 1}")
+    return np.asarray(idx)
+
+
+def _finite_number(value, what, positive=False, nonnegative=False):
+    """A concrete finite float (a tracer passes unchecked: it was checked when the figure was made)."""
+    if isinstance(value, jax.core.Tracer):
+        return value
+    v = float(value)
+    if not math.isfinite(v) or (positive and v <= 0.0) or (nonnegative and v < 0.0):
+        kind = " positive" if positive else " non-negative" if nonnegative else ""
+        raise ValueError(f"{what} must be a finite{kind} number, got {value!r}")
+    return v
+
+
+def _unit(v):
+    """v / |v| with a finite derivative (a zero vector gives zero)."""
+    n = geometry.safe_norm(v)
+    return v * jnp.where(n > 0.0, 1.0 / jnp.where(n > 0.0, n, 1.0), 0.0)
+
+
+def _safe_sqrt(s):
+    """sqrt with derivative 0 at 0 (instead of inf): the figure has a kink (a cone) there."""
+    positive = s > 0.0
+    return jnp.where(positive, jnp.sqrt(jnp.where(positive, s, 1.0)), 0.0)
+
+
+# -- hydrodynamics -------------------------------------------------------------------------------------
+
+
+class Drag(Figure):
+    """Total hydrodynamic force on the net along a direction (N); see :func:`drag`."""
+
+    direction: jax.Array | None
+    terms: tuple = eqx.field(static=True)
+
+    def __call__(self, o: Outcome):
+        chosen = tuple(t for t in o.model if t.name in self.terms)
+        if any(dict(t.options).get("moving") for t in chosen):
+            raise ValueError("drag: the model is a dynamic one (active_terms(scene, dynamic=True)); drag is a figure "
+                             "of a static equilibrium: pass the static model")
+        if not chosen:  # still water, or none of the chosen terms in this scene
+            return jnp.zeros((), o.x.dtype)
+        total = jnp.sum(assemble.forces(o.x, o.scene, chosen), axis=0)
+        d = o.scene.environment.current_direction if self.direction is None else self.direction
+        return jnp.dot(total, _unit(jnp.asarray(d, o.x.dtype)))
+
+
+def drag(direction=None, terms=HYDRODYNAMIC_TERMS) -> Drag:
+    """Hydrodynamic drag (N): the sum over all nodes of the forces of the drag terms, along ``direction``.
+
+    direction: (3,) any non-zero length; None: the scene's current direction (the towing resistance of a
+      trawl, the current load of a cage, positive downstream).
+    terms: names of the force terms counted (default :data:`HYDRODYNAMIC_TERMS`: twine, bar and node drag
+      and the catch's pressure; ``("netting_drag",)`` for the netting alone); terms absent from the model
+      count zero. The force of the modelled part (a quarter model gives a quarter of the cod-end's drag),
+      which is what the model's reactions balance.
+    Differentiated through everything the forces depend on, the catch front's position included (implicit
+    function theorem, :func:`jaxnet.catch.catch_front`). Smooth, except with a catch: C¹ where the front
+    sweeps a node, a kink where an edge lies in the front plane (:mod:`jaxnet.terms.pressure`) and where the
+    net just holds the catch (the front jumps to the mouth); gradients finite throughout.
+    """
+    force_terms = {t.name for t in model_lib.TERMS if t.kind == "force"}
+    terms = tuple(terms)
+    unknown = [t for t in terms if t not in force_terms]
+    if unknown or not terms:
+        raise ValueError(f"drag: terms must be force terms among {sorted(force_terms)}, got {unknown or terms!r}")
+    return Drag(None if direction is None else jnp.asarray(_vector(direction, "drag: direction", unit=True)), terms)
+
+
+# -- shape -----------------------------------------------------------------------------------------
+
+
+class Volume(Figure):
+    """Volume held by the net behind a plane (m³); see :func:`volume`."""
+
+    center: jax.Array | None
+    axis: jax.Array | None
+
+    def __call__(self, o: Outcome):
+        scene, net = o.scene, o.scene.netting
+        if net is None or net.outward is None:
+            raise ValueError("volume: the scene has no netting with an outward side (Net.enclose or Net.catch "
+                             "sets it)")
+        symmetry = 1.0
+        if self.center is not None:
+            center, axis = self.center, self.axis
+        elif scene.enclosure is not None:
+            center, axis = scene.enclosure.center, scene.enclosure.axis
+        elif scene.catch is not None:
+            center, axis, symmetry = scene.catch.center, scene.catch.axis, scene.catch.symmetry
+        else:
+            raise ValueError("volume: the scene has neither an enclosure nor a catch; give center and axis")
+        axis = _unit(jnp.asarray(axis, o.x.dtype))
+        front = jnp.dot(jnp.asarray(center, o.x.dtype), axis)
+        return catch_lib.enclosed_volume(o.x, net.vertices, front, axis, symmetry, sign=net.outward)
+
+
+def volume(center=None, axis=None) -> Volume:
+    """Volume (m³) enclosed by the netting behind the plane through ``center`` (3,) normal to ``axis`` (3,),
+    the axis pointing into the net (:func:`jaxnet.catch.enclosed_volume`, divergence theorem).
+
+    Default plane: the scene's enclosure (a cage's collar plane), else its catch's (the opening of a cod-end,
+    then the whole cod-end: × ``Catch.symmetry``). The netting must close the volume with the plane (and
+    with symmetry planes containing the axis), its outward side given by ``Netting.outward``.
+    C¹ in the positions (its gradient is the consistent load pattern of a unit pressure behind the plane,
+    :mod:`jaxnet.terms.pressure`, continuous); that gradient has a kink where an edge of the netting lies in
+    the plane (a cage's collar at rest): finite everywhere.
+    """
+    if (center is None) != (axis is None):
+        raise ValueError("volume: give both center and axis, or neither (the scene's enclosure or catch)")
+    if center is None:
+        return Volume(None, None)
+    return Volume(jnp.asarray(_vector(center, "volume: center")), jnp.asarray(_vector(axis, "volume: axis", unit=True)))
+
+
+class Opening(Figure):
+    """Area of a ring of nodes projected on the plane normal to an axis (m²); see :func:`opening`."""
+
+    nodes: tuple = eqx.field(static=True)
+    axis: jax.Array | None
+    center: jax.Array | None
+    symmetry: float
+
+    def __call__(self, o: Outcome):
+        axis = o.scene.environment.current_direction if self.axis is None else self.axis
+        axis = _unit(jnp.asarray(axis, o.x.dtype))
+        p = o.x[_nodes_of(self.nodes, o.x, "opening: nodes")]
+        if self.center is None:  # a closed ring: wrap around, about its mean (any origin gives the same)
+            q = p - jnp.mean(p, axis=0)
+            pairs = jnp.cross(q, jnp.roll(q, -1, axis=0))
+        else:  # an open arc, closed through the centre (a fan)
+            q = p - jnp.asarray(self.center, o.x.dtype)
+            pairs = jnp.cross(q[:-1], q[1:])
+        # shoelace in 3-D: the projected area is half the axial component of sum q_i ^ q_{i+1};
+        # |.| makes it independent of the ring's orientation (a kink only at zero area)
+        return self.symmetry * 0.5 * jnp.abs(jnp.sum(pairs @ axis))
+
+
+def opening(nodes, axis=None, center=None, symmetry=1.0) -> Opening:
+    """Opening area (m²) of a ring of nodes (the mouth of a trawl, a cod-end's section), projected on the
+    plane normal to ``axis`` (shoelace formula).
+
+    nodes: node indices in order around the ring (closed: the last joins the first), or, with ``center``,
+      along an arc closed through ``center`` (3,) (m): e.g. a quarter model's mouth, from one symmetry
+      plane to the other, with center a point of the axis.
+    axis: (3,) the normal of the projection plane; None: the scene's current direction.
+    symmetry: copies of the modelled part in the whole opening (4 for a quarter model).
+    Smooth, except at zero area (|.|: a kink, gradient finite).
+    """
+    idx = _node_indices(nodes, "opening: nodes", 2 if center is not None else 3)
+    axis = None if axis is None else jnp.asarray(_vector(axis, "opening: axis", unit=True))
+    center = None if center is None else jnp.asarray(_vector(center, "opening: center"))
+    return Opening(idx, axis, center, _finite_number(symmetry, "opening: symmetry", positive=True))
+
+
+class ShapeDistance(Figure):
+    """RMS (or mean square) distance of nodes to a target shape; see :func:`shape_distance`."""
+
+    target: jax.Array
+    nodes: tuple | None = eqx.field(static=True)
+    weights: jax.Array | None
+    squared: bool = eqx.field(static=True)
+
+    def __call__(self, o: Outcome):
+        p = o.x if self.nodes is None else o.x[_nodes_of(self.nodes, o.x, "shape_distance: nodes")]
+        if p.shape != self.target.shape:
+            raise ValueError(f"shape_distance: target has shape {self.target.shape}, the selected nodes {p.shape}")
+        d2 = jnp.sum((p - self.target) ** 2, axis=-1)
+        mean = jnp.mean(d2) if self.weights is None else jnp.sum(self.weights * d2) / jnp.sum(self.weights)
+        return mean if self.squared else _safe_sqrt(mean)
+
+
+def shape_distance(target, nodes=None, weights=None, squared=False) -> ShapeDistance:
+    """Root-mean-square distance (m) of the nodes to a target shape: sqrt(Σ w_i |x_i - t_i|² / Σ w_i).
+
+    target: (M, 3) target positions (m) of the nodes ``nodes`` (M indices), or of all N nodes (nodes=None).
+    weights: (M,) non-negative weights, not all zero; None: equal.
+    squared: return the weighted mean square distance (m²) instead: smooth everywhere, while the RMS has a
+      kink (a cone) at the target itself, where its gradient is taken as 0.
+    """
+    target = np.asarray(target, dtype=float)
+    if target.ndim != 2 or target.shape[1] != 3 or not np.all(np.isfinite(target)):
+        raise ValueError(f"shape_distance: target must be (M, 3) finite positions, got shape {target.shape}")
+    idx = None
+    if nodes is not None:
+        idx = _node_indices(nodes, "shape_distance: nodes", 1)
+        if len(idx) != target.shape[0]:
+            raise ValueError(f"shape_distance: {len(idx)} nodes but {target.shape[0]} target positions")
+    w = None
+    if weights is not None:
+        w = np.asarray(weights, dtype=float)
+        if w.shape != target.shape[:1] or not np.all(np.isfinite(w)) or np.any(w < 0) or not np.any(w > 0):
+            raise ValueError(f"shape_distance: weights must be {target.shape[0]} finite non-negative numbers, "
+                             f"not all zero")
+        w = jnp.asarray(w)
+    return ShapeDistance(jnp.asarray(target), idx, w, bool(squared))
+
+
+# -- tensions ------------------------------------------------------------------------------------
+
+
+def tensions(o: Outcome, families=TENSION_FAMILIES) -> jax.Array:
+    """All twine and bar tensions (N, positive in traction) of an outcome, one flat array: per diamond
+    triangle Tu and Tv (4.30-4.31), per hexagonal triangle T_l, T_m, T_n (4.85-4.87), per bar its tension;
+    families absent from the scene are skipped. Slack twines (EA_c = 0) carry 0, with a kink at the slack
+    point (finite one-sided gradient)."""
+    scene, x, parts = o.scene, o.x, []
+    if "netting" in families and scene.netting is not None:
+        n = scene.netting
+        tu, tv = jax.vmap(tension.netting_tensions)(x[n.vertices], n.uv, n.l0, n.ea_traction, n.ea_compression)
+        parts += [tu, tv]
+    if "hexagonal" in families and scene.hexagonal is not None:
+        h = scene.hexagonal
+        parts.append(jnp.ravel(jnp.stack(jax.vmap(hexagonal.hexagonal_tensions)(
+            x[h.vertices], h.uv, h.l0, h.ea_traction, h.ea_compression))))
+    if "bars" in families and scene.bars is not None:
+        b = scene.bars
+        parts.append(jax.vmap(cable.bar_tension)(x[b.ends], b.rest_length, b.ea_traction, b.ea_compression))
+    if not parts:
+        raise ValueError(f"tensions: the scene has none of the families {tuple(families)} (no twines, no bars)")
+    return jnp.concatenate([jnp.ravel(p) for p in parts])
+
+
+class MaxTension(Figure):
+    """Smooth maximum of the tensions (N); see :func:`max_tension`."""
+
+    softness: float
+    families: tuple = eqx.field(static=True)
+
+    def __call__(self, o: Outcome):
+        t = tensions(o, self.families)
+        return self.softness * jax.nn.logsumexp(t / self.softness)
+
+    def excess_bound(self, o: Outcome):
+        """Largest possible excess (N) of the figure over the true maximum tension: softness × log(n)."""
+        return self.softness * jnp.log(tensions(o, self.families).size)
+
+
+def max_tension(softness=1.0, families=TENSION_FAMILIES) -> MaxTension:
+    """Smooth maximum (N) of the twine and bar tensions, by log-sum-exp with softness τ (N):
+
+        M = τ log Σ_i exp(T_i / τ),     max T ≤ M ≤ max T + τ log n,
+
+    n the number of tensions (:func:`tensions`: 2 per diamond triangle, 3 per hexagonal one, 1 per bar).
+    M is an *upper* bound of the true maximum, so ``Constraint(max_tension(τ), upper=T_break)`` is
+    conservative; its gradient is the softmax-weighted gradient of the tensions (finite everywhere: at ties
+    and at slack twines, where each tension has a kink). Smaller τ: closer to the max, stiffer gradient.
+    families: which of :data:`TENSION_FAMILIES` to include (those present in the scene).
+    """
+    families = tuple(families)
+    unknown = [f for f in families if f not in TENSION_FAMILIES]
+    if unknown or not families:
+        raise ValueError(f"max_tension: families must be among {TENSION_FAMILIES}, got {unknown or families!r}")
+    return MaxTension(_finite_number(softness, "max_tension: softness", positive=True), families)
+
+
+# -- material --------------------------------------------------------------------------------------
+
+
+def _twine_lengths(scene, families):
+    """(length (m), diameter (m), density (kg/m³)) per element of each family present: the twines of a
+    diamond triangle are |d| of length l0 (|d|/2 U and |d|/2 V twines, 4.25-4.26), of a hexagonal one |d|
+    of each family (after 4.82); a bar is its rest length. The same counts as the weight (4.277)."""
+    out = []
+    if "netting" in families and scene.netting is not None:
+        n = scene.netting
+        out.append((jnp.abs(geometry.twine_determinant(n.uv)) * n.l0, n.diameter, n.density))
+    if "hexagonal" in families and scene.hexagonal is not None:
+        h = scene.hexagonal
+        out.append((jnp.abs(geometry.twine_determinant(h.uv)) * jnp.sum(h.l0, axis=-1), h.diameter, h.density))
+    if "bars" in families and scene.bars is not None:
+        b = scene.bars
+        out.append((jnp.asarray(b.rest_length), b.diameter, b.density))
+    return out
+
+
+class Material(Figure):
+    """Twine length (m), mass (kg) or cost of the material; see :func:`material` and :func:`twine_length`."""
+
+    what: str = eqx.field(static=True)  # "length" or "mass"
+    price_per_kg: float | None
+    families: tuple = eqx.field(static=True)
+
+    def __call__(self, o: Outcome):
+        total = jnp.zeros((), o.x.dtype)
+        for length, diameter, density in _twine_lengths(o.scene, self.families):
+            per = length if self.what == "length" else length * jnp.pi * diameter**2 / 4.0 * density
+            total = total + jnp.sum(per)
+        return total if self.price_per_kg is None else self.price_per_kg * total
+
+
+def _material_families(families, what):
+    families = tuple(families)
+    unknown = [f for f in families if f not in TENSION_FAMILIES]
+    if unknown or not families:
+        raise ValueError(f"{what}: families must be among {TENSION_FAMILIES}, got {unknown or families!r}")
+    return families
+
+
+def twine_length(families=("netting", "hexagonal")) -> Material:
+    """Total unstretched twine length (m) of the netting: Σ_triangles |d| l0 (|d| twines of length l0 per
+    diamond triangle; Σ|d| Σ l0 for hexagonal netting); with "bars" in ``families``, plus the ropes' rest
+    lengths. A function of the design (twine coordinates, l0), not of the positions: exact, smooth."""
+    return Material("length", None, _material_families(families, "twine_length"))
+
+
+def material(price_per_kg=None, families=("netting", "hexagonal")) -> Material:
+    """Mass (kg) of the netting's twine, Σ |d| l0 π D²/4 ρ (the dry mass behind the weight of 4.277); with
+    ``price_per_kg`` (currency/kg), its cost. ``families``: add "bars" to count the ropes (rest length ×
+    π D²/4 × ρ). Smooth in the design (D, ρ, l0, twine coordinates); independent of the positions."""
+    price = None if price_per_kg is None else _finite_number(price_per_kg, "material: price_per_kg")
+    return Material("mass", price, _material_families(families, "material"))
+
+
+class NettingArea(Figure):
+    """Area of the diamond netting (m²); see :func:`netting_area`."""
+
+    deployed: bool = eqx.field(static=True)
+
+    def __call__(self, o: Outcome):
+        net = o.scene.netting
+        if o.scene.hexagonal is not None:
+            raise ValueError("netting_area: hexagonal netting has no square-mesh area; use twine_length or material")
+        if net is None:
+            return jnp.zeros((), o.x.dtype)
+        if self.deployed:
+            return jnp.sum(jax.vmap(geometry.surface)(o.x[net.vertices]))
+        # |d|/2 mesh rhombi per triangle (twine-coordinate area), each l0² when square
+        return jnp.sum(jnp.abs(geometry.twine_determinant(net.uv)) * net.l0**2 / 2.0)
+
+
+def netting_area(deployed=False) -> NettingArea:
+    """Area (m²) of the diamond netting: with ``deployed=False`` its nominal area, that of its meshes opened
+    square, Σ |d| l0²/2 (|d|/2 rhombi of side l0 per triangle; for a panel of n × n meshes of side l0,
+    2 n² l0²): a measure of the netting bought, independent of the shape; with ``deployed=True`` the
+    surface of the netting at the positions, Σ |12 ^ 13|/2 (4.18).
+    """
+    return NettingArea(bool(deployed))
+
+
+# -- composition ---------------------------------------------------------------------------------
+
+
+class Weighted(Figure):
+    """Σ weight × figure; see :func:`weighted`."""
+
+    figures: dict
+    weights: dict
+
+    def __call__(self, o: Outcome):
+        return sum(self.weights[k] * self.figures[k](o) for k in sorted(self.figures))
+
+    def parts(self, o: Outcome) -> dict:
+        """Each named figure's value (unweighted), for reports and histories."""
+        return {k: self.figures[k](o) for k in sorted(self.figures)}
+
+
+def weighted(**parts) -> Weighted:
+    """A weighted sum of named figures: ``weighted(drag=(1.0, drag()), cost=(0.1, material(2.5)))``; a bare
+    figure has weight 1. Weights are leaves (traceable); mind the units (N + kg: the weight converts)."""
+    if not parts:
+        raise ValueError("weighted: give at least one figure")
+    figures, weights = {}, {}
+    for name, part in parts.items():
+        w, f = part if isinstance(part, tuple) else (1.0, part)
+        if not callable(f):
+            raise ValueError(f"weighted: {name} is not a figure (a callable of an Outcome): {f!r}")
+        figures[name], weights[name] = f, _finite_number(w, f"weighted: weight of {name}")
+    return Weighted(figures, weights)
+
+
+class Constraint(Figure):
+    """lower ≤ figure ≤ upper (None: that side is free); called, it gives its penalty.
+
+    figure: any figure; lower, upper: bounds in the figure's units; scale: a typical size of a violation,
+    in the same units, making penalties of different units comparable (1 by default).
+    """
+
+    figure: Callable
+    lower: float | None = None
+    upper: float | None = None
+    scale: float = 1.0
+
+    def __check_init__(self):
+        if not callable(self.figure):
+            raise ValueError(f"Constraint: figure is not a callable of an Outcome: {self.figure!r}")
+        if self.lower is None and self.upper is None:
+            raise ValueError("Constraint: give lower, upper or both")
+        lo = None if self.lower is None else _finite_number(self.lower, "Constraint: lower")
+        hi = None if self.upper is None else _finite_number(self.upper, "Constraint: upper")
+        if isinstance(lo, float) and isinstance(hi, float) and lo > hi:
+            raise ValueError(f"Constraint: lower {lo} > upper {hi}")
+        _finite_number(self.scale, "Constraint: scale", positive=True)
+
+    def value(self, o: Outcome):
+        return self.figure(o)
+
+    def violation(self, o: Outcome):
+        """How far outside [lower, upper] the figure is (its units, >= 0; 0 when satisfied)."""
+        v = self.figure(o)
+        out = jnp.zeros_like(v)
+        if self.lower is not None:
+            out = out + jnp.maximum(self.lower - v, 0.0)
+        if self.upper is not None:
+            out = out + jnp.maximum(v - self.upper, 0.0)
+        return out
+
+    def penalty(self, o: Outcome):
+        """Exterior quadratic penalty (violation / scale)², dimensionless: 0 inside, C¹ at the bounds."""
+        return (self.violation(o) / self.scale) ** 2
+
+    def __call__(self, o: Outcome):
+        return self.penalty(o)
+
+
+class Penalised(Figure):
+    """objective + weight × Σ penalties; see :func:`penalised`."""
+
+    objective: Callable
+    constraints: tuple
+    weight: float
+
+    def __call__(self, o: Outcome):
+        return self.objective(o) + self.weight * sum(c.penalty(o) for c in self.constraints)
+
+    def violation(self, o: Outcome):
+        """Σ violation / scale over the constraints (dimensionless, 0 when all are met), for histories."""
+        return sum(c.violation(o) / c.scale for c in self.constraints)
+
+
+def penalised(objective, constraints, weight=1.0) -> Penalised:
+    """The exterior penalty method: objective(o) + weight × Σ_c (violation_c / scale_c)². Raise ``weight``
+    over an optimisation to drive the violations to 0 (the minimiser of a fixed weight violates by O(1/weight))."""
+    constraints = tuple(constraints) if not isinstance(constraints, Constraint) else (constraints,)
+    bad = [c for c in constraints if not isinstance(c, Constraint)]
+    if bad:
+        raise ValueError(f"penalised: constraints must be Constraint objects, got {bad[0]!r}")
+    if not callable(objective):
+        raise ValueError(f"penalised: objective is not a figure: {objective!r}")
+    return Penalised(objective, constraints, _finite_number(weight, "penalised: weight", nonnegative=True))
+
+
+# -- bounds on design parameters -----------------------------------------------------------------
+
+
+def _one_for_all(bound):
+    """None or a single number: the same bound for every leaf of θ."""
+    return bound is None or isinstance(bound, (int, float, np.number)) or (
+        isinstance(bound, (np.ndarray, jax.Array)) and bound.ndim == 0)
+
+
+class Bounds(eqx.Module):
+    """Box bounds on a pytree θ of design parameters (e.g. the design of :mod:`jaxnet.design.space`).
+
+    lower, upper: None (unbounded), a number (the same for every leaf of θ), or a pytree of θ's structure
+    whose leaves are None (that leaf unbounded), numbers or arrays broadcastable to the leaf; where θ has a
+    dict, the bound's dict may leave keys out (unbounded) or give one number for a whole subtree, e.g.
+    ``Bounds(lower={"twine": {"diameter": 1e-3}}, upper=1e6)`` for θ = {"cut": ..., "twine": {...}}.
+    """
+
+    lower: Any = None
+    upper: Any = None
+
+    def __check_init__(self):
+        for name in ("lower", "upper"):
+            for path, leaf in jax.tree_util.tree_flatten_with_path(getattr(self, name))[0]:
+                if not isinstance(leaf, jax.core.Tracer) and np.any(np.isnan(np.asarray(leaf, dtype=float))):
+                    raise ValueError(f"Bounds: {name}{jax.tree_util.keystr(path)} is NaN")
+
+    def _pairs(self, theta):
+        """Per leaf of θ: (path name, leaf, lower or None, upper or None), checked."""
+        paths_leaves, treedef = jax.tree_util.tree_flatten_with_path(theta)
+
+        def complete(bound, part, name, path=""):
+            """The bound spread over θ's subtree ``part``: a number or None for all of its leaves, dicts key by key."""
+            if _one_for_all(bound):
+                return jax.tree.map(lambda _: bound, part)
+            if isinstance(bound, dict) and isinstance(part, dict):
+                extra = sorted(set(bound) - set(part), key=str)
+                if extra:
+                    raise ValueError(f"Bounds: {name}{path}{extra} are not design parameters (θ{path} has "
+                                     f"{sorted(part, key=str)})")
+                return {k: complete(bound.get(k), v, name, f"{path}[{k!r}]") for k, v in part.items()}
+            return bound
+
+        def per_leaf(bound, name):
+            try:
+                return treedef.flatten_up_to(complete(bound, theta, name))
+            except (ValueError, TypeError) as e:
+                if str(e).startswith("Bounds:"):
+                    raise
+                raise ValueError(f"Bounds: {name} does not match the structure of the design parameters: {e}") from None
+
+        out = []
+        for (path, leaf), lo, hi in zip(paths_leaves, per_leaf(self.lower, "lower"), per_leaf(self.upper, "upper")):
+            where = jax.tree_util.keystr(path) or "θ"
+            for b, side in ((lo, "lower"), (hi, "upper")):
+                if b is not None:
+                    try:
+                        np.broadcast_shapes(np.shape(b), np.shape(leaf))
+                    except ValueError:
+                        raise ValueError(f"Bounds: {side} bound of {where} has shape {np.shape(b)}, the parameter "
+                                         f"{np.shape(leaf)}") from None
+            concrete = not any(isinstance(b, jax.core.Tracer) for b in (lo, hi))
+            if lo is not None and hi is not None and concrete and np.any(np.asarray(lo) > np.asarray(hi)):
+                raise ValueError(f"Bounds: lower > upper for {where}")
+            out.append((where, leaf, lo, hi))
+        return out, treedef
+
+    def project(self, theta):
+        """θ clipped into the box, leaf by leaf (the projection of projected-gradient methods)."""
+        pairs, treedef = self._pairs(theta)
+        leaves = []
+        for _, leaf, lo, hi in pairs:
+            v = jnp.asarray(leaf)
+            if lo is not None:
+                v = jnp.maximum(v, lo)
+            if hi is not None:
+                v = jnp.minimum(v, hi)
+            leaves.append(v)
+        return jax.tree.unflatten(treedef, leaves)
+
+    def violation(self, theta):
+        """Σ over all entries of θ of the distance outside the box (θ's units, >= 0; 0 inside)."""
+        total = 0.0
+        for _, leaf, lo, hi in self._pairs(theta)[0]:
+            v = jnp.asarray(leaf)
+            if lo is not None:
+                total = total + jnp.sum(jnp.maximum(lo - v, 0.0))
+            if hi is not None:
+                total = total + jnp.sum(jnp.maximum(v - hi, 0.0))
+        return jnp.asarray(total)
