@@ -27,11 +27,12 @@ L0 = 0.05
 TRAPEZOID = (6, 4, 4)  # meshes at the top, at the bottom, deep
 
 
-def rig():
+def rig(twine=None):
     """A tapered panel with every family: hung from two bridles (free cables) to fixed points, a headline
     and a footrope sewn along it, a float, two sinkers, knots (default contact stiffness) and twine bending
-    (hinges), in a current."""
-    twine = Twine(l0=L0, ea=1000.0, diameter=2e-3, ea_compression=100.0, knot_size=4e-3, bending_stiffness=1e-6)
+    (hinges), in a current. ``twine``: another netting material (e.g. without knots and bending, which
+    cost compile time where they are not the point)."""
+    twine = twine or Twine(l0=L0, ea=1000.0, diameter=2e-3, ea_compression=100.0, knot_size=4e-3, bending_stiffness=1e-6)
     net = Net(environment=Environment(current_speed=0.3))
     width = L0 * np.sqrt(2.0)  # a square mesh across and deep (m)
     uv = np.asarray(cut.trapezoid(*TRAPEZOID))
