@@ -48,8 +48,8 @@ CONVERGED, MAX_STEPS, SOLVE_FAILED = "gradient below tolerance", "maximum number
 class DesignResult:
     """An optimisation's outcome.
 
-    theta: the optimised design (the families and entries that were optimised; θ's units). value: its
-    objective. x: (N, 3) its equilibrium (m). history: one dict per iteration (see the module docstring).
+    theta: the optimised design, the best iterate (the families and entries that were optimised; θ's
+    units). value: its objective. x: (N, 3) its equilibrium (m). history: one dict per iteration (see the module docstring).
     reason: why the loop stopped. rounded: the design with its cut on whole meshes (None without a cut),
     rounded_value, rounded_violation: its objective and constraint violation, rounded_x its equilibrium,
     cut_report: per panel, its sides' meshes and cutting rates (:class:`jaxnet.design.cut.SideCut`).
@@ -139,7 +139,11 @@ def optimize(space, objective, theta, optimizer=None, steps=50, bounds=None, sca
         return objective(o), (eq.x, eq.status, eq.iterations, _violation(objective, o))
 
     value_and_grad = jax.jit(jax.value_and_grad(loss, has_aux=True))
-    value_only = jax.jit(lambda z, start: loss(z, start)[0])
+    extra = isinstance(optimizer, optax.GradientTransformationExtraArgs)
+    # an optimiser with a line search (L-BFGS) calls the value function inside its update: one compiled update,
+    # the warm start an argument (a fresh closure per step would recompile the line search every step)
+    extra_update = jax.jit(lambda g, state, z, value, start: optimizer.update(
+        g, state, z, value=value, grad=g, value_fn=lambda zz: loss(zz, start)[0]))
 
     def evaluate(z, start):
         (value, (x, status, iterations, violation)), g = value_and_grad(z, start)
@@ -161,7 +165,7 @@ def optimize(space, objective, theta, optimizer=None, steps=50, bounds=None, sca
         from tqdm.auto import tqdm
 
         bar = tqdm(total=steps, desc="design", unit="step")
-    extra = isinstance(optimizer, optax.GradientTransformationExtraArgs)
+    best = (value, z, x)
     for k in range(steps + 1):
         g_norm = float(max(jnp.max(jnp.abs(leaf)) for leaf in jax.tree.leaves(g)))
         row = dict(step=k, objective=value, violation=violation + float(bounds.violation(design(z))),
@@ -179,8 +183,7 @@ def optimize(space, objective, theta, optimizer=None, steps=50, bounds=None, sca
         if k == steps:
             break
         if extra:
-            updates, new_state = optimizer.update(g, state, z, value=value, grad=g,
-                                                  value_fn=lambda zz: value_only(zz, x))
+            updates, new_state = extra_update(g, state, z, value, x)
         else:
             updates, new_state = optimizer.update(g, state, z)
         for _ in range(backtracks + 1):
@@ -197,8 +200,12 @@ def optimize(space, objective, theta, optimizer=None, steps=50, bounds=None, sca
             break
         z, state = z_new, new_state
         _, value, g, x, iterations, violation = trial
+        if value < best[0]:
+            best = (value, z, x)
     if bar is not None:
         bar.close()
+    # the best design seen: optimisers without a line search (Adam) need not end on their best iterate
+    value, z, x = best
     best = design(z)
     result = DesignResult(theta=jax.tree.map(np.asarray, best), value=value, x=x, history=history, reason=reason)
     if round_cut and "cut" in theta0:
