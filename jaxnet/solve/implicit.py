@@ -83,18 +83,16 @@ class Structure(eqx.Module):
 
     pattern: assemble.Pattern
     model: tuple = eqx.field(static=True)
-
-    @property
-    def exact_tangent(self):
-        """True when the assembled K is the exact Jacobian -∂F/∂x (no term with a global state: a catch)."""
-        return not any(t.term.kind == "force" and t.term.state is not None for t in self.model)
+    #: True when the assembled K is the exact Jacobian -∂F/∂x: no catch, whose front (a global state the
+    #: tangent holds fixed) moves with the net
+    exact_tangent: bool = eqx.field(static=True, default=True)
 
 
 def structure_of(scene, dynamic=False) -> Structure:
     """The :class:`Structure` of ``scene`` (validated here): its active terms and tangent pattern."""
     scene_lib.validate(scene)
     model = model_lib.active_terms(scene, dynamic=dynamic)
-    return Structure(pattern=assemble.build_pattern(scene, model), model=model)
+    return Structure(pattern=assemble.build_pattern(scene, model), model=model, exact_tangent=scene.catch is None)
 
 
 def residual(x_free, scene, structure: Structure, step=None):
@@ -173,7 +171,7 @@ def _root_jvp(model, newton, primals, tangents):
     params, rest, pattern, x0, step = primals
     d_params, d_step = tangents[0], tangents[4]
     x_free, info = _root(model, newton, params, rest, pattern, x0, step)
-    structure_ = Structure(pattern=pattern, model=model)
+    structure_ = Structure(pattern=pattern, model=model, exact_tangent=rest.catch is None and params.catch is None)
     scene = eqx.combine(params, rest)
     # ∂F/∂θ dθ at the root: the residual's change with the design (and the step's past), the positions held
     _, rhs = jax.jvp(lambda p, st: residual(x_free, eqx.combine(p, rest), structure_, st), (params, step),
