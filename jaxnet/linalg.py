@@ -29,6 +29,7 @@ takes a zero pivot, it takes the column's largest entry instead.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 
 import jax
@@ -72,21 +73,17 @@ def _host_solver(indptr, indices):
     return solver
 
 
-def _host_solve(data, rhs, indptr, indices, transpose=False):
-    x, ok = _host_solver(indptr, indices).solve(data, rhs, transpose)
+def _host_solve(data, rhs, indptr, indices, transpose=False, reuse=False):
+    x, ok = _host_solver(indptr, indices).solve(data, rhs, transpose, reuse)
     return x, np.asarray(ok)
 
 
-def _host_solve_transposed(data, rhs, indptr, indices):
-    return _host_solve(data, rhs, indptr, indices, transpose=True)
-
-
-def solve(data, rhs, indptr, indices, transpose=False):
-    """Solve A x = rhs (A^T x = rhs if ``transpose``, a Python bool) for the CSR matrix (data, indices,
-    indptr). Returns (x, ok); ok False if singular. Consecutive solves with the same ``data`` share one
-    factorisation (see :meth:`HostSolver.solve`)."""
+def solve(data, rhs, indptr, indices, transpose=False, reuse=False):
+    """Solve A x = rhs (A^T x = rhs if ``transpose``) for the CSR matrix (data, indices, indptr). Returns
+    (x, ok); ok False if singular. ``reuse`` (a Python bool): consecutive solves with the same ``data`` share
+    one factorisation (:meth:`HostSolver.solve`): the sensitivity solves of an equilibrium."""
     out = (jax.ShapeDtypeStruct(rhs.shape, rhs.dtype), jax.ShapeDtypeStruct((), jnp.bool_))
-    host = _host_solve_transposed if transpose else _host_solve
+    host = functools.partial(_host_solve, transpose=transpose, reuse=reuse)
     return jax.pure_callback(host, out, data, rhs, indptr, indices, vmap_method="sequential")
 
 
@@ -223,12 +220,13 @@ class HostSolver:
         self.backward_error = float(np.max(error, initial=0.0))
         return x
 
-    def solve(self, data, rhs, transpose=False):
+    def solve(self, data, rhs, transpose=False, reuse=False):
         """x solving A x = rhs (A^T x = rhs if ``transpose``) for the CSR entries ``data``; (x, ok) with ok
-        False (x zeros) if singular. The factor is kept: a later solve with the same ``data`` (the
-        sensitivities of an equilibrium: one system, many right-hand sides, either side) reuses it."""
+        False (x zeros) if singular. ``reuse``: if ``data`` is the matrix factorised last, solve with the
+        kept factor (the sensitivities of an equilibrium: one system, many right-hand sides, either side)."""
         data = np.asarray(data, dtype=float)
-        same = self._lu is not None and self._a.data.shape == data.shape and np.array_equal(self._a.data, data)
+        same = (reuse and self._lu is not None and self._a.data.shape == data.shape
+                and np.array_equal(self._a.data, data))
         if not same and not self.factorize(data):
             return np.zeros_like(np.asarray(rhs, dtype=float)), False
         x = self.apply(rhs, transpose)

@@ -79,27 +79,3 @@ def test_the_optimiser_recovers_the_target_and_rounds_to_its_cut(optimised):
     assert all(np.isfinite(row["gradient_norm"]) for row in lines)
     saved = json.loads((out / "design.json").read_text())
     assert saved["rounded_objective"] == pytest.approx(result.rounded_value, rel=1e-12)
-
-
-def test_history_gradient_is_the_objectives_gradient(optimised):
-    """The history's first gradient norm is that of the objective at the start (the adjoint gradient, in the
-    optimiser's units: per twine for the cut, relative for the diameter), which central differences of the
-    full solve reproduce."""
-    result, objective, twine, diameter, _ = optimised
-    space, reference, target, target_x = problem()
-    import jax
-
-    structure = implicit.structure_of(space.reference)
-    x0 = np.asarray(implicit.solve(space.reference).x)
-
-    def value(z):  # z: the diameter's relative change
-        theta = {"twine_diameter": {"netting": diameter * (1 + z)}}
-        scene = space.scene(theta)
-        eq = implicit.equilibrium(scene, structure, x0=x0, newton=implicit.DEFAULT_NEWTON)
-        return objective(objectives.Outcome(eq.x, scene, structure.model))
-
-    g = float(jax.grad(value)(0.0))
-    h = 1e-3
-    fd = (8 * (value(h) - value(-h)) - (value(2 * h) - value(-2 * h))) / (12 * h)
-    assert g == pytest.approx(float(fd), rel=1e-6)
-    assert abs(g) <= result.history[0]["gradient_norm"] * (1 + 1e-9)

@@ -137,7 +137,7 @@ def _tangent_solver(x_free, scene, structure, stiffness, step=None):
         return -jax.jvp(lambda x: residual(x, scene, structure, step), (x_free,), (v,))[1]
 
     def direct(b, transpose):
-        x, ok = linalg.solve(data, b, pattern.indptr, pattern.indices, transpose=transpose)
+        x, ok = linalg.solve(data, b, pattern.indptr, pattern.indices, transpose=transpose, reuse=True)
         return jnp.where(ok, x, jnp.nan)  # a singular K gives NaN sensitivities, which check= reports
 
     def refined(operator, b, transpose):
