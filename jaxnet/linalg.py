@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import threading
 
 import jax
 import jax.numpy as jnp
@@ -56,20 +57,24 @@ def matvec(data, rows, indices, v):
     return jax.ops.segment_sum(data * v[indices], rows, num_segments=v.shape[0], indices_are_sorted=True)
 
 
-#: solvers of the structures seen by :func:`solve`'s callback (structure digest -> HostSolver): a jitted loop
+#: solvers of the structures seen by :func:`solve`'s callback ((structure digest, thread) -> HostSolver): a jitted loop
 #: of Newton solves (dynamics: thousands of time steps) then computes each structure's ordering once.
 _SOLVERS: dict = {}
+_SOLVERS_LOCK = threading.Lock()
 _MAX_SOLVERS = 8
 
 
 def _host_solver(indptr, indices):
     indptr, indices = np.asarray(indptr), np.asarray(indices)
-    key = hashlib.blake2b(indptr.tobytes() + indices.tobytes(), digest_size=16).digest()
-    solver = _SOLVERS.get(key)
-    if solver is None:
-        if len(_SOLVERS) >= _MAX_SOLVERS:
-            _SOLVERS.pop(next(iter(_SOLVERS)))
-        solver = _SOLVERS[key] = HostSolver(indptr, indices)
+    # one solver per structure and thread: the callbacks of a program sharded over several devices run in
+    # several of XLA's threads at once, and a solver holds its last factor (not to be shared mid-solve)
+    key = (hashlib.blake2b(indptr.tobytes() + indices.tobytes(), digest_size=16).digest(), threading.get_ident())
+    with _SOLVERS_LOCK:
+        solver = _SOLVERS.get(key)
+        if solver is None:
+            if len(_SOLVERS) >= _MAX_SOLVERS:
+                _SOLVERS.pop(next(iter(_SOLVERS)))
+            solver = _SOLVERS[key] = HostSolver(indptr, indices)
     return solver
 
 
