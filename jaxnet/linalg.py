@@ -61,7 +61,7 @@ def matvec(data, rows, indices, v):
 #: of Newton solves (dynamics: thousands of time steps) then computes each structure's ordering once.
 _SOLVERS: dict = {}
 _SOLVERS_LOCK = threading.Lock()
-_MAX_SOLVERS = 8
+_MAX_SOLVERS = 64  # structures x threads
 
 
 def _host_solver(indptr, indices):
