@@ -138,7 +138,7 @@ def _tangent_solver(x_free, scene, structure, stiffness, step=None):
 
     def direct(b, transpose):
         x, ok = linalg.solve(data, b, pattern.indptr, pattern.indices, transpose=transpose, reuse=True)
-        return jnp.where(ok, x, jnp.nan)  # a singular K gives NaN sensitivities, which check= reports
+        return jnp.where(ok, x, jnp.nan)  # a singular K: no unique derivative, NaN rather than a finite guess
 
     def refined(operator, b, transpose):
         x = direct(b, transpose)
