@@ -5,20 +5,7 @@ import pytest
 
 import jaxnet as jn
 from jaxnet import figures
-from jaxnet.net import Net, Rope, Twine
-
-
-def biaxial_panel(nx, ny, theta, strain, step, l0=0.02, ea=1000.0):
-    """A panel of nx x ny meshes stretched uniformly: twines of length l0 (1 + strain) at half angle theta
-    from the vertical; all borders held, weightless. Mesh coordinates u across (x), v up (z)."""
-    L = l0 * (1 + strain)
-    across, up = 2 * L * np.sin(theta), 2 * L * np.cos(theta)  # one mesh is (U - V, U + V)
-    corners = [(0, 0, 0, 0, 0), (nx * across, 0, 0, nx, -nx), (nx * across, 0, ny * up, nx + ny, ny - nx), (0, 0, ny * up, ny, ny)]
-    net = Net(environment=jn.Environment(gravity=0.0))
-    p = net.panel("panel", corners, Twine(l0=l0, ea=ea, diameter=1e-3), step)
-    for k in range(4):
-        net.fix(p.side(k))
-    return net.build(), across, up
+from jaxnet.scenes.textbook import biaxial_panel
 
 
 @pytest.mark.parametrize("theta", [np.pi / 4, 0.3])

@@ -4,17 +4,11 @@ import numpy as np
 
 import jaxnet as jn
 from jaxnet import model
-from jaxnet.net import HexTwine, Net
+from jaxnet.scenes import textbook
 
 
 def hanging_hexagonal_panel(meshes=8, a=0.02, pull=5.0):
-    net = Net()
-    w = meshes * 3 * a  # a base mesh is 3 twine lengths along U
-    corners = [(0, 0, -w, 0, 0), (w, 0, -w, meshes, 0), (w, 0, 0, meshes, meshes), (0, 0, 0, 0, meshes)]
-    panel = net.panel("hex", corners, HexTwine(l0=(a, a, 1.2 * a), ea=1000.0, diameter=1e-3), step=0.1)
-    net.fix(panel.side(2))
-    net.attach(panel.side(0), force=(0.0, 0.0, -pull))
-    return net.build()
+    return textbook.hexagonal_hanging_panel(meshes, a, pull)[0]
 
 
 def test_hexagonal_panel_hangs_in_balance_with_its_weight():

@@ -35,16 +35,13 @@ twine tensions scatter by 30 %. Strain does not enter the angle, so nothing is l
 
 from __future__ import annotations
 
-import dataclasses
-
 import jax
 import numpy as np
 import pytest
 
 import jaxnet as jn
 from jaxnet import figures, geometry, model
-from jaxnet.net import Net, Rope, Twine
-from jaxnet.scene import Environment
+from jaxnet.scenes import textbook
 
 RHO = 1025.0
 SPEED, CATCH_CD = 1.0, 1.4
@@ -52,59 +49,22 @@ PRESSURE = 0.5 * RHO * CATCH_CD * SPEED**2  # Pa (4.246)
 AROUND, ALONG = 16, 32  # meshes around the whole tube and along it
 L0, EA = 0.05, 1000.0
 COD_LINE = 1e-3  # m, the quarter's share of the rope that gathers the rear
-ANSWER = np.degrees(np.arctan(np.sqrt(2.0)))  # 54.7356°
+ANSWER = textbook.TUBE_ANGLE_DEG  # arctan(sqrt 2) = 54.7356°
 TOLERANCE = 0.05  # degrees, see the module docstring
 
 
 def quarter_tube(start_angle):
-    """The quarter tube, laid at the start on a cylinder whose meshes make ``start_angle`` (rad) with the
-    axis: the front ring (held) has that cylinder's radius, and the last 3 meshes close onto the axis."""
-    n, m = AROUND // 4, ALONG
-    radius = AROUND * L0 * np.sin(start_angle) / np.pi  # M meshes of width 2 l0 sin(angle) around
-    length = ALONG * 2 * L0 * np.cos(start_angle)
-    net = Net(Environment(current_speed=SPEED, current_direction=np.array([1.0, 0.0, 0.0])))
-    twine = Twine(l0=L0, ea=EA, diameter=2e-3, density=RHO, cd_normal=0.0)
-    # mesh coordinates: u around (from the plane y = 0 to the plane z = 0), v along; U = u + v, V = v - u
-    p = net.panel("tube", [(0, 0, radius, 0, 0), (0, radius, 0, n, -n), (length, radius, 0, n + m, m - n),
-                           (length, 0, radius, m, m)], twine, step=L0)
-    net.fix(p.side(0))  # the front ring
-    net.fix(p.side(3), axes="y")  # on the symmetry plane y = 0
-    net.fix(p.side(1), axes="z")  # on the symmetry plane z = 0
-    net.cable("cod line", along=p.side(2), rope=Rope(ea=5e4, diameter=0.01, density=RHO, cd_normal=0.0), length=COD_LINE)
-    net.catch(100.0, drag_coefficient=CATCH_CD, symmetry=4.0, center=(0.0, 0.0, 0.0))  # far more than it holds
-    scene = net.build()
-    # the builder draws the corners' straight chords: lay every node on the cylinder (fixed ones included,
-    # so the ring is round), closing the last 3 meshes onto the cod line's radius
-    tri, uv = np.asarray(scene.netting.vertices), np.asarray(scene.netting.uv)
-    node_uv = np.zeros((scene.n_nodes, 2))
-    node_uv[tri.ravel()] = uv.reshape(-1, 2)
-    u, v = (node_uv[:, 0] - node_uv[:, 1]) / 2, (node_uv[:, 0] + node_uv[:, 1]) / 2
-    phi = u / n * np.pi / 2
-    closing = np.clip((v - (m - 3)) / 3, 0.0, 1.0)
-    r = np.maximum(radius * np.sqrt(1.0 - closing**2), COD_LINE * 2 / np.pi)
-    x = np.stack([v * 2 * L0 * np.cos(start_angle), r * np.sin(phi), r * np.cos(phi)], axis=1)
-    fixed = np.asarray(scene.nodes.fixed)
+    """The quarter tube (jaxnet.scenes.textbook), laid at the start on a cylinder whose meshes make
+    ``start_angle`` (rad) with the axis; the nodes on the symmetry planes are on them."""
+    scene = textbook.pressurised_tube(start_angle, around=AROUND, along=ALONG, l0=L0, ea=EA, speed=SPEED,
+                                      catch_cd=CATCH_CD, cod_line=COD_LINE, water_density=RHO)
+    x, fixed = np.asarray(scene.nodes.position), np.asarray(scene.nodes.fixed)
     assert np.all(x[fixed[:, 1] & ~fixed[:, 0], 1] == 0) and np.allclose(x[fixed[:, 2] & ~fixed[:, 0], 2], 0, atol=1e-15)
-    return dataclasses.replace(scene, nodes=dataclasses.replace(scene.nodes, position=x))
+    return scene
 
 
-def axis_angles(scene, x):
-    """Per triangle: centroid abscissa (m) and the angles (degrees) of its U and V twines to the x axis."""
-    net = scene.netting
-    xe = np.asarray(x)[np.asarray(net.vertices)]
-    U, V, _ = jax.vmap(geometry.twine_vectors)(xe, np.asarray(net.uv))
-
-    def angle(w):
-        w = np.asarray(w)
-        return np.degrees(np.arccos(np.abs(w[:, 0]) / np.linalg.norm(w, axis=1)))
-
-    return xe[:, :, 0].mean(axis=1), angle(U), angle(V)
-
-
-def middle_third(scene, x):
-    centroid, _, _ = axis_angles(scene, x)
-    length = np.asarray(x)[:, 0].max() - np.asarray(x)[:, 0].min()
-    return (centroid > length / 3) & (centroid < 2 * length / 3)
+axis_angles = textbook.tube_twine_angles
+middle_third = textbook.tube_middle_third
 
 
 @pytest.fixture(scope="module")

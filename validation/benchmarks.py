@@ -1,0 +1,82 @@
+"""The stand-alone benchmarks, run by the report: FEMNET's cases, dynamics, cost against size, stiffness paths.
+
+Each script of ``validation/`` measures one thing and prints its own tables (see its docstring); the report
+runs it in a fresh process (so that compile caches and memory peaks are its own) and keeps what it printed,
+verbatim. ``--quick`` passes each script the small sizes given in :data:`SCRIPTS`.
+"""
+
+from __future__ import annotations
+
+import pathlib
+import subprocess
+import sys
+import time
+
+TITLE = "Benchmarks: FEMNET's cases, dynamics, cost against size"
+
+HERE = pathlib.Path(__file__).parent
+
+#: script -> (what it measures, arguments for --quick, arguments for the full study); ``{plots}`` is the
+#: report's folder of plots
+SCRIPTS = {
+    "femnet_cases.py": ("FEMNET's cases: FEMNET's figures beside jaxnet's, iterations, cold and warm times",
+                        ["--repeat", "1", "--stiffness", "autodiff"], []),
+    "dynamics_cost.py": ("Dynamics: error against run time of the book's scheme and the diffrax reference, "
+                         "cost per step against FEMNET's, steps per second against size",
+                         ["--sizes", "1.6", "--cage-end", "1.0", "--plot", "{plots}/dynamics_work_precision.png"],
+                         ["--plot", "{plots}/dynamics_work_precision.png"]),
+    "bench_statics.py": ("Static solver against size: panels from a flat start, iterations, assembly and "
+                         "factorisation times, growth exponents", ["--sizes", "100", "1000", "10000"], []),
+    "stiffness_cost.py": ("Closed-form and autodiff stiffness side by side, per term",
+                          ["--elements", "1000", "10000", "--repeats", "3"], []),
+    "bench_terms.py": ("The cage at several refinements and the cost of every term",
+                       ["--steps", "0.8", "0.5", "--repeats", "3", "--compile-repeats", "1"], []),
+    "design_gradient_cost.py": ("Design gradients: the adjoint against one forward solve", ["--quick"], []),
+}
+
+
+def _as_markdown(stdout: str) -> str:
+    """A script's output in the report: Markdown tables kept as they are, plain text fenced; its headings
+    demoted below the report's own (## is a section of the report)."""
+    lines = [("#### " + line.lstrip("#").lstrip()) if line.startswith("#") else line for line in stdout.splitlines()]
+    blocks, plain = [], []
+
+    def flush():
+        if any(p.strip() for p in plain):
+            blocks.append("```\n" + "\n".join(plain).strip("\n") + "\n```")
+        plain.clear()
+
+    for line in lines:
+        if line.startswith("|") or line.startswith("#### ") or (not line.strip() and not plain):
+            flush()
+            blocks.append(line)
+        else:
+            plain.append(line)
+    flush()
+    return "\n".join(blocks) + "\n"
+
+
+def run(report, quick):
+    report.text(__doc__.split("\n", 2)[2])
+    report.plots.mkdir(parents=True, exist_ok=True)
+    failed = []
+    for script, (what, quick_args, full_args) in SCRIPTS.items():
+        args = [a.format(plots=report.plots) for a in (quick_args if quick else full_args)]
+        command = [sys.executable, str(HERE / script), *args]
+        report.heading(f"`{script}`: {what}")
+        print(f"  [benchmarks] {' '.join(command[1:])}", flush=True)
+        t0 = time.perf_counter()
+        out = subprocess.run(command, capture_output=True, text=True, cwd=HERE.parent)
+        wall = time.perf_counter() - t0
+        report.text(f"`python validation/{script} {' '.join(args)}` ({wall:.0f} s):\n")
+        if out.returncode:
+            tail = "\n".join(out.stderr.strip().splitlines()[-15:])
+            report.text(f"**Failed** (exit {out.returncode}):\n\n```\n{tail}\n```\n")
+            failed.append(script)
+            continue
+        report.text(_as_markdown(out.stdout))
+        if "--plot" in args:
+            plot = pathlib.Path(args[args.index("--plot") + 1])
+            report.text(f"![{script}]({plot.relative_to(report.path.parent)})\n")
+    if failed:
+        raise RuntimeError(f"benchmark scripts failed: {failed}")
