@@ -313,6 +313,8 @@ class Net:
 
     def seam(self, a: Side, b: Side):
         """Sew panel side ``a`` to panel side ``b``: they share their border nodes."""
+        if a == b:  # its nodes would merge pairwise from both ends: the side folded onto itself
+            raise SceneError(f"seam: side {getattr(a, 'index', '?')} of panel '{getattr(a, 'panel', '?')}' is sewn to itself")
         self._seams.append((a, b))
 
     def fix(self, where, axes="xyz"):
@@ -538,7 +540,9 @@ class Net:
             try:
                 div[p.name] = np.array(side_divisions(p.corners[:, 3:5], p.step, _mesh_length(p.twine)), dtype=int)
             except PanelError as err:
-                raise SceneError(str(err)) from err
+                # the mesher names the function, not the panel, in what it finds wrong here
+                message = str(err).removeprefix("panel 'side_divisions': ")
+                raise SceneError(f"panel '{p.name}': {message}") from err
         sides = [s for seam in self._seams for s in seam]
         for s in sides:
             self._check_side(s, "seam")

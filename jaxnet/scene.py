@@ -292,9 +292,17 @@ def _panel_name(scene, family, e):
 def _check_triangles(family, n, culprit, what):
     """Vertex indices within 0..n-1, finite twine coordinates, d != 0 (eq. 4.7); returns the (E, 3) indices."""
     tri = np.asarray(family.vertices)
+    if tri.ndim != 2 or tri.shape[1] != 3:
+        raise SceneError(f"{what}: vertices must have shape (E, 3) (three nodes per triangle), got {tri.shape}")
+    _check_indices(tri, f"{what}: vertices")
     if tri.size and (tri.min() < 0 or tri.max() >= n):
         e = int(np.argwhere((tri < 0) | (tri >= n))[0][0])
         raise SceneError(f"{culprit(e)}: vertex index outside 0..{n - 1}")
+    twice = np.flatnonzero((tri[:, 0] == tri[:, 1]) | (tri[:, 1] == tri[:, 2]) | (tri[:, 0] == tri[:, 2]))
+    if twice.size:
+        e = int(twice[0])
+        raise SceneError(f"{culprit(e)}: a node appears twice among its vertices {tri[e].tolist()}")
+    _check_shapes(family, what, {"uv": (len(tri), 3, 2)})
     uv = np.asarray(family.uv, dtype=float)
     _check_finite(uv, f"{what} twine coordinates")
     d = (uv[:, 1, 0] - uv[:, 0, 0]) * (uv[:, 2, 1] - uv[:, 0, 1]) - (uv[:, 2, 0] - uv[:, 0, 0]) * (uv[:, 1, 1] - uv[:, 0, 1])
@@ -320,11 +328,15 @@ def _check_finite(values, what):
 
 def _check_positive(values, what, culprit, strict=True):
     values = np.asarray(values, dtype=float)
+    infinite = np.flatnonzero(np.isinf(values))
+    if infinite.size:  # inf passes the sign test but makes every force NaN
+        i = int(infinite[0])
+        raise SceneError(f"{culprit(i)}: {what} must be finite, got {float(values[i])!r}")
     bad = np.flatnonzero(~(values > 0) if strict else ~(values >= 0))
     if bad.size:
         i = int(bad[0])
         sign = "> 0" if strict else ">= 0"
-        raise SceneError(f"{culprit(i)}: {what} must be {sign}, got {values[i]!r}")
+        raise SceneError(f"{culprit(i)}: {what} must be {sign}, got {float(values[i])!r}")
 
 
 def _per_axis(nodes, name, n):
@@ -333,6 +345,44 @@ def _per_axis(nodes, name, n):
     if arr.shape != (n, 3):
         raise SceneError(f"nodes: {name} must have shape ({n}, 3) (per node, along x, y, z), got {arr.shape}")
     return arr
+
+
+def _check_shapes(family, what, shapes):
+    """Every field of ``family`` named in ``shapes`` (field -> expected shape) that is not None has that shape:
+    per-element arrays of the wrong length would otherwise fail inside the compiled program, unnamed."""
+    for name, shape in shapes.items():
+        value = getattr(family, name)
+        if value is None:
+            continue
+        got = np.shape(value)
+        if got != shape:
+            raise SceneError(f"{what}: {name} must have shape {shape}, got {got}")
+
+
+def _check_indices(values, what):
+    """Node indices must be integers (a float index is a mistake, not a node)."""
+    values = np.asarray(values)
+    if values.size and not np.issubdtype(values.dtype, np.integer):
+        raise SceneError(f"{what} must be integer node indices, got dtype {values.dtype}")
+
+
+def _scalar(value, what):
+    """A scalar parameter as a float, or a SceneError naming it (a string or an array where a number belongs)."""
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise SceneError(f"{what} must be a number, got {value!r}") from None
+
+
+def _vector(value, what):
+    """A (3,) finite vector, or a SceneError naming it."""
+    try:
+        v = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        v = None
+    if v is None or v.shape != (3,) or not np.all(np.isfinite(v)):
+        raise SceneError(f"{what} must be 3 finite numbers (x, y, z), got {value!r}")
+    return v
 
 
 def _axis_culprit(arr_index):
@@ -416,31 +466,76 @@ def has_free_surface(scene) -> bool:
     return bool(np.isfinite(scene.environment.surface_level))
 
 
+def _check_environment(env):
+    """Scalars finite numbers (surface_level NaN for none), unit 'up' and current direction, waves or None."""
+    gravity, rho, speed = (_scalar(getattr(env, k), f"environment: {k}") for k in ("gravity", "water_density",
+                                                                                 "current_speed"))
+    if not np.isfinite(gravity) or gravity < 0:
+        raise SceneError(f"environment: gravity must be finite and >= 0, got {env.gravity!r}")
+    if not (np.isfinite(rho) and rho > 0):
+        raise SceneError(f"environment: water density must be > 0, got {env.water_density!r}")
+    if abs(np.linalg.norm(_vector(env.up, "environment: 'up'")) - 1.0) > 1e-9:
+        raise SceneError(f"environment: 'up' must be a unit vector, got {env.up!r}")
+    if not (np.isfinite(speed) and speed >= 0):
+        raise SceneError(f"environment: current_speed must be finite and >= 0, got {env.current_speed!r}")
+    direction = _vector(env.current_direction, "environment: current_direction")
+    if speed > 0 and abs(np.linalg.norm(direction) - 1.0) > 1e-9:
+        raise SceneError(f"environment: current_direction must be a unit vector, got {env.current_direction!r}")
+    if np.isinf(_scalar(env.surface_level, "environment: surface_level")):
+        raise SceneError(f"environment: surface_level must be a finite height (m), or NaN for no free surface, got "
+                         f"{env.surface_level!r}")
+    if not np.isfinite(_scalar(env.time, "environment: time")):
+        raise SceneError(f"environment: time must be finite (s), got {env.time!r}")
+    ca = _scalar(env.added_mass_coefficient, "environment: added_mass_coefficient")
+    if not (np.isfinite(ca) and ca >= 0):
+        raise SceneError(f"environment: added_mass_coefficient must be finite and >= 0, got {env.added_mass_coefficient!r}")
+    if env.waves is not None and not (hasattr(env.waves, "velocity") and hasattr(env.waves, "acceleration")):
+        raise SceneError(f"environment: waves must be None or waves such as jaxnet.waves.Airy, got {env.waves!r}")
+
+
+def _check_catch(scene):
+    """The catch's numbers (finite volume > 0, Cd >= 0, symmetry >= 1, unit axis, finite centre) and netting to
+    hold it. A volume larger than the net holds is allowed: the front then sits at the opening and the whole net
+    carries the pressure (FEMNET's behaviour; :func:`jaxnet.catch.catch_front` reports ``holds`` False)."""
+    catch = scene.catch
+    volume, cd, symmetry = (_scalar(getattr(catch, k), f"catch: {k}") for k in ("volume", "drag_coefficient", "symmetry"))
+    if not (np.isfinite(volume) and volume > 0):
+        raise SceneError(f"catch: volume must be finite and > 0 (m³), got {catch.volume!r}")
+    if not (np.isfinite(cd) and cd >= 0):
+        raise SceneError(f"catch: drag_coefficient must be finite and >= 0, got {catch.drag_coefficient!r}")
+    if not (np.isfinite(symmetry) and symmetry >= 1):
+        raise SceneError(f"catch: symmetry (copies of the modelled part) must be finite and >= 1, got {catch.symmetry!r}")
+    if abs(np.linalg.norm(_vector(catch.axis, "catch: axis")) - 1.0) > 1e-9:
+        raise SceneError(f"catch: axis must be a unit vector, got {catch.axis!r}")
+    _vector(catch.center, "catch: center")
+    if scene.netting is None:
+        raise SceneError("catch: the scene has no diamond-mesh netting to hold the catch")
+
+
+def _check_enclosure(enclosure):
+    _vector(enclosure.center, "enclosure: center")
+    if abs(np.linalg.norm(_vector(enclosure.axis, "enclosure: axis")) - 1.0) > 1e-9:
+        raise SceneError(f"enclosure: axis must be a unit vector, got {enclosure.axis!r}")
+
+
 def validate(scene: Scene) -> None:
     """Raise :class:`SceneError` if the scene cannot be solved; the message names the culprit."""
     nodes = scene.nodes
-    n = scene.n_nodes
     pos = np.asarray(nodes.position, dtype=float)
     if pos.ndim != 2 or pos.shape[1] != 3:
         raise SceneError(f"node positions must have shape (N, 3), got {pos.shape}")
+    n = scene.n_nodes
+    _check_shapes(nodes, "nodes", {"fixed": (n, 3), "mass": (n,), "volume": (n,), "force": (n, 3), "drag_area": (n,),
+                                   "size": (n,), "added_mass": (n, 3)})
     for name in ("position", "force", "mass", "volume"):
         arr = np.asarray(getattr(nodes, name), dtype=float)
         bad = np.argwhere(~np.isfinite(arr))
         if bad.size:
-            raise SceneError(f"node {int(bad[0][0])}: {name} is not finite ({arr[tuple(bad[0])]!r})")
+            raise SceneError(f"node {int(bad[0][0])}: {name} is not finite ({float(arr[tuple(bad[0])])!r})")
     _check_positive(nodes.mass, "mass", lambda i: f"node {i}", strict=False)
     _check_positive(nodes.volume, "displaced volume", lambda i: f"node {i}", strict=False)
     env = scene.environment
-    if not np.isfinite(env.gravity) or env.gravity < 0:
-        raise SceneError(f"environment: gravity must be finite and >= 0, got {env.gravity!r}")
-    if not env.water_density > 0:
-        raise SceneError(f"environment: water density must be > 0, got {env.water_density!r}")
-    if abs(np.linalg.norm(env.up) - 1.0) > 1e-9:
-        raise SceneError(f"environment: 'up' must be a unit vector, got {env.up!r}")
-    if not (np.isfinite(env.current_speed) and env.current_speed >= 0):
-        raise SceneError(f"environment: current_speed must be finite and >= 0, got {env.current_speed!r}")
-    if env.current_speed > 0 and abs(np.linalg.norm(env.current_direction) - 1.0) > 1e-9:
-        raise SceneError(f"environment: current_direction must be a unit vector, got {env.current_direction!r}")
+    _check_environment(env)
     depth, factor = np.asarray(env.profile_depth, dtype=float), np.asarray(env.profile_factor, dtype=float)
     if depth.shape != factor.shape or depth.ndim != 1:
         raise SceneError(f"environment: profile_depth and profile_factor must be 1-D of one length, got "
@@ -459,6 +554,8 @@ def validate(scene: Scene) -> None:
         net = scene.netting
         culprit = lambda e: f"triangle {e} ({_panel_name(scene, net, e)})"  # noqa: E731
         tri = _check_triangles(net, n, culprit, "netting")
+        per_triangle = {f.name: (len(tri),) for f in dataclasses.fields(Netting) if f.name not in ("vertices", "uv")}
+        _check_shapes(net, "netting", per_triangle)
         _check_positive(net.l0, "unstretched twine length l0", culprit)
         _check_positive(net.ea_traction, "traction stiffness EA", culprit, strict=False)
         _check_positive(net.ea_compression, "compression stiffness EA", culprit, strict=False)
@@ -489,6 +586,9 @@ def validate(scene: Scene) -> None:
         hexa = scene.hexagonal
         culprit = lambda e: f"hexagonal triangle {e} ({_panel_name(scene, hexa, e)})"  # noqa: E731
         tri = _check_triangles(hexa, n, culprit, "hexagonal")
+        _check_shapes(hexa, "hexagonal", {"l0": (len(tri), 3), "ea_traction": (len(tri), 3),
+                                          "ea_compression": (len(tri), 3), "diameter": (len(tri),),
+                                          "density": (len(tri),), "panel": (len(tri),)})
         for name in ("l0", "ea_traction", "ea_compression"):
             values = np.asarray(getattr(hexa, name), dtype=float).min(axis=1)
             _check_positive(values, name, culprit, strict=(name == "l0"))
@@ -505,6 +605,10 @@ def validate(scene: Scene) -> None:
     if scene.bars is not None:
         bars = scene.bars
         ends = np.asarray(bars.ends)
+        if ends.ndim != 2 or ends.shape[1] != 2:
+            raise SceneError(f"bars: ends must have shape (B, 2) (two nodes per bar), got {ends.shape}")
+        _check_indices(ends, "bars: ends")
+        _check_shapes(bars, "bars", {f.name: (len(ends),) for f in dataclasses.fields(Bars) if f.name != "ends"})
         if ends.size and (ends.min() < 0 or ends.max() >= n):
             b = int(np.argwhere((ends < 0) | (ends >= n))[0][0])
             raise SceneError(f"bar {b} ({_cable_name(scene, b)}): end node index outside 0..{n - 1}")
@@ -522,6 +626,11 @@ def validate(scene: Scene) -> None:
             raise SceneError(f"{culprit(int(same[0]))}: both ends on node {ends[same[0], 0]}")
         used[ends.ravel()] = True
         edges.append(ends)
+
+    if scene.catch is not None:
+        _check_catch(scene)
+    if scene.enclosure is not None:
+        _check_enclosure(scene.enclosure)
 
     fixed = np.asarray(nodes.fixed, dtype=bool)
     free_unused = np.flatnonzero(~used & ~fixed.all(axis=1))

@@ -262,6 +262,7 @@ class _Reader:
         self.path = path
         self.pos = 0
         self.starts = [0] + [m.end() for m in re.finditer("\n", text)]
+        self.last = None  # (what, line) of the last value or label read: named when a value is missing or stray
 
     def line(self, pos=None):
         return bisect.bisect_right(self.starts, self.pos if pos is None else pos)
@@ -274,8 +275,18 @@ class _Reader:
         colon = self.text.find(":", self.pos)
         if colon < 0:
             raise self.error(f"the file ends before the field '{what}' (truncated file?)", self.line(len(self.text)))
-        label = self.text[self.pos:colon].split("\n")[-1]
+        before = self.text[self.pos:colon].split("\n")
+        label = before[-1]
+        # FEMNET skips whatever lies between a value and the next label; a number there is a value too many (a
+        # line with more fields than its entry has), which FEMNET would drop silently
+        for k, text in enumerate(before[:-1]):
+            stray = [t for t in text.split() if _NUMBER.fullmatch(t) or t.lower().lstrip("+-") in ("nan", "inf")]
+            if stray:
+                after = f" after {self.last[0]}" if self.last else ""
+                raise self.error(f"unexpected value {stray[0]!r}{after}, before the field '{what}': a line with more "
+                                 "values than its entry has?", self.line(self.pos) + k)
         self.pos = colon + 1
+        self.last = (f"the label {label.strip()!r}", self.line(colon))
         norm = " ".join(label.lower().split())
         if norm == "dynamic":  # "Dynamic: Time step (s):" has two colons
             colon = self.text.find(":", self.pos)
@@ -299,7 +310,12 @@ class _Reader:
             raise self.error(f"'{what}': {tok!r} is not a finite number", line)
         # a decimal number as C's scanf reads it (Python's float() would also take "1_000" or "0x1p3")
         if not _NUMBER.fullmatch(tok):
+            if self.last is not None and line > self.last[1]:
+                # the value is missing from the line above (too few values there), not wrong here
+                raise self.error(f"'{what}': missing: the line ends after {self.last[0]} (too few values on the "
+                                 f"line?); the next line starts with {tok!r}", self.last[1])
             raise self.error(f"'{what}': expected a number, found {tok!r}", line)
+        self.last = (f"'{what}'", line)
         v = float(tok)
         if not math.isfinite(v):
             raise self.error(f"'{what}': {tok!r} is not a finite number", line)
@@ -325,7 +341,22 @@ class _Reader:
 
     def triple(self, key, what, check=None):
         self.label(key, what)
-        return [self.number(f"{what} {axis}", check) for axis in "XYZ"]
+        start = self.last[1]
+        values = [self.number(f"{what} {axis}", check) for axis in "XYZ"]
+        self.one_line(values, start, what, "X Y Z")
+        return values
+
+    def one_line(self, values, line, what, fields, previous=None):
+        """The values of a row (a corner, a cable end, X Y Z) must all be on its line ``line``, and a row must not
+        start on the line of the ``previous`` row (its (what, line)): a row with a value missing or one too many
+        would otherwise shift the next rows, and the error show up lines later, or never."""
+        if previous is not None and previous[1] == line:
+            what, line = previous  # the previous row had a value too many: this one began on its line
+        elif all(v.line == line for v in values):
+            return
+        text = self.text[self.starts[line - 1]:self.starts[line] if line < len(self.starts) else len(self.text)]
+        found = len(text.split(":")[-1].split())
+        raise self.error(f"{what}: expected {len(fields.split())} values on its line ({fields}), found {found}", line)
 
 
 @dataclasses.dataclass
@@ -431,11 +462,15 @@ def parse_don(path) -> Case:
         r.integer(f"cable {k + 1} number")
         r.label("ends", f"cable {k + 1}: extremities")
         ends, etype = [], []
+        previous = None
         for e in range(2):
             what = f"cable {k + 1} end {e + 1}"
-            r.integer(f"{what} number")
-            ends.append([r.number(f"{what} {name}", "position").value for name in "xyz"])
+            number = r.integer(f"{what} number")
+            row = [r.number(f"{what} {name}", "position") for name in "xyz"]
             etype.append(r.integer(f"{what} node type", 1))
+            r.one_line([number, *row, etype[-1]], number.line, what, "no x y z type", previous)
+            ends.append([v.value for v in row])
+            previous = (what, number.line)
         mat = {}
         for key, what, check in (("ea", "traction stiffness", ">=0"), ("eac", "compression stiffness", ">=0"),
                                  ("l0", "unstretched length", ">0"), ("density", "volumic mass", ">=0"),
@@ -594,13 +629,15 @@ def _parse_panel(r, k, hexagonal):
     rows, ctype, stype, lines = [], [], [], []
     for c in range(nc.value):
         what = f"{name} corner {c + 1}"
-        r.integer(f"{what} number")
+        number = r.integer(f"{what} number")
         vals = [r.number(f"{what} {coord}", "position" if coord in "xyz" else "meshes")
                 for coord in ("x", "y", "z", "U", "V")]
         rows.append([v.value for v in vals])
         lines.append(vals[0].line)
         ctype.append(r.integer(f"{what} node type", 1))
         stype.append(r.integer(f"{what} following side type", 1))
+        r.one_line([number, *vals, ctype[-1], stype[-1]], number.line, what, "no x y z U V type following-type",
+                   (f"{name} corner {c}", lines[-2]) if c else None)
     mat = {}
     if hexagonal:
         # FEMNET reads the rest of the last corner's line, then skips one whole line (two fgets) before the

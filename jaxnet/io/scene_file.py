@@ -60,6 +60,40 @@ def _keys(obj, allowed, where, required=()):
     return obj
 
 
+def _number(value, where):
+    """A number of the file (not a string, a list or a boolean), or a SceneError naming where it is."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise SceneError(f"{where}: expected a number, got {value!r}")
+    return float(value)
+
+
+def _integer(value, where):
+    """An integer of the file (a float with no fraction will do), or a SceneError naming where it is."""
+    if isinstance(value, float) and value.is_integer():
+        return int(value)
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise SceneError(f"{where}: expected an integer, got {value!r}")
+    return value
+
+
+def _rows(value, where, width):
+    """A (rows, width) array of the file's numbers (rows: lists of ``width`` numbers), or a SceneError naming where."""
+    def numbers(row):
+        return isinstance(row, (list, tuple)) and len(row) == width and all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) for v in row)
+
+    if not isinstance(value, (list, tuple)) or not all(numbers(row) for row in value):
+        raise SceneError(f"{where}: expected rows of {width} numbers, got {value!r}")
+    return np.asarray(value, dtype=float).reshape(-1, width)
+
+
+def _list(value, where):
+    """A 1-D array of the file's numbers, or a SceneError naming where it is."""
+    if not isinstance(value, (list, tuple)):
+        raise SceneError(f"{where}: expected a list of numbers, got {value!r}")
+    return np.array([_number(v, f"{where}[{k}]") for k, v in enumerate(value)], dtype=float)
+
+
 def _material(spec, table, cls, where):
     if isinstance(spec, str):
         if spec not in table:
@@ -67,22 +101,41 @@ def _material(spec, table, cls, where):
         return table[spec]
     fields = [f.name for f in dataclasses.fields(cls)]
     required = [f.name for f in dataclasses.fields(cls) if f.default is dataclasses.MISSING]
-    return cls(**{k: (v if k in _STRINGS else float(v)) for k, v in _keys(spec, fields, where, required).items()})
+    return cls(**{k: (v if k in _STRINGS else _number(v, f"{where}.{k}"))
+                  for k, v in _keys(spec, fields, where, required).items()})
+
+
+def _solver(spec):
+    """Newton's options: numbers where numbers belong, a threshold > 0, at least one iteration, a displacement
+    limit > 0 (the :class:`Newton` class itself takes anything)."""
+    spec = dict(_keys(spec, {f.name for f in dataclasses.fields(Newton)}, "solver"))
+    for key, value in spec.items():
+        if key in ("stiffness", "verbose") or (key == "stall_window" and value is None):
+            continue
+        integer = key in ("max_iter", "line_search", "stall_window")
+        spec[key] = _integer(value, f"solver.{key}") if integer else _number(value, f"solver.{key}")
+    for key, low in (("tol", 0.0), ("max_step", 0.0), ("max_iter", 0)):
+        if key in spec and not spec[key] > low:
+            raise SceneError(f"solver.{key} must be > {low:g}, got {spec[key]!r}")
+    try:
+        return Newton(**spec)
+    except ValueError as err:
+        raise SceneError(f"solver: {err}") from None
 
 
 def _ref(spec, where):
     if isinstance(spec, (list, tuple)):
         if len(spec) != 3:
             raise SceneError(f"{where}: a point must be [x, y, z], got {spec!r}")
-        return tuple(float(v) for v in spec)
+        return tuple(_number(v, f"{where}[{k}]") for k, v in enumerate(spec))
     _keys(spec, {"panel", "corner", "side", "cable", "end"}, where)
     if "panel" in spec:
         if "corner" in spec and "side" in spec:
             raise SceneError(f"{where}: give a corner or a side, not both")
         if "corner" in spec:
-            return Corner(spec["panel"], int(spec["corner"]))
+            return Corner(spec["panel"], _integer(spec["corner"], f"{where}.corner"))
         if "side" in spec:
-            return Side(spec["panel"], int(spec["side"]))
+            return Side(spec["panel"], _integer(spec["side"], f"{where}.side"))
         return PanelRef(spec["panel"])
     if "cable" in spec:
         if "end" in spec:
@@ -108,9 +161,13 @@ def net_from_dict(doc: dict) -> tuple[Net, Newton]:
     _keys(doc, _TOP, "scene")
     env_fields = {f.name for f in dataclasses.fields(Environment)}
     env_spec = dict(_keys(doc.get("environment", {}), env_fields, "environment"))
-    for key in ("up", "current_direction", "profile_depth", "profile_factor"):
-        if key in env_spec:
-            env_spec[key] = np.asarray(env_spec[key], dtype=float)
+    for key, value in env_spec.items():
+        if key in ("up", "current_direction"):
+            env_spec[key] = _triple(value, f"environment.{key}")
+        elif key in ("profile_depth", "profile_factor"):
+            env_spec[key] = _list(value, f"environment.{key}")
+        elif key != "waves":
+            env_spec[key] = _number(value, f"environment.{key}")
     env = Environment(**env_spec)
     net = Net(environment=env)
     twines = {k: _material(v, {}, Twine, f"twines.{k}") for k, v in doc.get("twines", {}).items()}
@@ -118,7 +175,8 @@ def net_from_dict(doc: dict) -> tuple[Net, Newton]:
     for i, p in enumerate(doc.get("panels", [])):
         where = f"panels[{i}]"
         _keys(p, {"name", "corners", "twine", "step"}, where, ("corners", "twine", "step"))
-        net.panel(p.get("name", f"panel{i}"), p["corners"], _material(p["twine"], twines, Twine, f"{where}.twine"), float(p["step"]))
+        net.panel(p.get("name", f"panel{i}"), _rows(p["corners"], f"{where}.corners", 5),
+                  _material(p["twine"], twines, Twine, f"{where}.twine"), _number(p["step"], f"{where}.step"))
     for i, c in enumerate(doc.get("cables", [])):
         where = f"cables[{i}]"
         _keys(c, {"name", "rope", "start", "end", "along", "n_bars", "length"}, where, ("rope",))
@@ -128,8 +186,8 @@ def net_from_dict(doc: dict) -> tuple[Net, Newton]:
             start=_ref(c["start"], f"{where}.start") if "start" in c else None,
             end=_ref(c["end"], f"{where}.end") if "end" in c else None,
             rope=_material(c["rope"], ropes, Rope, f"{where}.rope"),
-            n_bars=c.get("n_bars"),
-            length=c.get("length"),
+            n_bars=_integer(c["n_bars"], f"{where}.n_bars") if "n_bars" in c else None,
+            length=_number(c["length"], f"{where}.length") if "length" in c else None,
             along=along,
         )
     for i, pair in enumerate(doc.get("seams", [])):
@@ -140,15 +198,21 @@ def net_from_dict(doc: dict) -> tuple[Net, Newton]:
         _keys(f, {"at", "axes"}, f"fix[{i}]", ("at",))
         net.fix(_ref(f["at"], f"fix[{i}].at"), f.get("axes", "xyz"))
     for i, a in enumerate(doc.get("attach", [])):
-        _keys(a, {"at", "mass", "volume", "force", "drag_area", "size"}, f"attach[{i}]", ("at",))
-        net.attach(_ref(a["at"], f"attach[{i}].at"), a.get("mass", 0.0), a.get("volume", 0.0), a.get("force", (0.0, 0.0, 0.0)),
-                   a.get("drag_area", 0.0), a.get("size", 0.0))
+        where = f"attach[{i}]"
+        _keys(a, {"at", "mass", "volume", "force", "drag_area", "size"}, where, ("at",))
+        amounts = {k: _number(a[k], f"{where}.{k}") for k in ("mass", "volume", "drag_area", "size") if k in a}
+        if "force" in a:
+            amounts["force"] = _triple(a["force"], f"{where}.force")
+        net.attach(_ref(a["at"], f"{where}.at"), **amounts)
     for i, s in enumerate(doc.get("sinkers", [])):
-        _keys(s, {"at", "mass", "density"}, f"sinkers[{i}]", ("at", "mass"))
-        net.sinker(_ref(s["at"], f"sinkers[{i}].at"), s["mass"], s.get("density", 11340.0))
+        where = f"sinkers[{i}]"
+        _keys(s, {"at", "mass", "density"}, where, ("at", "mass"))
+        net.sinker(_ref(s["at"], f"{where}.at"), **{k: _number(s[k], f"{where}.{k}") for k in ("mass", "density") if k in s})
     for i, s in enumerate(doc.get("floats", [])):
-        _keys(s, {"at", "buoyancy_N", "mass", "size", "drag_area"}, f"floats[{i}]", ("at", "buoyancy_N"))
-        net.float_(_ref(s["at"], f"floats[{i}].at"), s["buoyancy_N"], s.get("mass", 0.0), s.get("size", 0.0), s.get("drag_area", 0.0))
+        where = f"floats[{i}]"
+        _keys(s, {"at", "buoyancy_N", "mass", "size", "drag_area"}, where, ("at", "buoyancy_N"))
+        net.float_(_ref(s["at"], f"{where}.at"), **{k: _number(s[k], f"{where}.{k}")
+                                                    for k in ("buoyancy_N", "mass", "size", "drag_area") if k in s})
     # FEMNET's node-type properties, given to every node of the reference (Net.body, Net.limit)
     for key, fields, give in (("bodies", ("drag_length", "drag_coefficient"), net.body),
                               ("limits", ("limit", "sense"), net.limit)):
@@ -161,10 +225,9 @@ def net_from_dict(doc: dict) -> tuple[Net, Newton]:
                 raise SceneError(f"{where}: {err}") from None
     if "catch" in doc:
         c = _keys(doc["catch"], {"volume", "drag_coefficient", "symmetry", "axis"}, "catch", ("volume",))
-        net.catch(c["volume"], c.get("drag_coefficient", 1.4), c.get("symmetry", 1.0), c.get("axis"))
-    solver_fields = {f.name for f in dataclasses.fields(Newton)}
-    solver = Newton(**_keys(doc.get("solver", {}), solver_fields, "solver"))
-    return net, solver
+        numbers = {k: _number(c[k], f"catch.{k}") for k in ("volume", "drag_coefficient", "symmetry") if k in c}
+        net.catch(**numbers, axis=_triple(c["axis"], "catch.axis") if "axis" in c else None)
+    return net, _solver(doc.get("solver", {}))
 
 
 def read(path) -> tuple[Net, Newton]:
