@@ -129,6 +129,19 @@ class Newton:
     def __post_init__(self):
         if self.stiffness not in assemble.STIFFNESS_PATHS:
             raise ValueError(f"Newton: stiffness must be one of {assemble.STIFFNESS_PATHS}, not {self.stiffness!r}")
+        # refused here, before anything compiles: tol <= 0 would run to max_iter and report a failure that is
+        # the caller's, max_iter 0 would compile a solve that cannot take a step
+        if not (np.isfinite(self.tol) and self.tol > 0):
+            raise ValueError(f"Newton: tol (N) must be finite and > 0, got {self.tol!r}")
+        if isinstance(self.max_iter, bool) or int(self.max_iter) != self.max_iter or self.max_iter < 1:
+            raise ValueError(f"Newton: max_iter must be an integer >= 1, got {self.max_iter!r}")
+        if not self.max_step > 0:
+            raise ValueError(f"Newton: max_step (m) must be > 0 (inf for no limit), got {self.max_step!r}")
+        if self.line_search < 0:
+            raise ValueError(f"Newton: line_search (halvings) must be >= 0, got {self.line_search!r}")
+        if not (0 < self.min_damping <= self.damping <= self.max_damping):
+            raise ValueError(f"Newton: damping must lie in [min_damping, max_damping] with min_damping > 0, got "
+                             f"{self.min_damping!r} <= {self.damping!r} <= {self.max_damping!r}")
 
 
 class Equilibrium(eqx.Module):
@@ -584,6 +597,14 @@ def solve(scene, solver: Newton | None = None, x0=None, raise_on_failure=True, *
     scene_lib.validate(scene)
     model = model_lib.active_terms(scene)
     pattern = assemble.build_pattern(scene, model)
+    if x0 is not None:
+        x0 = np.asarray(x0, dtype=float)
+        if x0.shape != (scene.n_nodes, 3):
+            raise ValueError(f"solve: x0 (start positions) must have shape ({scene.n_nodes}, 3), got {x0.shape}")
+        bad = np.argwhere(~np.isfinite(x0))
+        if bad.size:
+            raise ValueError(f"solve: x0 (start positions) of node {int(bad[0][0])} is not finite: "
+                             f"{x0[bad[0][0]].tolist()}")
     start = np.asarray(scene.nodes.position if x0 is None else x0, dtype=float).ravel()[np.asarray(pattern.free)]
     t0 = time.perf_counter()
     _compile_pieces(jnp.asarray(start), scene, pattern, model, solver.stiffness)
