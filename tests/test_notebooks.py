@@ -91,6 +91,136 @@ def test_design_panel_cuts(monkeypatch):
     assert all(best["report"][b][2].meshes == best["foot"] for b in ns["bottoms"])
 
 
+def test_quickstart(monkeypatch):
+    import jaxnet as jn
+
+    ns = run_notebook("quickstart.ipynb", monkeypatch)
+    scene, eq, forces, n, twine = ns["scene"], ns["eq"], ns["forces"], ns["n"], ns["twine"]
+    tol = jn.Newton().tol
+    assert eq.converged and float(eq.residual_N) <= tol
+    # the net as a whole: the twines' forces cancel, so reactions + external forces = the sum of the free
+    # nodes' residuals, each below the tolerance (measured: 4e-9 N against loads of 6 N)
+    assert np.abs(ns["balance"]).max() <= scene.n_nodes * tol
+    # immersed weight, closed form: n² meshes of 4 l0 of twine each, and the two ropes along the panel's
+    # width (headline polyamide 1140 kg/m³, sinker bar lead 11340 kg/m³) in sea water
+    g, rho, w = 9.81, 1025.0, n * twine.l0 * np.sqrt(2.0)
+    section = lambda d: np.pi * d**2 / 4  # noqa: E731
+    weight = g * (4 * n**2 * twine.l0 * section(twine.diameter) * (twine.density - rho)
+                  + w * section(8e-3) * (1140.0 - rho) + w * section(0.01) * (11340.0 - rho))
+    np.testing.assert_allclose(forces["weight_and_buoyancy_N"], [0.0, 0.0, -weight], rtol=1e-9, atol=1e-9)
+    # the two ropes lie nearly straight across the flow: Morison drag ½ ρ Cd D L U² of both, within the 5 %
+    # their bow downstream takes off (measured: 1 % less, 2.5 % at full size)
+    U, cd = 0.3, 1.2
+    straight = 0.5 * rho * cd * (8e-3 + 0.01) * w * U**2
+    assert 0.95 * straight <= forces["drag_cables_N"][1] <= straight
+    # the drag and the weight swing the panel back: tilted downstream, its foot still below the headline
+    assert 0.0 < ns["angle"] < 90.0
+
+
+def test_fish_cage_in_current(monkeypatch):
+    import jaxnet as jn
+
+    ns = run_notebook("fish_cage_in_current.ipynb", monkeypatch)
+    rows, table, exponent = ns["rows"], ns["table"], ns["exponent"]
+    tol = jn.Newton().tol
+    assert [row["speed"] for row in rows] == ns["speeds"] and rows[0]["speed"] == 0.0
+    for row in rows:
+        scene, _ = ns["shapes"][row["speed"]]
+        # the whole net in equilibrium: reactions (the collar held in x and y) + drag + weight and buoyancy
+        # vanish to within the free nodes' residuals
+        assert row["balance"] <= scene.n_nodes * tol
+    # drag against speed: the collar is held in plan, so its drag is a rigid body's, ∝ U² (exponent 2 to
+    # within its small change of draught; measured 2.0000); the netting gives way, so its drag grows no
+    # faster than U² and faster than U (measured 1.99 on the small, stiff cage, 1.55-1.93 at full size)
+    np.testing.assert_allclose(exponent["drag_collar"], 2.0, atol=0.01)
+    assert np.all(exponent["drag_netting"] >= 1.0) and np.all(exponent["drag_netting"] <= 2.0 + 5e-3)
+    assert np.all(exponent["drag"] <= 2.0 + 5e-3)
+    # the stronger the current, the less volume the net keeps
+    assert np.all(np.diff(table["volume"]) < 0.0)
+
+
+def test_codend_with_catch(monkeypatch):
+    import jax
+
+    import jaxnet as jn
+    from jaxnet import catch as catch_lib
+
+    ns = run_notebook("codend_with_catch.ipynb", monkeypatch)
+    rows, tol = ns["rows"], jn.Newton().tol
+    assert [row["requested"] for row in rows] == ns["volumes"]
+    for row in rows:
+        scene, x = ns["shapes"][row["requested"]]
+        tri, c, env = scene.netting.vertices, scene.catch, scene.environment
+        sign = scene.netting.outward
+        assert row["holds_the_volume"]
+        # the front encloses the requested catch (whole cod-end): as the report's divergence-theorem sum,
+        # and as the integral of the cross-section A(s) from the front to the rear of the net (-dV/ds = A;
+        # A is piecewise quadratic in s, so 4000 trapezoids are within 1e-6; measured 7e-9)
+        assert row["volume_m3"] == pytest.approx(row["requested"], rel=1e-8)
+        s = np.linspace(row["front_m"], np.max(x[np.asarray(tri)] @ np.asarray(c.axis)), 4001)
+        area = jax.vmap(lambda s_: catch_lib.front_area(x, tri, s_, c.axis, c.symmetry, sign))(s)
+        assert np.trapezoid(np.asarray(area), s) == pytest.approx(row["requested"], rel=1e-6)
+        # the axial push of the catch's pressure forces on the netting behind the front is p × the front's
+        # cross-section (the divergence theorem on the closed catch), with p = ½ ρ Cd U² (4.246)
+        p = 0.5 * float(env.water_density) * float(c.drag_coefficient) * float(env.current_speed) ** 2
+        front_area = float(catch_lib.front_area(x, tri, row["front_m"], c.axis, c.symmetry, sign))
+        assert row["catch_force"] == pytest.approx(p * front_area, rel=1e-9)
+        assert row["drag_N"] == pytest.approx(p * front_area, rel=1e-9)
+        # the net in equilibrium as a whole: reactions + drag + catch pressure
+        assert row["balance"] <= scene.n_nodes * tol
+    # a larger catch reaches further forward, is thicker and wider, and pulls harder
+    by_volume = sorted(rows, key=lambda r: r["requested"])
+    for key in ("thickness_m", "diameter_m", "drag_N", "towing"):
+        assert np.all(np.diff([r[key] for r in by_volume]) > 0), key
+    assert np.all(np.diff([r["front_m"] for r in by_volume]) < 0)
+
+
+def test_dynamics_in_waves(monkeypatch):
+    from scipy.optimize import brentq
+
+    ns = run_notebook("dynamics_in_waves.ipynb", monkeypatch)
+    run, t, start, static = ns["run"], ns["t"], ns["start"], ns["static"]
+    H, T, depth, ramp, collar = ns["H"], ns["T"], ns["depth"], ns["ramp"], ns["collar"]
+    g, omega = 9.81, 2 * np.pi / ns["T"]
+    assert t[0] == 0.0 and t[-1] == pytest.approx(ns["end"]) and int(run.figures["retries"][-1]) == 0
+    # the collar follows the surface at the cage's centre, η = H/2 cos ωt, ramped up by (1 - cos πt/R)/2
+    envelope = np.where(t < ramp, 0.5 * (1.0 - np.cos(np.pi * np.minimum(t, ramp) / ramp)), 1.0)
+    heave = run.positions[:, collar, 2] - start[collar, 2]
+    expected = np.broadcast_to((0.5 * H * envelope * np.cos(omega * t))[:, None], heave.shape)
+    np.testing.assert_allclose(heave, expected, atol=1e-9)
+    # the wave's elevation at each node plotted: Airy's H/2 cos(k x - ωt), k from ω² = g k tanh(k h)
+    k = brentq(lambda k_: g * k_ * np.tanh(k_ * depth) - omega**2, 1e-8, 100.0, xtol=1e-15)
+    for name, i in ns["nodes"].items():
+        np.testing.assert_allclose(ns["elevation"][name], 0.5 * H * np.cos(k * start[i, 0] - omega * t), atol=1e-9)
+    # mean loads over the last whole period against the static ones. Along the current: drag grows as
+    # u|u| of the water's velocity relative to the net, and adding a zero-mean oscillation w to a current U
+    # raises its mean (U² + w² while |w| < U, 2 U |w| beyond) without passing U² + mean w²: for a net held
+    # still, 1 < mean / static < 1 + (a ω coth kh)² / (2 U²), a the wave's amplitude (measured: 4.9)
+    last = ns["means"][-1]
+    U = float(ns["scene"].environment.current_speed)
+    orbital = 0.5 * H * omega / np.tanh(k * depth)
+    assert static["reaction"][0] < 0.0
+    assert 1.0 < last["reaction"][0] / static["reaction"][0] < 1.0 + orbital**2 / (2 * U**2)
+    # vertically: the weights are constant, the buoyancy of the collar heaving through the mean surface is
+    # symmetric about its half-immersed rest, and the inertia of a periodic motion averages out over a
+    # period: the mean is the static reaction to within a few % of the swing (measured 0.8 %)
+    late = t >= last["window"][0]
+    swing = np.ptp(run.figures["reaction_total_N"][late, 2])
+    assert abs(last["reaction"][2] - static["reaction"][2]) < 0.03 * swing
+    # the volume below the rest plane z = 0 (recorded) and below the heaving collar (the notebook's): with
+    # the collar at z_c <= 0 and the whole net below it, they differ by the water column above the collar,
+    # -z_c times the area of the collar's ring (the shoelace formula on its nodes), exactly
+    ring = start[collar, :2]
+    ring = ring[np.argsort(np.arctan2(ring[:, 1], ring[:, 0]))]
+    ring_area = 0.5 * abs(np.dot(ring[:, 0], np.roll(ring[:, 1], -1)) - np.dot(ring[:, 1], np.roll(ring[:, 0], -1)))
+    z_c = ns["collar_z"]
+    below = (z_c <= 0.0) & (run.positions[:, :, 2].max(axis=1) <= z_c + 1e-12)
+    assert below.sum() >= len(t) // 4
+    np.testing.assert_allclose((run.figures["volume_m3"] - ns["held"])[below], -ring_area * z_c[below], rtol=1e-9,
+                               atol=1e-9 * ring_area)
+
+
 def test_every_notebook_has_a_test():
-    tested = {"hand_vs_autodiff.ipynb", "design_panel_cuts.ipynb"}
+    tested = {"hand_vs_autodiff.ipynb", "design_panel_cuts.ipynb", "quickstart.ipynb", "fish_cage_in_current.ipynb",
+              "codend_with_catch.ipynb", "dynamics_in_waves.ipynb"}
     assert {p.name for p in NOTEBOOKS.glob("*.ipynb")} == tested
