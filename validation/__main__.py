@@ -17,7 +17,7 @@ import time
 import traceback
 
 #: the sections, in report order: module name in this package
-SECTIONS = ("convergence", "experiments", "bad_input", "benchmarks")  # the others are added as they land
+SECTIONS = ("convergence", "stability", "experiments", "bad_input", "benchmarks")
 
 
 def main(argv=None):
