@@ -40,7 +40,7 @@ import pathlib
 import numpy as np
 
 from jaxnet.net import CableEnd, CableNodes, Corner, Net, PanelRef, Rope, Side, Twine
-from jaxnet.scene import Environment, SceneError, validate
+from jaxnet.scene import Environment, SceneError
 from jaxnet.solve.statics import Newton
 
 _TOP = {"environment", "twines", "ropes", "panels", "cables", "seams", "fix", "attach", "sinkers", "floats", "catch",
