@@ -182,8 +182,15 @@ def _previous(scene, conn, motion):
 
 
 def states(x, scene, model):
-    """Global quantities some force terms need (e.g. the catch front), computed once from positions x."""
-    return {t.name: t.term.state(x, scene) for t in model if t.term.kind == "force" and t.term.state is not None}
+    """Global quantities some force terms need (e.g. the catch front), computed once from positions x: terms
+    that share a state function (the catch pressure and the netting drag behind the front) share its value."""
+    by_function, out = {}, {}
+    for t in model:
+        if t.term.kind == "force" and t.term.state is not None:
+            if t.term.state not in by_function:
+                by_function[t.term.state] = t.term.state(x, scene)
+            out[t.name] = by_function[t.term.state]
+    return out
 
 
 def energy(x, scene, model: tuple[ActiveTerm, ...], elastic_scale=1.0):

@@ -17,11 +17,12 @@ series.pvd + net_NNNNN.vtu for ParaView, checkpoint.npz; ``--resume`` continues 
 record), with a progress bar. A FEMNET case takes its own time settings; the built-in ``cage_waves`` (the
 default with ``--dynamic``) is the cage in regular waves, its collar heaving.
 
-Compiled programs are kept on disk (JAX's persistent compilation cache, in ``--cache DIR``, default
-``$XDG_CACHE_HOME/jaxnet`` or ``~/.cache/jaxnet``; ``--no-cache`` to switch it off; a
-``JAX_COMPILATION_CACHE_DIR`` set by the user wins): a second run of a case of the same shape and terms —
-another current speed, another catch, the same case again — loads them instead of compiling (FEMNET's
-c2: about 10 s of compilation becomes about 1 s).
+Compiled programs are kept on disk (in ``--cache DIR``, default ``$XDG_CACHE_HOME/jaxnet`` or
+``~/.cache/jaxnet``: the static solver's programs whole, :mod:`jaxnet.solve.programs`, the others in JAX's
+persistent compilation cache; ``--no-cache`` to switch both off; a ``JAX_COMPILATION_CACHE_DIR`` set by the
+user wins): a second run of a case of the same shape and terms — another current speed, another catch, the
+same case again — loads them instead of tracing and compiling (FEMNET's c2: about 10 s of compilation
+becomes about half a second).
 """
 
 from __future__ import annotations

@@ -207,11 +207,6 @@ def _netting_drag(x, p, env, state, models, shielded, moving=False, waves=False,
     return total
 
 
-def _drag_state(x, scene):
-    """The catch front, for the shielding of the netting behind it (None without a catch)."""
-    return None if scene.catch is None else _catch_state(x, scene)
-
-
 def _bar_drag(x, p, env, state, moving=False, waves=False, velocity=None):
     def force(c):
         return drag.bar_drag(x, p.rest_length, p.diameter, p.cd_normal, p.tangential_ratio * p.cd_normal, c,
@@ -247,8 +242,12 @@ def _bottom_friction(x, p, env, state, axis, floor):
 
 
 def _catch_state(x, scene):
-    """The catch front (abscissa along the axis, m) for positions x, with the pressure and axis."""
+    """The catch front (abscissa along the axis, m) for positions x, with the pressure and axis (None without a
+    catch). The state of the catch pressure and of the netting drag (the shielding of the netting behind the
+    front): the same function, so that :func:`jaxnet.assemble.states` solves for the front once."""
     c, env = scene.catch, scene.environment
+    if c is None:
+        return None
     front = catch_lib.catch_front(x, scene.netting.vertices, c.axis, c.volume, c.symmetry, sign=scene.netting.outward)
     p = pressure.dynamic_pressure(env.water_density, c.drag_coefficient, env.current_speed)
     return {"front": front.position, "pressure": p, "axis": c.axis}
@@ -435,7 +434,7 @@ TERMS = (
     Term("mesh_opening", "netting", "energy", _opening, _netting_parameter_options("opening_stiffness"), elastic=True),
     Term("knot_contact", "netting", "energy", _knot_contact, _knot_options, elastic=True),
     Term("twine_bending", "hinges", "energy", _twine_bending, _hinge_options, elastic=True),
-    Term("netting_drag", "netting", "force", _netting_drag, _netting_drag_options, state=_drag_state, moving=True),
+    Term("netting_drag", "netting", "force", _netting_drag, _netting_drag_options, state=_catch_state, moving=True),
     Term("bar_drag", "bars", "force", _bar_drag, _bar_drag_options, moving=True),
     Term("node_drag", "nodes", "force", _node_drag, _node_drag_options, moving=True),
     Term("node_box_drag", "nodes", "force", _node_box_drag, _node_box_drag_options, moving=True),

@@ -81,26 +81,33 @@ def test_scene_file_and_bad_scene_file(tmp_path, capsys):
 
 
 def test_compiled_programs_are_kept_on_disk_and_reused(tmp_path):
-    """The solver's compiled pieces hold no host callback, so JAX's persistent cache keeps them: a second
-    process solving the same scene finds them there (fewer new cache entries: none) and gives the same
-    answer. Run in subprocesses: the cache is process-wide JAX configuration."""
+    """The solver's compiled programs (evaluation, tangent, spring network, loads) are kept on disk whole
+    (:mod:`jaxnet.solve.programs`): a second process solving the same scene loads them, compiles nothing
+    (no new program, none rewritten, no new entry in JAX's own cache) and gives the same answer; a damaged
+    program file is compiled again and replaced, never trusted. Run in subprocesses: the cache is
+    process-wide JAX configuration."""
     cache = tmp_path / "cache"
+    programs = cache / "jaxnet-programs"
 
     def run(out):
         cmd = [sys.executable, "-m", "jaxnet.cli", "run", "--scene", "hanging", "--quiet", "--cache", str(cache),
                "--out", str(tmp_path / out)]
         subprocess.run(cmd, check=True, capture_output=True)
-        return json.loads((tmp_path / out / "result.json").read_text()), set(p.name for p in cache.iterdir())
+        return (json.loads((tmp_path / out / "result.json").read_text()),
+                {p.name: p.stat().st_mtime_ns for p in programs.iterdir()}, set(p.name for p in cache.iterdir()))
 
-    def solver_pieces(entries):
-        return {e for e in entries if e.startswith(("jit__evaluate-", "jit__tangent-", "jit_stiffness-"))}
-
-    first, entries = run("a")
-    assert len(solver_pieces(entries)) == 3  # the evaluation, the tangent and the spring network
-    second, entries_after = run("b")
-    assert solver_pieces(entries_after) == solver_pieces(entries)  # found on disk: nothing new compiled
+    first, kept, entries = run("a")
+    assert sorted(name.split("-")[0] for name in kept) == ["evaluate", "loads", "springs", "tangent"]
+    second, kept_after, entries_after = run("b")
+    assert kept_after == kept and entries_after == entries  # loaded: nothing compiled, nothing written
     assert second["iterations"] == first["iterations"]
     np.testing.assert_allclose(second["reaction_N"], first["reaction_N"], rtol=1e-12)
+    damaged = next(name for name in kept if name.startswith("tangent-"))
+    (programs / damaged).write_bytes(b"not a program")
+    third, kept_third, _ = run("c")
+    assert set(kept_third) == set(kept) and kept_third[damaged] != kept[damaged]  # compiled again, replaced
+    assert third["iterations"] == first["iterations"]
+    np.testing.assert_allclose(third["reaction_N"], first["reaction_N"], rtol=1e-12)
 
 
 def test_dynamic_run_of_a_net_at_rest_stays_at_rest_and_resumes(tmp_path):

@@ -160,11 +160,11 @@ def test_a_solve_with_a_catch_compiles_its_evaluation_and_tangent_once(caplog):
     import jax
 
     from jaxnet.scenes.codend import codend
-    from jaxnet.solve import statics
+    from jaxnet.solve import programs
 
     scene = codend(meshes_around=8, meshes_along=6, catch_m3=0.01).build()
     jax.clear_caches()
-    statics._compiled.clear()
+    programs.clear()
     jax.config.update("jax_log_compiles", True)  # globally: the pieces compile in worker threads
     try:
         with caplog.at_level("WARNING"):

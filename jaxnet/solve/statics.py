@@ -17,8 +17,9 @@ Two drivers run the same iteration (the functions below are shared). :func:`solv
 host: the evaluation of the residual and the tangent are compiled once each (in parallel), and each
 iteration calls the tangent once, factorises on the host (SuperLU, the ordering computed once per solve:
 :class:`jaxnet.linalg.HostSolver`) and calls the evaluation once per line-search trial. Its compiled pieces
-are half the size of the whole loop's program and hold no host callback, so JAX's persistent compilation
-cache can keep them between processes (the command line turns it on). :func:`newton_loop` is the whole
+are half the size of the whole loop's program and hold no host callback, so they are kept whole between
+processes (:mod:`jaxnet.solve.programs`, when a compilation cache directory is set: the command line sets
+one): a second process loads them without tracing or compiling. :func:`newton_loop` is the whole
 iteration as one jittable program (the factorisation a host callback), for use inside traced code.
 
 Stiffness continuation. A net that starts far from its equilibrium shape (FEMNET's cases start flat: a
@@ -71,7 +72,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxnet import assemble, linalg, model as model_lib, scene as scene_lib
-from jaxnet.solve import spring_network
+from jaxnet.solve import programs, spring_network
 
 #: stop reasons (``Equilibrium.status``)
 RUNNING, CONVERGED, MAX_ITERATIONS, NON_FINITE, STALLED = 0, 1, 2, 3, 4
@@ -393,42 +394,42 @@ _newton_jit = jax.jit(newton_loop, static_argnames=("model", "opts"))
 
 _evaluate_jit = jax.jit(_evaluate, static_argnames=("model",))
 _tangent_jit = jax.jit(_tangent, static_argnames=("model", "stiffness"))
-_springs_jit = jax.jit(spring_network.stiffness, static_argnames=("model",))
+
+
+def _springs(scene, pattern, model):
+    return spring_network.stiffness(scene, model, pattern)
+
+
+_springs_jit = jax.jit(_springs, static_argnames=("model",))
 # jitted although it runs once per solve: op by op, its vmaps compile dozens of small programs (1.7 s cold)
 _loads_jit = jax.jit(assemble.loads, static_argnames=("model",))
 
-#: shapes already compiled, keyed by what identifies a program: the active terms and their options, and
-#: the structure, shapes and dtypes of the arguments. A second solve of a scene of the same shape (another
-#: load, another panel cut, another start) reuses the programs (``jax.jit``'s own cache) and compiles nothing.
-_compiled: set = set()
-
-
-def _signature(args):
-    leaves, treedef = jax.tree.flatten(args)
-    return treedef, tuple((np.shape(a), jnp.result_type(a).str) for a in leaves)
-
-
 def _compile_pieces(start, scene, pattern, model, stiffness="autodiff"):
-    """Compile the evaluation, the tangent, the spring network and the loads for this scene's shape, in parallel
-    threads (XLA compiles without the GIL), by calling them once. The loop then calls the same ``jax.jit``
-    functions (their C++ dispatch costs microseconds, where an AOT executable's Python call costs a
-    millisecond for a scene's many leaves). The pieces hold no host callback, so JAX's persistent
-    compilation cache, when on, keeps them on disk for the next process."""
-    key = (model, stiffness, _signature((start, scene, pattern)))
-    if key in _compiled:
-        return
+    """The evaluation, tangent, spring network and loads compiled for this scene's shape and terms, as a dict
+    of callables taking their dynamic arguments only (:mod:`jaxnet.solve.programs`: from this process's
+    memory, else from disk, else compiled, the missing ones in parallel threads: XLA compiles without the
+    GIL). A second solve of a scene of the same shape (another load, another panel cut, another start)
+    reuses them and compiles nothing; a second process loads them from disk, without tracing."""
     zero = jnp.zeros(scene.nodes.position.shape)
-    # placeholders for the force terms' states (tracing only the states, not the whole evaluation again)
-    state = jax.tree.map(lambda s: jnp.zeros(s.shape, s.dtype), jax.eval_shape(
-        lambda: assemble.states(assemble.positions(start, scene, pattern), scene, model)))
-    calls = (lambda: _evaluate_jit(start, zero, zero, 1.0, scene, pattern, model=model),
-             lambda: _tangent_jit(start, state, 1.0, scene, pattern, model=model, stiffness=stiffness),
-             lambda: _springs_jit(scene, model, pattern),
-             lambda: _loads_jit(scene, model))
-    with concurrent.futures.ThreadPoolExecutor(len(calls)) as pool:
-        for out in pool.map(lambda call: call(), calls):
-            jax.block_until_ready(out)
-    _compiled.add(key)
+    evaluate_args = (start, zero, zero, 1.0, scene, pattern)
+    evaluate = programs.lookup("evaluate", evaluate_args, {"model": model})
+    # placeholders for the force terms' states (the catch front), the tangent's arguments: from the
+    # evaluation's outputs when it is compiled already, else by tracing the states alone
+    shapes = evaluate.out_info[4] if evaluate is not None else jax.eval_shape(
+        lambda: assemble.states(assemble.positions(start, scene, pattern), scene, model))
+    state = jax.tree.map(lambda s: jnp.zeros(s.shape, s.dtype), shapes)
+    pieces = {"evaluate": (_evaluate_jit, evaluate_args, {"model": model}),
+              "tangent": (_tangent_jit, (start, state, 1.0, scene, pattern), {"model": model, "stiffness": stiffness}),
+              "springs": (_springs_jit, (scene, pattern), {"model": model}),
+              "loads": (_loads_jit, (scene,), {"model": model})}
+    found = {name: evaluate if name == "evaluate" else programs.lookup(name, args, static)
+             for name, (_, args, static) in pieces.items()}
+    missing = [name for name, program in found.items() if program is None]
+    if missing:
+        with concurrent.futures.ThreadPoolExecutor(len(missing)) as pool:
+            compiled = pool.map(lambda name: programs.compile(name, *pieces[name]), missing)
+            found.update(zip(missing, compiled))
+    return found
 
 
 def _stalled(hist, window):
@@ -468,16 +469,20 @@ def stiffness_stages(opts: Newton):
     return [float(opts.soft_start * opts.stiffening**k) for k in range(n)] + [1.0]
 
 
-def host_loop(start, scene, pattern, model, opts: Newton):
+def host_loop(start, scene, pattern, model, opts: Newton, pieces=None):
     """The Newton iteration of :func:`newton_loop`, driven from Python: each iteration calls the compiled
     tangent once, factorises on the host (SuperLU) and calls the compiled evaluation once per line-search
-    trial. Same rules (shared functions), same result; prints progress as it goes when verbose."""
+    trial. Same rules (shared functions), same result; prints progress as it goes when verbose.
+    ``pieces``: the compiled programs (:func:`_compile_pieces`), obtained here if not given."""
+    if pieces is None:
+        pieces = _compile_pieces(jnp.asarray(start), scene, pattern, model, opts.stiffness)
+    evaluate, tangent = pieces["evaluate"], pieces["tangent"]
     n_nodes = scene.n_nodes
     free = np.asarray(pattern.free)
     indptr, indices = np.asarray(pattern.indptr), np.asarray(pattern.indices)
     factor = linalg.HostSolver(indptr, indices)
-    springs = np.asarray(_springs_jit(scene, model, pattern))
-    load_device = _loads_jit(scene, model)  # constant: computed once, passed to every evaluation
+    springs = np.asarray(pieces["springs"](scene, pattern))
+    load_device = pieces["loads"](scene)  # constant: computed once, passed to every evaluation
     load = np.asarray(load_device)
     X0 = np.asarray(scene.nodes.position, dtype=float).ravel()
 
@@ -495,8 +500,7 @@ def host_loop(start, scene, pattern, model, opts: Newton):
     stage = len(scales) - 1  # plain Newton (the net as it is) until the continuation starts
 
     def run(x, f_frozen):
-        e, force, f_nc, m, state = _evaluate_jit(x, f_frozen, load_device, scales[stage], scene, pattern,
-                                                 model=model)
+        e, force, f_nc, m, state = evaluate(x, f_frozen, load_device, scales[stage], scene, pattern)
         return float(e), np.asarray(force), np.asarray(f_nc), float(m), state
 
     x = np.asarray(start, dtype=float)
@@ -540,7 +544,7 @@ def host_loop(start, scene, pattern, model, opts: Newton):
                 print(f"  stiffness x {scales[stage]:.3g}")
         X = positions(x)
         e = e_stored - float(np.sum((load + f_nc) * X))
-        data = np.asarray(_tangent_jit(x, state, scales[stage], scene, pattern, model=model, stiffness=opts.stiffness))
+        data = np.asarray(tangent(x, state, scales[stage], scene, pattern))
         dx, ok = factor.solve(data + mu * springs, f)
         biggest = nodal(dx).max()
         dx = dx * min(1.0, opts.max_step / max(biggest, 1e-300))
@@ -621,9 +625,9 @@ def solve(scene, solver: Newton | None = None, x0=None, raise_on_failure=True, *
                              f"{x0[bad[0][0]].tolist()}")
     start = np.asarray(scene.nodes.position if x0 is None else x0, dtype=float).ravel()[np.asarray(pattern.free)]
     t0 = time.perf_counter()
-    _compile_pieces(jnp.asarray(start), scene, pattern, model, solver.stiffness)
+    pieces = _compile_pieces(jnp.asarray(start), scene, pattern, model, solver.stiffness)
     t1 = time.perf_counter()
-    eq = host_loop(start, scene, pattern, model, solver)
+    eq = host_loop(start, scene, pattern, model, solver, pieces)
     t2 = time.perf_counter()
     timing = Timing(compile_s=t1 - t0, wall_s=t2 - t0)
     if raise_on_failure and not eq.converged:

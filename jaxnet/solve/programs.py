@@ -1,0 +1,171 @@
+"""The static solver's compiled programs: compiled ahead of time, kept in memory and on disk.
+
+A solve runs a handful of compiled programs (the evaluation of the residual, the tangent, the spring
+network, the loads: :func:`jaxnet.solve.statics.solve`). Compiling them is most of a first solve: on
+FEMNET's cod-end ``c2`` (1906 unknowns, six terms) about 9 s of XLA compilation, where the Newton iteration
+itself takes about 1 s. JAX's persistent compilation cache keeps the XLA executables, but a new process still
+traces and lowers every program before it can look one up: about 3 s on ``c2``, half of a second run's time. So the programs are kept here as whole executables instead, keyed by everything that decides them:
+
+* the program (a name) and its static arguments (the active terms and their options, the stiffness path);
+* the structure, shapes and dtypes (weak types included) of its arguments;
+* the jax and jaxlib versions, the backend and its devices, float64, and the jaxnet sources themselves (a
+  digest of every ``.py`` file of the package, so an edited model never runs a stale program).
+
+A program found in memory (this process) is reused as it is; one found on disk is loaded (tenths of a
+second, no tracing); otherwise it is traced, compiled and, when a directory is set, written there (atomically:
+a run that is stopped leaves no partial file). The directory is JAX's compilation cache directory when one
+is configured (``jax_compilation_cache_dir``, which ``jaxnet run`` sets; ``--no-cache`` leaves it unset),
+subdirectory ``jaxnet-programs``: one switch for both caches. A file that cannot be read or loaded (another
+jaxlib, a truncated write) is compiled again and replaced, never trusted.
+
+Programs holding a host callback (the jitted Newton loop's SuperLU) are not kept on disk: an executable
+refers to its callbacks by address in the process that compiled it. A program file is a pickle, as JAX's
+own cache entries are executables: the directory is trusted as much as the user's own files.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import os
+import pathlib
+import pickle
+import tempfile
+import threading
+
+import jax
+import numpy as np
+from jax.experimental import serialize_executable
+
+#: subdirectory of JAX's compilation cache directory where the programs are kept
+SUBDIRECTORY = "jaxnet-programs"
+
+_MEMORY: dict = {}
+_LOCK = threading.Lock()
+
+
+def sources_digest(root):
+    """Digest (hex) of the ``.py`` files under ``root``, their paths and contents."""
+    root = pathlib.Path(root)
+    digest = hashlib.blake2b(digest_size=16)
+    for path in sorted(root.rglob("*.py")):
+        digest.update(str(path.relative_to(root)).encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+@functools.cache
+def _package_digest():
+    # a program compiled from other sources is another program (read once per process: milliseconds)
+    return sources_digest(pathlib.Path(__file__).resolve().parents[1])
+
+
+def _platform():
+    import jaxlib
+
+    devices = jax.devices()
+    return (jax.__version__, jaxlib.__version__, devices[0].platform, devices[0].device_kind, len(devices),
+            bool(jax.config.jax_enable_x64))
+
+
+def _leaf_signature(leaf):
+    if isinstance(leaf, (bool, int, float, complex)):  # a Python scalar is traced weakly typed
+        return type(leaf).__name__
+    return tuple(np.shape(leaf)), str(leaf.dtype), bool(getattr(getattr(leaf, "aval", None), "weak_type", False))
+
+
+def _argument_signature(args):
+    leaves, treedef = jax.tree.flatten(args)
+    return str(treedef), tuple(_leaf_signature(leaf) for leaf in leaves)
+
+
+def key(name, static, args):
+    """The identity of a program: ``name``, its ``static`` arguments (a repr-stable tuple), its arguments'
+    structure and shapes, the platform and the jaxnet sources. A hex digest (a file name)."""
+    text = repr((name, static, _argument_signature(args), _platform(), _package_digest()))
+    return hashlib.blake2b(text.encode(), digest_size=20).hexdigest()
+
+
+def directory():
+    """Where programs are kept between processes: ``<JAX compilation cache dir>/jaxnet-programs``, or None
+    (memory only) when no compilation cache directory is configured."""
+    base = jax.config.jax_compilation_cache_dir
+    return None if not base else pathlib.Path(base) / SUBDIRECTORY
+
+
+def _load(path, args):
+    try:
+        with open(path, "rb") as file:
+            payload, out_tree = pickle.load(file)
+        # the argument structure is the caller's own (an equinox module's tree does not survive pickling)
+        return serialize_executable.deserialize_and_load(payload, jax.tree.structure((args, {})), out_tree)
+    except Exception:  # another jaxlib, a truncated or foreign file: compile again, never trust it
+        return None
+
+
+def _store(path, compiled):
+    # written to a temporary file then renamed: a stopped run or a concurrent one leaves no partial program
+    temporary = None
+    try:
+        payload, _, out_tree = serialize_executable.serialize(compiled)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=path.parent, delete=False, suffix=".tmp") as file:
+            temporary = file.name
+            pickle.dump((payload, out_tree), file)
+        os.replace(temporary, path)
+    except Exception:  # a read-only or full disk costs the next process a compilation, not this solve
+        if temporary is not None and os.path.exists(temporary):
+            os.remove(temporary)
+
+
+def _identity(name, args, static_kwargs):
+    static = tuple(sorted((n, _stable(v)) for n, v in (static_kwargs or {}).items()))
+    k = key(name, static, args)
+    where = directory()
+    return k, None if where is None else where / f"{name}-{k}.jaxexe"
+
+
+def lookup(name, args, static_kwargs=None):
+    """The program ``name`` for positional ``args`` and ``static_kwargs`` (its static arguments by keyword,
+    with a stable repr) if this process has it or it is on disk (then loaded, and kept in memory), else
+    None. Nothing is traced or compiled."""
+    k, path = _identity(name, args, static_kwargs)
+    with _LOCK:
+        program = _MEMORY.get(k)
+    if program is None and path is not None and path.exists():
+        program = _load(path, args)
+        if program is not None:
+            with _LOCK:
+                _MEMORY[k] = program
+    return program
+
+
+def compile(name, jitted, args, static_kwargs=None):  # noqa: A001 (the module's verb)
+    """Compile ``jitted`` (a ``jax.jit`` function) for ``args`` and ``static_kwargs``, keep the program in
+    memory and, when a directory is set, on disk, and return it: a callable taking ``args`` only (same
+    structure, shapes and dtypes). Thread-safe: the solver compiles its programs in parallel threads."""
+    k, path = _identity(name, args, static_kwargs)
+    program = jitted.lower(*args, **(static_kwargs or {})).compile()
+    if path is not None:
+        _store(path, program)
+    with _LOCK:
+        _MEMORY[k] = program
+    return program
+
+
+def obtain(name, jitted, args, static_kwargs=None):
+    """:func:`lookup`, else :func:`compile`."""
+    return lookup(name, args, static_kwargs) or compile(name, jitted, args, static_kwargs)
+
+
+def _stable(value):
+    """A repr-stable stand-in for a static argument: the solver's model (active terms) by names and options."""
+    if isinstance(value, tuple) and value and hasattr(value[0], "term"):
+        return tuple((t.name, t.options) for t in value)
+    return value
+
+
+def clear():
+    """Forget the programs of this process (the files on disk stay)."""
+    with _LOCK:
+        _MEMORY.clear()
