@@ -76,7 +76,7 @@ def test_scene_file_and_bad_scene_file(tmp_path, capsys):
     np.testing.assert_allclose(result["reaction_N"], [0, 0, 2.0], atol=result["n_nodes"] * 1e-3)
     doc["panels"][0]["stepp"] = 1
     path.write_text(json.dumps(doc))
-    assert cli.main(["run", str(path), "--out", str(tmp_path / "bad")]) == 2
+    assert cli.main(["run", str(path), "--out", str(tmp_path / "bad"), "--no-cache"]) == 2
     assert "unknown key(s) ['stepp']" in capsys.readouterr().err
 
 

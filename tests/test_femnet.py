@@ -245,13 +245,13 @@ def femnet_drag(x, uv, l0, d, cd, f, c, rho):
 def test_cli_runs_a_femnet_case_on_its_mesh(tmp_path):
     out = tmp_path / "out"
     code = cli.main(["run", str(DATA / "nr_netting.don"), "--mesh", str(DATA / "nr_netting.mdg"), "--out", str(out),
-                     "--quiet"])
+                     "--quiet", "--no-cache"])
     assert code == 0
     result = json.loads((out / "result.json").read_text())
     assert result["n_nodes"] == 446 and result["converged"]
     assert abs(result["femnet"]["drag_netting_N"][0] - 138) <= 0.5
     assert result["femnet_case"]["water_density"] == 1000.0
-    assert cli.main(["run", str(DATA / "c2.mdg"), "--mesh", str(DATA / "c2.mdg"), "--out", str(out)]) == 2
+    assert cli.main(["run", str(DATA / "c2.mdg"), "--mesh", str(DATA / "c2.mdg"), "--out", str(out), "--no-cache"]) == 2
 
 
 # -- links, hexagonal panels, node types (synthetic cases in tests/data/femnet) --------------------------------

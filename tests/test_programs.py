@@ -6,6 +6,7 @@ The round trip through the disk, and a damaged file, are tested through the comm
 import jax
 import jax.numpy as jnp
 import numpy as np
+import pytest
 
 import jaxnet  # noqa: F401  (float64)
 from jaxnet.solve import programs
@@ -50,3 +51,36 @@ def test_a_program_is_compiled_once_per_process_and_computes_what_the_function_d
     assert programs.lookup("scaled", (np.zeros(8), 2.0)) is None  # another size is another program
     programs.clear()
     assert programs.lookup("scaled", (x, 2.0)) is None
+
+
+_PROCESS = """
+import sys, jax, jax.numpy as jnp, numpy as np
+import jaxnet
+from jaxnet.solve import programs
+jax.config.update("jax_compilation_cache_dir", sys.argv[1])
+jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
+program = programs.obtain("scaled", jax.jit(lambda x, s: s * jnp.sin(x)), (np.linspace(0.0, 1.0, 7), 2.0))
+print(float(program(np.linspace(0.0, 1.0, 7), 3.0).sum()))
+"""
+
+
+def test_a_program_jax_took_from_its_own_cache_is_not_kept_on_disk(tmp_path):
+    """On CPU an executable JAX loaded from its persistent cache serialises without its kernels: kept on disk it
+    would load in the next process and fail at its first call. Such a program serves its process only."""
+    import subprocess
+    import sys
+
+    def run():
+        out = subprocess.run([sys.executable, "-c", _PROCESS, str(tmp_path)], capture_output=True, text=True)
+        assert out.returncode == 0, out.stderr[-2000:]
+        return float(out.stdout.split()[-1])
+
+    expected = 3.0 * np.sin(np.linspace(0.0, 1.0, 7)).sum()
+    assert run() == pytest.approx(expected, rel=1e-14)  # compiled afresh: kept by JAX and by jaxnet
+    kept = tmp_path / programs.SUBDIRECTORY
+    assert len(list(kept.iterdir())) == 1
+    for path in kept.iterdir():
+        path.unlink()
+    assert run() == pytest.approx(expected, rel=1e-14)  # JAX's cache answers: not kept
+    assert list(kept.iterdir()) == []
+    assert run() == pytest.approx(expected, rel=1e-14)  # and the next process is still right

@@ -37,11 +37,26 @@ import jax
 import numpy as np
 from jax.experimental import serialize_executable
 
+
 #: subdirectory of JAX's compilation cache directory where the programs are kept
 SUBDIRECTORY = "jaxnet-programs"
 
 _MEMORY: dict = {}
 _LOCK = threading.Lock()
+_THREAD = threading.local()  # per compiling thread: did JAX's persistent cache answer its last compilation?
+_LISTENING = []
+
+
+def _on_jax_event(event, **_):
+    if event == "/jax/compilation_cache/cache_hits":  # recorded in the thread that compiles
+        _THREAD.jax_cache_hit = True
+
+
+def _listen_to_jax_cache():
+    with _LOCK:
+        if not _LISTENING:
+            jax.monitoring.register_event_listener(_on_jax_event)
+            _LISTENING.append(True)
 
 
 def sources_digest(root):
@@ -145,8 +160,13 @@ def compile(name, jitted, args, static_kwargs=None):  # noqa: A001 (the module's
     memory and, when a directory is set, on disk, and return it: a callable taking ``args`` only (same
     structure, shapes and dtypes). Thread-safe: the solver compiles its programs in parallel threads."""
     k, path = _identity(name, args, static_kwargs)
+    _listen_to_jax_cache()
+    _THREAD.jax_cache_hit = False
     program = jitted.lower(*args, **(static_kwargs or {})).compile()
-    if path is not None:
+    # an executable JAX took from its own persistent cache serialises without its kernels on CPU: the file
+    # would load, then fail at its first call (jax 0.10.2: "Function convert_bitcast_fusion not found").
+    # Such a program serves this process only; the next one gets it from JAX's cache again.
+    if path is not None and not _THREAD.jax_cache_hit:
         _store(path, program)
     with _LOCK:
         _MEMORY[k] = program
