@@ -303,7 +303,9 @@ def scatter_hessians(x, scene, pattern, element_energies, element_forces=None, s
 
                 block = block - jax.jacfwd(flat)(xe.ravel())
             if block_fn is not None:
-                block = block + block_fn(xe, p, scene.environment, state)
+                # in a time step the moving drags' closed forms take the vertices' velocities and Δt
+                moving = {} if motion is None else {"velocity": _velocity(xe, xp, motion), "time_step": motion.time_step}
+                block = block + block_fn(xe, p, scene.environment, state, **moving)
             return block
 
         blocks = jax.vmap(stiffness)(x[conn], fam, _previous(scene, conn, motion))
@@ -315,7 +317,7 @@ def _family_closed_form(model, family, elastic_scale=1.0):
     """Sum of the closed-form element matrices (:mod:`jaxnet.closed_form`) of a family's terms in ``model``."""
     terms = [t for t in model if t.term.family == family]
 
-    def block(x, p, env, state):
+    def block(x, p, env, state, velocity=None, time_step=None):
         total = 0.0
         for t in terms:
             entry = closed_form_registry.STIFFNESS[t.name]
@@ -324,7 +326,10 @@ def _family_closed_form(model, family, elastic_scale=1.0):
                     k = entry.stiffness(x, p, env, **t.kwargs())
                     k = elastic_scale * k if t.term.elastic else k
                 else:
-                    k = entry.stiffness(x, p, env, state.get(t.name), **t.kwargs())
+                    # a moving drag (a time step's): its vertices' velocities (m/s) and Δt (s), as _family_force
+                    moving = ({"velocity": velocity, "time_step": time_step}
+                              if t.term.moving and t.kwargs().get("moving") else {})
+                    k = entry.stiffness(x, p, env, state.get(t.name), **t.kwargs(), **moving)
             total = total + k
         return total
 
@@ -347,7 +352,8 @@ def tangent(x, scene, model, pattern, state=None, elastic_scale=1.0, stiffness="
     """
     if stiffness not in STIFFNESS_PATHS:
         raise ValueError(f"stiffness must be one of {STIFFNESS_PATHS}, not {stiffness!r}")
-    by_hand = tuple(t for t in model if stiffness == "closed_form" and closed_form_registry.covered(t))
+    by_hand = tuple(t for t in model if stiffness == "closed_form"
+                    and closed_form_registry.covered(t, with_velocities=motion is not None))
     rest = tuple(t for t in model if t not in by_hand)
     energies = {f: _family_energy(rest, f, elastic_scale) for f in _families(rest, "energy")}
     element_forces = {f: _family_force(rest, f) for f in _families(rest, "force")}

@@ -18,6 +18,8 @@ and a = H/2 is the amplitude (H the height, crest to trough). With s = z + h the
     elevation            η = -(1/g) ∂Φ/∂t at z = 0 = a cos θ                             (m)
     velocity             u = ∇Φ = a ω [cosh(k s)/sinh(k h) cos θ e + sinh(k s)/sinh(k h) sin θ up]
     acceleration         ∂u/∂t = a ω² [cosh(k s)/sinh(k h) sin θ e - sinh(k s)/sinh(k h) cos θ up]
+    velocity gradient    ∂u/∂x = a ω k [e (sinh(k s) cos θ up - cosh(k s) sin θ e)^T
+                                        + up (cosh(k s) sin θ up + sinh(k s) cos θ e)^T] / sinh(k h)
     dispersion           ω² = g k tanh(k h)
 
 (g a k/ω · 1/cosh(kh) = a ω/sinh(kh) by the dispersion relation). The acceleration is the *local*
@@ -261,6 +263,31 @@ class Airy(eqx.Module):
         horizontal = amplitude * cosh_ratio * jnp.cos(theta)
         vertical = amplitude * sinh_ratio * jnp.sin(theta)
         return horizontal[..., None] * self.direction + vertical[..., None] * self.up
+
+    def velocity_gradient(self, x, t):
+        """Gradient ∂u/∂x (..., 3, 3) (1/s) of the orbital velocity at points x (..., 3) (m), time t (s), entry
+        [..., m, n] = ∂u_m/∂x_n: what the drag stiffness of a moving net needs (the water's velocity at a
+        vertex changes as the vertex moves; :mod:`jaxnet.closed_form.drag`). Written out, not by autodiff:
+        with u = A [C cos θ e + S sin θ up], θ = k e·x - ω t + phase, and along the vertical C' = k S, S' = k C
+        (C, S the ratios cosh(ks)/sinh(kh), sinh(ks)/sinh(kh); deep water: both e^{kz}),
+
+            ∂u/∂x = A k [ e (S cos θ m up - C sin θ e)^T + up (C sin θ m up + S cos θ e)^T ],
+
+        m = 1 where z lies between the bed and the mean surface, 0 where :meth:`velocity` holds it constant
+        (above the surface, below the bed: the same ``where`` as there, so the same derivative as jacfwd's).
+        """
+        x = jnp.asarray(x, dtype=float)
+        theta = self._phase(x, t)
+        cosh_ratio, sinh_ratio = self._depth_ratios(x)
+        z = x @ self.up - self.surface_level
+        inside = ((z <= 0.0) & (z >= -self.depth)).astype(x.dtype)  # depth inf: no bed
+        scale = 0.5 * self.height * self.angular_frequency * self.wavenumber
+        cos, sin = jnp.cos(theta), jnp.sin(theta)
+        e, up = self.direction, self.up
+        # d(horizontal)/dx and d(vertical)/dx, (..., 3) each
+        d_horizontal = scale * ((sinh_ratio * cos * inside)[..., None] * up - (cosh_ratio * sin)[..., None] * e)
+        d_vertical = scale * ((cosh_ratio * sin * inside)[..., None] * up + (sinh_ratio * cos)[..., None] * e)
+        return e[:, None] * d_horizontal[..., None, :] + up[:, None] * d_vertical[..., None, :]
 
     def acceleration(self, x, t):
         """Local acceleration ∂u/∂t (..., 3) (m/s²) of the water at points x (..., 3) (m), time t (s): the

@@ -14,6 +14,12 @@
    and Newton iterations per step; then, at Δt = 10 ms, the cost per step with each stiffness path.
 3. Cost against size: steps per second and Newton iterations per step of the cage in waves meshed finer
    and finer (``--sizes``, meshing steps in m), after compilation, with the compile time.
+4. Where a step's time goes (``--breakdown``): on the same cage at Δt = 10 ms, the pieces of a Newton
+   iteration timed alone, compiled (the evaluation of the residual, the tangent on each path and term by
+   term, the sparse solve through the host callback and on the host alone), and the fixed cost of a step
+   (the cage at its equilibrium in calm water: Newton converges at its start point, 0 iterations).
+
+Timings are medians of 3 repeats; on a shared machine they vary up to ~1.5x between runs.
 
 FEMNET's dynamic solver (same scheme, C): about 55 Newton iterations per step and 732 s of wall time for 68 s
 of a 351-DOF cage in waves at Δt = 0.01 s (6800 steps: 108 ms per step) on this kind of machine.
@@ -148,13 +154,91 @@ def size_table(steps):
               f"{wall / tr.steps * 1e3:.1f} | {tr.mean_iterations:.2f} |")
 
 
+def _median_ms(run, calls=100, repeats=3):
+    """Median over ``repeats`` of the mean time (ms) of ``calls`` calls of ``run`` (compiled by a first call)."""
+    import jax
+
+    jax.block_until_ready(run())
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        for _ in range(calls):
+            out = run()
+        jax.block_until_ready(out)
+        times.append((time.perf_counter() - t0) / calls * 1e3)
+    return float(np.median(times))
+
+
+def breakdown():
+    """The pieces of a time step of the cage in waves, each timed alone (module docstring, item 4)."""
+    import equinox as eqx
+    import jax
+    import jax.numpy as jnp
+
+    from jaxnet import assemble, linalg, model as model_lib
+    from jaxnet.scenes import cage_in_waves
+
+    scene, loading = cage_in_waves(step=1.6)
+    x_eq = np.asarray(statics.solve(scene)[0].x)
+    model = model_lib.active_terms(scene, dynamic=True)
+    pattern = assemble.build_pattern(scene, model)
+    masses = tuple(jnp.asarray(m) for m in dynamics.lumped_masses(scene))
+    # a state of the run: 0.5 s into it
+    state = dynamics.simulate(scene, 0.5, dynamics.Implicit(), loading, record_every=0.5, x0=x_eq, progress=False).state
+    h = 0.01
+    scene_t = dynamics.scene_at(scene, loading, state.t + h)
+    water_load = masses[1] * dynamics.water_acceleration(state.x, scene_t, loading, True)
+    step = dynamics.TimeStep(state.x, state.v, jnp.asarray(h), masses[0], water_load)
+    x = (state.x + h * state.v).ravel()[pattern.free]
+    load = assemble.loads(scene_t, model) + water_load
+    evaluate = jax.jit(statics._evaluate, static_argnames=("model",))
+    zero = jnp.zeros_like(state.x)
+    _, force, _, _, forces_state = evaluate(x, zero, load, 1.0, scene_t, pattern, model=model, step=step)
+    rows = [("evaluation (energy, its gradient, drag forces)", _median_ms(
+        lambda: evaluate(x, zero, load, 1.0, scene_t, pattern, model=model, step=step)))]
+    tangent = jax.jit(statics._tangent, static_argnames=("model", "stiffness"))
+    for path in assemble.STIFFNESS_PATHS:
+        rows.append((f"tangent, {path}", _median_ms(
+            lambda: tangent(x, forces_state, 1.0, scene_t, pattern, model=model, stiffness=path, step=step))))
+        X = assemble.positions(x, scene_t, pattern)
+        for term in model:
+            if term.term.kind in ("energy", "force"):
+                one = jax.jit(lambda X, term=term, path=path: assemble.tangent(
+                    X, scene_t, (term,), pattern, forces_state, 1.0, path, step.motion))
+                rows.append((f"    {term.name}", _median_ms(lambda: one(X))))
+    data = tangent(x, forces_state, 1.0, scene_t, pattern, model=model, stiffness="closed_form", step=step)
+    f = force.ravel()[pattern.free]
+    solve = jax.jit(linalg.solve)
+    rows.append(("sparse solve through the host callback", _median_ms(lambda: solve(data, f, pattern.indptr,
+                                                                                    pattern.indices))))
+    host = linalg.HostSolver(np.asarray(pattern.indptr), np.asarray(pattern.indices))
+    data_np, f_np = np.asarray(data), np.asarray(f)
+    rows.append(("    of which on the host (SuperLU, checks)", _median_ms(lambda: host.solve(data_np, f_np)[0])))
+    # the fixed cost of a step: the cage at its equilibrium in calm water, Newton converging at its start
+    calm = eqx.tree_at(lambda s: s.environment.waves.height, scene, jnp.asarray(0.0))
+    x_calm = np.asarray(statics.solve(calm, tol=1e-7)[0].x)
+    opts = dynamics.Implicit(time_step=h)
+    _, wall = timed(lambda: dynamics.simulate(calm, 1.0, opts, None, record_every=0.05, x0=x_calm, progress=False))
+    rows.append(("a step without Newton iterations (1 evaluation, records every 5 steps)", wall / 100 * 1e3))
+    print("\n## Where a step's time goes: the cage in waves, Δt = 10 ms, pieces timed alone (compiled)\n")
+    print("| piece | ms |")
+    print("|---|---|")
+    for name, ms in rows:
+        print(f"| {name} | {ms:.3f} |")
+    return rows
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--sizes", type=float, nargs="*", default=[1.6, 1.0, 0.5])
     parser.add_argument("--cage-end", type=float, default=3.0)
     parser.add_argument("--no-cage", action="store_true")
     parser.add_argument("--plot", default="validation/dynamics_work_precision.png")
+    parser.add_argument("--breakdown", action="store_true", help="only the cost breakdown of a step (item 4)")
     args = parser.parse_args()
+    if args.breakdown:
+        breakdown()
+        return
     plot(pendulum_table(), args.plot)
     if not args.no_cage:
         cage_table(args.cage_end)

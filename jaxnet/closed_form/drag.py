@@ -1,4 +1,5 @@
-"""Closed-form stiffness of hydrodynamic drag (book section 4.3.3, eqs 4.136-4.210, corrected).
+"""Closed-form stiffness of hydrodynamic drag (book section 4.3.3, eqs 4.136-4.210, corrected; a moving net:
+4.272-4.276, whose stiffness the book does not give).
 
 K = -∂F/∂x (4.46) of the drag forces of :mod:`jaxnet.terms.drag`, written without autodiff. Drag is not
 conservative: K is not symmetric.
@@ -36,6 +37,21 @@ also holds ∂F/∂c · dc/dz · up^T / k on every vertex column (k = 3 vertices
 bar, 1 node). ``velocity_slope`` is that dc/dz (m/s per m) at the centroid (:func:`current_slope`);
 ``None`` (a uniform current) leaves the term out, which is the book's stiffness.
 
+A moving net (an implicit time step, 4.266 and 4.272-4.276). Vertex i of an element takes its share of the
+element's drag computed with the water's velocity relative to it, c_i = w(x_i) - v_i, w the current at the
+vertex's depth plus the waves' orbital velocity, v_i = (x_i - x_i^n)/Δt (:func:`jaxnet.model._per_vertex`).
+Row block i of K = -∂F/∂x then holds the same twine terms as above taken at c_i, and on its diagonal block
+∂F/∂c (∂w/∂x(x_i) - I/Δt): the water's velocity varying over the vertex's position (current profile,
+:meth:`jaxnet.waves.Airy.velocity_gradient`) and the damping of the vertex's own velocity
+(:func:`moving_netting_drag_stiffness`, :func:`moving_bar_drag_stiffness`, :func:`moving_node_drag_stiffness`).
+Why a closed form: the autodiff path differentiates the element's drag once per vertex (``jax.jacfwd`` of a
+k-fold ``vmap``), most of a time step's tangent (measured on the 339-unknown cage in waves: the netting
+drag's tangent 1.6-2.0 ms by autodiff, 0.8 ms closed; a step ~15 ms -> ~10.5 ms,
+``validation/dynamics_cost.py``). The helpers work on stacks (leading axes), so one call takes both twine
+families at the three vertices' velocities. The book's dynamic stiffness is the inertia's alone (4.271): without
+the drag's damping -(1/Δt) ∂F/∂c the same cage takes ~136 Newton iterations per step instead of 2.3, and
+retries most steps at half the step (measured; the book's 4.272-4.276 give the force only).
+
 Singular points, all returned as the autodiff path's ``jax.jacfwd`` gives them (no NaN, no inf):
 
 * water along a twine (c_n = 0), across it (c_t = 0), still water (both 0): the book's 1/sin α, 1/|cos α|
@@ -59,6 +75,25 @@ from jaxnet import geometry
 
 _EYE = jnp.eye(3)
 
+# The helpers below work on stacks of vectors and matrices (leading axes "..."): one call computes the
+# Jacobians of both twine families at the relative velocities of all three vertices of a moving element (6
+# twine drags) in one set of operations: on a small net XLA's cost is per operation more than per element.
+
+
+def _dot(u, v):
+    """u . v over the last axis, (...)."""
+    return jnp.sum(u * v, axis=-1)
+
+
+def _outer(u, v):
+    """u v^T over the last axis, (..., 3, 3)."""
+    return u[..., :, None] * v[..., None, :]
+
+
+def _matrices(s):
+    """A stack of scalars (...) as (..., 1, 1), to scale a stack of matrices."""
+    return jnp.asarray(s)[..., None, None]
+
 
 def _inverse(value):
     """1/value where value > 0, else 0 (the autodiff path's double ``where``), elementwise."""
@@ -67,24 +102,24 @@ def _inverse(value):
 
 
 def _abs_times_jacobian(v):
-    """(3, 3) ∂(|v| v)/∂v = |v| I + v v^T/|v|; 0 at v = 0 (|v| by ``safe_norm``, as the force uses)."""
+    """(..., 3, 3) ∂(|v| v)/∂v = |v| I + v v^T/|v|; 0 at v = 0 (|v| by ``safe_norm``, as the force uses)."""
     length = geometry.safe_norm(v)
-    return length * _EYE + jnp.outer(v, v) * _inverse(length)
+    return _matrices(length) * _EYE + _outer(v, v) * _matrices(_inverse(length))
 
 
 def _split(axis, water_velocity):
     """Split of the water velocity along and across the axis W, as :func:`jaxnet.terms.drag.twine_drag`
-    computes it: (c_t, c_n, ∂c_t/∂W, ∂c_t/∂c), the last two (3, 3). A zero axis gives c_t = 0 with zero
+    computes it: (c_t, c_n, ∂c_t/∂W, ∂c_t/∂c), the last two (..., 3, 3). A zero axis gives c_t = 0 with zero
     derivatives (the force's double ``where`` on 1/|W|²)."""
     c = water_velocity
-    sq = jnp.dot(axis, axis)
-    inv_sq = _inverse(sq)
-    along = jnp.dot(c, axis)
-    c_t = (along * inv_sq) * axis
+    inv_sq = _inverse(_dot(axis, axis))
+    along = _dot(c, axis)
+    c_t = (along * inv_sq)[..., None] * axis
     c_n = c - c_t
     # ∂c_t/∂W = [W c^T + (c.W) I]/|W|² - 2 (c.W) W W^T/|W|⁴ (= [ê c_n^T + (c.ê)(I - ê ê^T)]/|W|)
-    dct_daxis = (jnp.outer(axis, c) + along * _EYE) * inv_sq - (2.0 * along * inv_sq * inv_sq) * jnp.outer(axis, axis)
-    dct_dc = jnp.outer(axis, axis) * inv_sq
+    dct_daxis = ((_outer(axis, c) + _matrices(along) * _EYE) * _matrices(inv_sq)
+                 - _matrices(2.0 * along * inv_sq * inv_sq) * _outer(axis, axis))
+    dct_dc = _outer(axis, axis) * _matrices(inv_sq)
     return c_t, c_n, dct_daxis, dct_dc
 
 
@@ -96,15 +131,17 @@ def twine_drag_jacobians(axis, length, diameter, cd_normal, cd_tangential, water
 
     Args: as :func:`jaxnet.terms.drag.twine_drag`: axis (3,) m (only its direction matters), length m
       (the unstretched L of the area D L), diameter m, cd_normal and cd_tangential dimensionless,
-      water_velocity (3,) m/s (relative to the cylinder), water_density kg/m³.
+      water_velocity (3,) m/s (relative to the cylinder), water_density kg/m³. ``axis`` and
+      ``water_velocity`` may be stacks (..., 3) that broadcast against each other (several twines, several
+      velocities), the coefficients scalars.
     Returns:
-      (j_axis, j_velocity): (3, 3) ∂F/∂axis in N/m and ∂F/∂water_velocity in N·s/m (row: force
-      component, column: axis or velocity component). Both finite everywhere; j_axis = 0 for a zero axis.
+      (j_axis, j_velocity): (3, 3) (or (..., 3, 3)) ∂F/∂axis in N/m and ∂F/∂water_velocity in N·s/m (row:
+      force component, column: axis or velocity component). Both finite everywhere; j_axis = 0 for a zero axis.
     """
     c_t, c_n, dct_daxis, dct_dc = _split(axis, water_velocity)
     k = 0.5 * water_density * diameter * length
-    normal = (k * cd_normal) * _abs_times_jacobian(c_n)
-    tangential = (k * cd_tangential) * _abs_times_jacobian(c_t)
+    normal = _matrices(k * cd_normal) * _abs_times_jacobian(c_n)
+    tangential = _matrices(k * cd_tangential) * _abs_times_jacobian(c_t)
     j_axis = (tangential - normal) @ dct_daxis
     j_velocity = normal @ (_EYE - dct_dc) + tangential @ dct_dc
     return j_axis, j_velocity
@@ -115,7 +152,7 @@ def _vertical(velocity_slope, up):
     if velocity_slope is None:
         return jnp.zeros((3, 3))
     up = jnp.array([0.0, 0.0, 1.0]) if up is None else jnp.asarray(up, dtype=float)
-    return jnp.outer(jnp.asarray(velocity_slope, dtype=float), up)
+    return _outer(jnp.asarray(velocity_slope, dtype=float), up)
 
 
 def _spread_stiffness(coefficients, jacobians, j_velocity, dc_dcentroid, vertices):
@@ -130,13 +167,28 @@ def _spread_stiffness(coefficients, jacobians, j_velocity, dc_dcentroid, vertice
     return jnp.broadcast_to(per_vertex[None], (vertices, 3, k, 3)).reshape(3 * vertices, 3 * k)
 
 
-def _twine_parts(x, uv, l0, diameter, cd_normal, cd_tangential, water_velocity, water_density):
-    """What both netting drag stiffnesses start from: the coefficients a, b (U = a @ x, V = b @ x), U, V,
-    the twine count |d|/2, the twine arguments, and each family's :func:`twine_drag_jacobians`."""
+def _twine_geometry(x, uv):
+    """What every netting drag stiffness starts from: the coefficients (a, b) of U = a @ x and V = b @ x
+    (:func:`jaxnet.geometry.twine_coefficients`), U, V and the twine count |d|/2."""
     a, b, d = geometry.twine_coefficients(uv)
-    U, V = a @ x, b @ x
-    args = (l0, diameter, cd_normal, cd_tangential, water_velocity, water_density)
-    return a, b, U, V, geometry.twine_count(d), args, twine_drag_jacobians(U, *args), twine_drag_jacobians(V, *args)
+    return (a, b), a @ x, b @ x, geometry.twine_count(d)
+
+
+def _both_families(U, V, l0, diameter, cd_normal, cd_tangential, water_velocity, water_density):
+    """:func:`twine_drag_jacobians` of one U and one V twine in one call: ((∂/∂U, ∂/∂c of a U twine),
+    (∂/∂V, ∂/∂c of a V twine)), each (..., 3, 3) for water velocities (..., 3)."""
+    j_axis, j_c = twine_drag_jacobians(jnp.stack([U, V]), l0, diameter, cd_normal, cd_tangential,
+                                       water_velocity[..., None, :], water_density)
+    return (j_axis[..., 0, :, :], j_c[..., 0, :, :]), (j_axis[..., 1, :, :], j_c[..., 1, :, :])
+
+
+def _netting_jacobians(U, V, count, l0, diameter, cd_normal, cd_tangential, water_velocity, water_density):
+    """(∂F/∂U, ∂F/∂V, ∂F/∂c), each (..., 3, 3), of a triangle's whole twine drag F (three times one vertex's
+    share of :func:`jaxnet.terms.drag.netting_drag`): |d|/2 U twines and |d|/2 V twines, each
+    :func:`twine_drag_jacobians`, with the water velocity c (..., 3) relative to the netting."""
+    (ju_axis, ju_c), (jv_axis, jv_c) = _both_families(U, V, l0, diameter, cd_normal, cd_tangential, water_velocity,
+                                                      water_density)
+    return count * ju_axis, count * jv_axis, count * (ju_c + jv_c)
 
 
 def netting_drag_stiffness(x, uv, l0, diameter, cd_normal, cd_tangential, water_velocity, water_density,
@@ -155,68 +207,86 @@ def netting_drag_stiffness(x, uv, l0, diameter, cd_normal, cd_tangential, water_
       up: (3,) unit vertical along which z is measured; None is (0, 0, 1). Only used with velocity_slope.
     Vertex-major layout (entry (3 i + m, 3 j + n): coordinate m of vertex i, n of vertex j).
     """
-    a, b, _, _, count, _, (ju_axis, ju_c), (jv_axis, jv_c) = _twine_parts(x, uv, l0, diameter, cd_normal,
-                                                                         cd_tangential, water_velocity,
-                                                                         water_density)
-    return _spread_stiffness((a, b), (count * ju_axis, count * jv_axis), count * (ju_c + jv_c),
-                             _vertical(velocity_slope, up), 3)
+    coefficients, U, V, count = _twine_geometry(x, uv)
+    j_u, j_v, j_c = _netting_jacobians(U, V, count, l0, diameter, cd_normal, cd_tangential, water_velocity,
+                                       water_density)
+    return _spread_stiffness(coefficients, (j_u, j_v), j_c, _vertical(velocity_slope, up), 3)
 
 
 def _twine_force(axis, length, diameter, cd_normal, cd_tangential, water_velocity, water_density):
     """(normal, tangential) drag of one cylinder (N), as :func:`jaxnet.terms.drag.twine_drag` (the value the
-    catch variant's derivative needs)."""
+    catch variant's derivative needs); (..., 3) each for stacks as :func:`twine_drag_jacobians`."""
     c_t, c_n, _, _ = _split(axis, water_velocity)
     k = 0.5 * water_density * diameter * length
-    return (k * cd_normal * geometry.safe_norm(c_n)) * c_n, (k * cd_tangential * geometry.safe_norm(c_t)) * c_t
+    return ((k * cd_normal * geometry.safe_norm(c_n))[..., None] * c_n,
+            (k * cd_tangential * geometry.safe_norm(c_t))[..., None] * c_t)
 
 
 def _unit_across_jacobians(axis, water_velocity, inv_c2):
-    """ê (3,) of :func:`jaxnet.terms.drag._unit_across` and its derivatives (3, 3) with respect to the axis
-    and to the water velocity: ∂ê = (I - ê ê^T)/|a| ∂a, a = W - (W.c) c/|c|²; all 0 where ê is set to 0."""
+    """ê (..., 3) of :func:`jaxnet.terms.drag._unit_across` and its derivatives (..., 3, 3) with respect to the
+    axis and to the water velocity: ∂ê = (I - ê ê^T)/|a| ∂a, a = W - (W.c) c/|c|²; all 0 where ê is set to 0."""
     c = water_velocity
-    along = jnp.dot(axis, c)
-    across = axis - (along * inv_c2) * c
-    sq = jnp.dot(across, across)
-    has = sq > 1e-24 * jnp.dot(axis, axis)
+    along = _dot(axis, c)
+    across = axis - (along * inv_c2)[..., None] * c
+    sq = _dot(across, across)
+    has = sq > 1e-24 * _dot(axis, axis)
     inv_length = jnp.where(has, 1.0 / jnp.sqrt(jnp.where(has, sq, 1.0)), 0.0)
-    e = across * inv_length
-    project = (_EYE - jnp.outer(e, e)) * inv_length
-    da_daxis = _EYE - jnp.outer(c, c) * inv_c2
+    e = across * inv_length[..., None]
+    project = (_EYE - _outer(e, e)) * _matrices(inv_length)
+    da_daxis = _EYE - _outer(c, c) * _matrices(inv_c2)
     # d(1/|c|²)/dc = -2 c/|c|⁴ (0 in still water, where 1/|c|² is the constant 0)
-    da_dc = -inv_c2 * (along * _EYE + jnp.outer(c, axis)) + (2.0 * along * inv_c2 * inv_c2) * jnp.outer(c, c)
+    da_dc = (-_matrices(inv_c2) * (_matrices(along) * _EYE + _outer(c, axis))
+             + _matrices(2.0 * along * inv_c2 * inv_c2) * _outer(c, c))
     return e, project @ da_daxis, project @ da_dc
+
+
+def _row_times(v, m):
+    """v^T m over the last axes: (..., 3) for v (..., 3) and m (..., 3, 3)."""
+    return jnp.sum(v[..., :, None] * m, axis=-2)
+
+
+def _femnet_catch_jacobians(U, V, count, l0, diameter, cd_normal, cd_tangential, water_velocity, water_density):
+    """(∂F/∂U, ∂F/∂V, ∂F/∂c), each (..., 3, 3), of a triangle's whole drag as FEMNET loads netting ahead of a
+    catch, F = (|d|/2)[F_V + (F_U.ĉ) ĉ + (F_U.ê_U) ê_V] (:func:`jaxnet.terms.drag.netting_drag_femnet_catch`,
+    three thirds), with the water velocity c (..., 3) relative to the netting.
+
+    Differentiated term by term: ∂(P F_U) with P = c c^T/|c|², ∂(F_U.ê_U) ê_V and (F_U.ê_U) ∂ê_V, with
+    ∂ê the derivative of a unit vector across the flow (module docstring for its singular set).
+    """
+    (ju_axis, ju_c), (jv_axis, jv_c) = _both_families(U, V, l0, diameter, cd_normal, cd_tangential, water_velocity,
+                                                      water_density)
+    normal_u, tangential_u = _twine_force(U, l0, diameter, cd_normal, cd_tangential, water_velocity, water_density)
+    force_u = count * (normal_u + tangential_u)
+    c = water_velocity
+    inv_c2 = _inverse(_dot(c, c))
+    in_line = _outer(c, c) * _matrices(inv_c2)
+    e_u, de_u_daxis, de_u_dc = _unit_across_jacobians(U, c, inv_c2)
+    e_v, de_v_daxis, de_v_dc = _unit_across_jacobians(V, c, inv_c2)
+    across_u = _dot(force_u, e_u)
+    # F_U reaches the total through P F_U + (F_U.ê_U) ê_V: a linear map of F_U
+    carry_u = in_line + _outer(e_v, e_u)
+    along_c = _dot(force_u, c)
+    d_in_line_dc = (_matrices(inv_c2) * (_outer(c, force_u) + _matrices(along_c) * _EYE)
+                    - _matrices(2.0 * along_c * inv_c2 * inv_c2) * _outer(c, c))
+    j_u = carry_u @ (count * ju_axis) + _outer(e_v, _row_times(force_u, de_u_daxis))
+    j_v = count * jv_axis + _matrices(across_u) * de_v_daxis
+    j_c = (count * jv_c + d_in_line_dc + carry_u @ (count * ju_c)
+           + _outer(e_v, _row_times(force_u, de_u_dc)) + _matrices(across_u) * de_v_dc)
+    return j_u, j_v, j_c
 
 
 def netting_drag_femnet_catch_stiffness(x, uv, l0, diameter, cd_normal, cd_tangential, water_velocity,
                                         water_density, velocity_slope=None, up=None):
     """(9, 9) stiffness K = -∂F/∂x (N/m) of FEMNET's netting drag ahead of a catch,
-    :func:`jaxnet.terms.drag.netting_drag_femnet_catch`: F = (|d|/2)[F_V + (F_U.ĉ) ĉ + (F_U.ê_U) ê_V] / 3.
-
-    Differentiated term by term: ∂(P F_U) with P = c c^T/|c|², ∂(F_U.ê_U) ê_V and (F_U.ê_U) ∂ê_V, with
-    ∂ê the derivative of a unit vector across the flow (module docstring for its singular set).
+    :func:`jaxnet.terms.drag.netting_drag_femnet_catch`: F = (|d|/2)[F_V + (F_U.ĉ) ĉ + (F_U.ê_U) ê_V] / 3
+    (:func:`_femnet_catch_jacobians` for its derivatives).
 
     Args: as :func:`netting_drag_stiffness` (same units, same ``velocity_slope`` and ``up``).
     """
-    a, b, U, V, count, args, (ju_axis, ju_c), (jv_axis, jv_c) = _twine_parts(x, uv, l0, diameter, cd_normal,
-                                                                             cd_tangential, water_velocity,
-                                                                             water_density)
-    normal_u, tangential_u = _twine_force(U, *args)
-    force_u = count * (normal_u + tangential_u)
-    c = water_velocity
-    inv_c2 = _inverse(jnp.dot(c, c))
-    in_line = jnp.outer(c, c) * inv_c2
-    e_u, de_u_daxis, de_u_dc = _unit_across_jacobians(U, c, inv_c2)
-    e_v, de_v_daxis, de_v_dc = _unit_across_jacobians(V, c, inv_c2)
-    across_u = jnp.dot(force_u, e_u)
-    # F_U reaches the total through P F_U + (F_U.ê_U) ê_V: a linear map of F_U
-    carry_u = in_line + jnp.outer(e_v, e_u)
-    along_c = jnp.dot(force_u, c)
-    d_in_line_dc = inv_c2 * (jnp.outer(c, force_u) + along_c * _EYE) - (2.0 * along_c * inv_c2 * inv_c2) * jnp.outer(c, c)
-    j_u = carry_u @ (count * ju_axis) + jnp.outer(e_v, force_u @ de_u_daxis)
-    j_v = count * jv_axis + across_u * de_v_daxis
-    j_c = (count * jv_c + d_in_line_dc + carry_u @ (count * ju_c)
-           + jnp.outer(e_v, force_u @ de_u_dc) + across_u * de_v_dc)
-    return _spread_stiffness((a, b), (j_u, j_v), j_c, _vertical(velocity_slope, up), 3)
+    coefficients, U, V, count = _twine_geometry(x, uv)
+    j_u, j_v, j_c = _femnet_catch_jacobians(U, V, count, l0, diameter, cd_normal, cd_tangential, water_velocity,
+                                            water_density)
+    return _spread_stiffness(coefficients, (j_u, j_v), j_c, _vertical(velocity_slope, up), 3)
 
 
 def bar_drag_stiffness(x, rest_length, diameter, cd_normal, cd_tangential, water_velocity, water_density,
@@ -247,6 +317,100 @@ def node_drag_stiffness(drag_area, water_velocity, water_density, velocity_slope
     """
     j_c = (0.5 * water_density * drag_area) * _abs_times_jacobian(water_velocity)
     return _spread_stiffness((jnp.zeros(1),), (jnp.zeros((3, 3)),), j_c, _vertical(velocity_slope, up), 1)
+
+
+# -- a moving net (dynamics) ----------------------------------------------------------------------------
+
+
+def _relative_stiffness(coefficients, jacobians, j_velocity, water_gradient, time_step):
+    """(3k, 3k) K = -∂F/∂x (N/m) of an element force of which vertex i takes 1/k of the element's drag
+    computed with the water's velocity relative to vertex i, c_i = w(x_i) - (x_i - x_i^n)/Δt (book
+    4.272-4.276; :func:`jaxnet.model._per_vertex`).
+
+    Row block i, column block j:
+        -(1/k) [Σ_p coefficients[p][j] jacobians[p][i] + δ_ij j_velocity[i] (∂w/∂x(x_i) - I/Δt)].
+
+    Args:
+      coefficients: per twine vector p of the element, (k,) the weights of W_p = Σ_j coefficients[p][j] x_j.
+      jacobians: per twine vector p, (k, 3, 3) ∂F/∂W_p of the element's drag at each c_i (N/m).
+      j_velocity: (k, 3, 3) ∂F/∂c of the element's drag at each c_i (N·s/m).
+      water_gradient: (k, 3, 3) ∂w/∂x of the water's velocity at each vertex (1/s).
+      time_step: Δt (s) of the backward difference v_i = (x_i - x_i^n)/Δt (4.266).
+    """
+    k = coefficients[0].shape[0]
+    # vertex i's own position moves c_i twice: the water's velocity there, and its velocity (x_i - x_i^n)/Δt
+    own = j_velocity @ (water_gradient - _EYE / time_step)
+    # built in the layout of the result, (i, m, j, n) (measured: a transpose at the end costs as much as the rest)
+    blocks = jnp.eye(k)[:, None, :, None] * own[:, :, None, :]
+    for w, j in zip(coefficients, jacobians):
+        blocks = blocks + j[:, :, None, :] * w[None, None, :, None]
+    return -blocks.reshape(3 * k, 3 * k) / k
+
+
+def _moving_netting(element_jacobians, x, uv, l0, diameter, cd_normal, cd_tangential, relative_velocity,
+                    water_gradient, time_step, water_density):
+    """:func:`_relative_stiffness` of a triangle, its element Jacobians (:func:`_netting_jacobians` or
+    :func:`_femnet_catch_jacobians`) taken at the three vertices' relative velocities in one call."""
+    (a, b), U, V, count = _twine_geometry(x, uv)
+    j_u, j_v, j_c = element_jacobians(U, V, count, l0, diameter, cd_normal, cd_tangential, relative_velocity,
+                                      water_density)
+    return _relative_stiffness((a, b), (j_u, j_v), j_c, water_gradient, time_step)
+
+
+def moving_netting_drag_stiffness(x, uv, l0, diameter, cd_normal, cd_tangential, relative_velocity, water_gradient,
+                                  time_step, water_density):
+    """(9, 9) drag stiffness K = -∂F/∂x (N/m) of one diamond-mesh triangle of a moving net in an implicit
+    time step: vertex i takes a third of :func:`jaxnet.terms.drag.netting_drag` computed with the water's
+    velocity relative to it, c_i = w(x_i) - (x_i - x_i^n)/Δt (book 4.272-4.276, with the corrections of
+    :func:`netting_drag_stiffness`). K holds the twines' turning (as in statics, at each c_i), the water's
+    velocity varying over the vertex's position (current profile, waves' orbital velocity) and the damping
+    -(1/Δt) ∂F/∂c of the vertex's own velocity.
+
+    Args:
+      x: (3, 3) vertex positions (m); uv: (3, 2) twine coordinates.
+      l0, diameter: m; cd_normal, cd_tangential: dimensionless.
+      relative_velocity: (3, 3) c_i, the water's velocity relative to each vertex (m/s).
+      water_gradient: (3, 3, 3) ∂w/∂x of the water's velocity at each vertex (1/s), [i, m, n] = ∂w_m/∂x_n.
+      time_step: Δt (s). water_density: ρ (kg/m³).
+    Vertex-major layout, as :func:`netting_drag_stiffness`.
+    """
+    return _moving_netting(_netting_jacobians, x, uv, l0, diameter, cd_normal, cd_tangential, relative_velocity,
+                           water_gradient, time_step, water_density)
+
+
+def moving_netting_drag_femnet_catch_stiffness(x, uv, l0, diameter, cd_normal, cd_tangential, relative_velocity,
+                                               water_gradient, time_step, water_density):
+    """(9, 9) stiffness K = -∂F/∂x (N/m) of FEMNET's netting drag ahead of a catch
+    (:func:`jaxnet.terms.drag.netting_drag_femnet_catch`) on a moving net: vertex i takes a third of it
+    computed with c_i. Args as :func:`moving_netting_drag_stiffness`."""
+    return _moving_netting(_femnet_catch_jacobians, x, uv, l0, diameter, cd_normal, cd_tangential,
+                           relative_velocity, water_gradient, time_step, water_density)
+
+
+def moving_bar_drag_stiffness(x, rest_length, diameter, cd_normal, cd_tangential, relative_velocity, water_gradient,
+                              time_step, water_density):
+    """(6, 6) drag stiffness K = -∂F/∂x (N/m) of one cable bar of a moving net: end e takes half of
+    :func:`jaxnet.terms.drag.bar_drag` computed with the water's velocity relative to it, c_e (4.272-4.276).
+
+    Args:
+      x: (2, 3) end positions (m); rest_length, diameter: m; cd_normal, cd_tangential: dimensionless;
+      relative_velocity: (2, 3) c_e (m/s); water_gradient: (2, 3, 3) ∂w/∂x at each end (1/s);
+      time_step: Δt (s); water_density: kg/m³.
+    """
+    j_axis, j_c = twine_drag_jacobians(x[1] - x[0], rest_length, diameter, cd_normal, cd_tangential, relative_velocity,
+                                       water_density)  # (2, 3, 3) each: at the two ends' relative velocities
+    return _relative_stiffness((jnp.array([-1.0, 1.0]),), (j_axis,), j_c, water_gradient, time_step)
+
+
+def moving_node_drag_stiffness(drag_area, relative_velocity, water_gradient, time_step, water_density):
+    """(3, 3) stiffness K = -∂F/∂x (N/m) of the drag ½ ρ (Cd A) |c| c on a moving body at a node, c = w(x) - v
+    the water's velocity relative to it, v = (x - x^n)/Δt: K = -½ ρ (Cd A) (|c| I + c c^T/|c|) (∂w/∂x - I/Δt).
+
+    Args: drag_area Cd·A (m²); relative_velocity (3,) c (m/s); water_gradient (3, 3) ∂w/∂x at the node (1/s);
+      time_step Δt (s); water_density kg/m³.
+    """
+    j_c = (0.5 * water_density * drag_area) * _abs_times_jacobian(relative_velocity)
+    return -j_c @ (water_gradient - _EYE / time_step)
 
 
 def current_slope(z, speed, direction, profile_depth, profile_factor, surface_level=0.0):

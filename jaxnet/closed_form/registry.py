@@ -9,7 +9,10 @@ autodiff stiffness. Each term's matrix comes from exactly one path; :func:`paths
 An element stiffness function has the signature of the term's element function (:class:`jaxnet.model.Term`)
 and returns the (3k, 3k) element matrix K = -dF/dx (N/m), vertex-major (entry (3 i + m, 3 j + n):
 coordinate m of vertex i, n of vertex j): ``(x, p, env, **options)`` for an energy (its Hessian),
-``(x, p, env, state, **options)`` for a force (minus its Jacobian, the global state held fixed).
+``(x, p, env, state, **options)`` for a force (minus its Jacobian, the global state held fixed). In a time
+step a moving drag (book 4.272-4.276: each vertex's share with the water's velocity relative to that vertex)
+also takes the keywords ``velocity`` ((k, 3) vertex velocities, m/s) and ``time_step`` (Δt, s): its matrix
+then holds the damping -(1/Δt) ∂F/∂c as well (:func:`covered`'s ``with_velocities``).
 """
 
 from __future__ import annotations
@@ -74,17 +77,45 @@ def _water(x, env):
     return model._water_velocity(x, env), slope
 
 
-#: closed forms of the netting drag models made of twine drags (``Netting.drag_model`` codes)
+def _water_at_vertices(x, env, waves):
+    """In a time step, the water's velocity w (k, 3) at each vertex x (k, 3) as the moving drag sees it
+    (:func:`jaxnet.model.water_velocity_at`: the current at the vertex's depth, plus the waves' orbital
+    velocity when ``waves``) and its gradient ∂w/∂x (k, 3, 3) there (1/s): dc/dz up^T, plus the waves'."""
+    w = model.water_velocity_at(x, env, waves)
+    slope = drag.current_slope(x @ env.up, env.current_speed, env.current_direction, env.profile_depth,
+                               env.profile_factor, env.surface_level)
+    gradient = slope[:, :, None] * env.up[None, None, :]
+    if waves:
+        gradient = gradient + env.waves.velocity_gradient(x, env.time)
+    return w, gradient
+
+
+#: closed forms of the netting drag models made of twine drags (``Netting.drag_model`` codes): at rest in a
+#: current, and moving (a time step: relative velocity per vertex)
 _NETTING_DRAG = {0: drag.netting_drag_stiffness, 3: drag.netting_drag_femnet_catch_stiffness}
+_MOVING_NETTING_DRAG = {0: drag.moving_netting_drag_stiffness, 3: drag.moving_netting_drag_femnet_catch_stiffness}
 
 
-def _netting_drag(x, p, env, state, models, shielded):
-    c, slope = _water(x, env)
+def _netting_drag(x, p, env, state, models, shielded, moving=False, waves=False, velocity=None, time_step=None):
+    rho = env.water_density
+    if moving:
+        # in a time step (model._per_vertex): vertex i takes its share of the drag at the water's velocity
+        # relative to it, c_i
+        w, gradient = _water_at_vertices(x, env, waves)
+        relative = w - velocity
+    else:
+        c, slope = _water(x, env)
     stiffness, force = 0.0, 0.0
     for code in models:
-        k = _NETTING_DRAG[code](x, p.uv, p.l0, p.diameter, p.cd_normal, p.tangential_ratio * p.cd_normal, c,
-                                env.water_density, slope, env.up)
-        f = model.NETTING_DRAG[code][1](x, p, c, env.water_density) if shielded else 0.0
+        drag_force = model.NETTING_DRAG[code][1]
+        if moving:
+            k = _MOVING_NETTING_DRAG[code](x, p.uv, p.l0, p.diameter, p.cd_normal, p.tangential_ratio * p.cd_normal,
+                                           relative, gradient, time_step, rho)
+            f = jnp.stack([drag_force(x, p, relative[i], rho)[i] for i in range(3)]) if shielded else 0.0
+        else:
+            k = _NETTING_DRAG[code](x, p.uv, p.l0, p.diameter, p.cd_normal, p.tangential_ratio * p.cd_normal, c, rho,
+                                    slope, env.up)
+            f = drag_force(x, p, c, rho) if shielded else 0.0
         if len(models) > 1:
             k, f = jnp.where(p.drag_model == code, k, 0.0), jnp.where(p.drag_model == code, f, 0.0)
         stiffness, force = stiffness + k, force + f
@@ -100,13 +131,22 @@ def _netting_drag(x, p, env, state, models, shielded):
     return stiffness
 
 
-def _bar_drag(x, p, env, state):
+def _bar_drag(x, p, env, state, moving=False, waves=False, velocity=None, time_step=None):
+    cd_tangential = p.tangential_ratio * p.cd_normal
+    if moving:
+        w, gradient = _water_at_vertices(x, env, waves)
+        return drag.moving_bar_drag_stiffness(x, p.rest_length, p.diameter, p.cd_normal, cd_tangential, w - velocity,
+                                              gradient, time_step, env.water_density)
     c, slope = _water(x, env)
-    return drag.bar_drag_stiffness(x, p.rest_length, p.diameter, p.cd_normal, p.tangential_ratio * p.cd_normal, c,
-                                   env.water_density, slope, env.up)
+    return drag.bar_drag_stiffness(x, p.rest_length, p.diameter, p.cd_normal, cd_tangential, c, env.water_density,
+                                   slope, env.up)
 
 
-def _node_drag(x, p, env, state):
+def _node_drag(x, p, env, state, moving=False, waves=False, velocity=None, time_step=None):
+    if moving:
+        w, gradient = _water_at_vertices(x, env, waves)
+        return drag.moving_node_drag_stiffness(p.drag_area, w[0] - velocity[0], gradient[0], time_step,
+                                               env.water_density)
     c, slope = _water(x, env)
     return drag.node_drag_stiffness(p.drag_area, c, env.water_density, slope, env.up)
 
@@ -125,19 +165,24 @@ STIFFNESS = {
 }
 
 
-def covered(active_term) -> bool:
-    """True if this active term (:class:`jaxnet.model.ActiveTerm`) has a closed-form stiffness for its options."""
+def covered(active_term, with_velocities=False) -> bool:
+    """True if this active term (:class:`jaxnet.model.ActiveTerm`) has a closed-form stiffness for its options.
+
+    with_velocities: the caller hands the closed forms the vertices' velocities and the time step (the
+    tangent of an implicit step, :func:`jaxnet.assemble.tangent` with a ``Motion``). A moving drag (a
+    dynamic scene's) depends on them (c_i = w(x_i) - (x_i - x_i^n)/Δt, book 4.272-4.276): without them it
+    keeps its autodiff stiffness.
+    """
     entry = STIFFNESS.get(active_term.name)
     options = active_term.kwargs()
-    # in dynamics a drag depends on the vertices' velocities too (x - x_previous)/dt: the book's closed forms
-    # (4.136-4.210) are those of a net at rest in a current, so a moving drag takes autodiff
-    if options.get("moving"):
+    if options.get("moving") and not with_velocities:
         return False
     return entry is not None and (entry.covers is None or entry.covers(options))
 
 
-def paths(terms, stiffness="closed_form") -> dict:
+def paths(terms, stiffness="closed_form", with_velocities=False) -> dict:
     """Per active term with a stiffness (energies and forces), the path its stiffness takes:
-    ``"closed_form"`` or ``"autodiff"``, for a solver run with ``stiffness``."""
-    return {t.name: ("closed_form" if stiffness == "closed_form" and covered(t) else "autodiff")
+    ``"closed_form"`` or ``"autodiff"``, for a solver run with ``stiffness`` (``with_velocities``: in a time
+    step, see :func:`covered`)."""
+    return {t.name: ("closed_form" if stiffness == "closed_form" and covered(t, with_velocities) else "autodiff")
             for t in terms if t.term.kind in ("energy", "force")}

@@ -18,8 +18,9 @@ minus the gradient of ½ (M + M_a)/Δt² |x - x_n - Δt v_n|² (:func:`jaxnet.te
 the step is the static problem with that energy added: :func:`jaxnet.solve.statics.newton_loop` solves it
 unchanged (the same damped Newton, energy line search and stop reasons), its tangent gaining the inertia
 (M + M_a)/Δt² on the diagonal (4.271) and the drag's damping (1/Δt) ∂F/∂v (autodiff of the drag with v
-formed inside). The water's acceleration γ_h (the current's time derivative, the waves' local
-acceleration) is taken at the start of the step, at the nodes' positions x_n: a load during the step.
+formed inside, or the drag's closed form given v: :mod:`jaxnet.closed_form.drag`). The water's acceleration
+γ_h (the current's time derivative, the waves' local acceleration) is taken at the start of the step, at the
+nodes' positions x_n: a load during the step.
 
 Why this scheme is stable. Backward differences are the first-order backward differentiation formula
 (implicit Euler on positions and velocities): A-stable and L-stable, so stiff twines (EA up to 1e9 N) do not
@@ -88,9 +89,12 @@ class Implicit:
     newton: the options of each step's Newton iteration (:class:`jaxnet.solve.statics.Newton`): by default
       nearly undamped (inertia makes the step's tangent regular), without the static continuation, and with
       the hand-derived stiffness where a term has one (``stiffness="closed_form"``: the same matrix as
-      autodiff to rounding, tested; the drag, which depends on the velocities here, stays on autodiff). Why
-      not autodiff as in statics: a time step is a few iterations, so the tangent is most of its cost, and
-      the closed forms made the 339-unknown cage in waves 1.1-1.6x faster per step
+      autodiff to rounding, tested; the drag, which depends on the velocities here, takes its closed form
+      where the assembly hands it the vertices' velocities, :func:`jaxnet.closed_form.registry.covered`).
+      Why not autodiff as in statics: a time step is a few iterations, so the tangent is a large part of its
+      cost, and the moving drag's autodiff tangent (jacfwd through the drag computed once per vertex) is most
+      of it: on the 339-unknown cage in waves the closed forms take a step from 15.1 to 12.6 ms (2.31 Newton
+      iterations per step; measured once under a load of 2.6 on 2 cores)
       (``validation/dynamics_cost.py``).
     """
 
@@ -188,6 +192,12 @@ class State(eqx.Module):
 # -- masses --------------------------------------------------------------------------------------------
 
 
+# jitted: op by op, the vmaps below dispatch (and, at the first call, compile) each primitive apart: 8 ms per
+# simulate on the cage in waves, against 0.2 ms compiled
+_netting_vertex_masses = jax.jit(jax.vmap(inertia.netting_vertex_mass))
+_twine_determinants = jax.jit(jax.vmap(geometry.twine_determinant))
+
+
 def lumped_masses(scene):
     """Per node and axis, (M + M_a, M_a + ρV): the inertia (kg) and the water's inertia coefficient (kg).
 
@@ -202,13 +212,13 @@ def lumped_masses(scene):
     mass, volume, added = np.zeros(n), np.zeros(n), np.zeros((n, 3))
     net = scene.netting
     if net is not None:
-        m, v = jax.vmap(inertia.netting_vertex_mass)(net.uv, net.l0, net.diameter, net.density)
+        m, v = _netting_vertex_masses(net.uv, net.l0, net.diameter, net.density)
         tri = np.asarray(net.vertices)
         np.add.at(mass, tri.ravel(), np.repeat(np.asarray(m), 3))
         np.add.at(volume, tri.ravel(), np.repeat(np.asarray(v), 3))
     hexa = scene.hexagonal
     if hexa is not None:
-        d = np.abs(np.asarray(jax.vmap(geometry.twine_determinant)(hexa.uv)))
+        d = np.abs(np.asarray(_twine_determinants(hexa.uv)))
         v = d * np.pi * np.asarray(hexa.diameter) ** 2 / 4.0 * np.asarray(hexa.l0).sum(axis=1) / 3.0
         tri = np.asarray(hexa.vertices)
         np.add.at(mass, tri.ravel(), np.repeat(np.asarray(hexa.density) * v, 3))
