@@ -221,3 +221,40 @@ def test_the_jitted_solve_calls_the_same_solver():
     np.testing.assert_allclose(np.asarray(xs), np.linalg.solve(A, b), rtol=0, atol=1e-12 * np.abs(xs).max())
     xs, ok = jax.jit(linalg.solve)(jnp.zeros_like(data), jnp.asarray(b), jnp.asarray(indptr), jnp.asarray(indices))
     assert not bool(ok) and np.all(np.asarray(xs) == 0)
+
+
+def test_the_jitted_solve_packs_every_argument_kind_and_keeps_structures_apart():
+    """solve() hands the host one packed array: int32 and int64 structures, several right-hand sides, the
+    transposed system and a vmapped batch all come back right, and two structures solved in turn (the
+    host's last-solver shortcut) each get their own factorisation."""
+    rng = np.random.default_rng(8)
+    x, edges = sheet()
+    # the second system: the same sheet with its nodes renumbered, so both structures have the same sizes
+    # and differ only in their column indices
+    renumber = rng.permutation(len(x))
+    systems = []
+    for e in (edges, renumber[edges]):
+        mask = block_mask(len(x), e)
+        A = random_on(mask, rng)
+        systems.append((A,) + csr(mask, A))
+    assert systems[0][1].shape == systems[1][1].shape and systems[0][2].shape == systems[1][2].shape
+    assert not np.array_equal(systems[0][2], systems[1][2])
+    solve = jax.jit(linalg.solve, static_argnames=("transpose",))
+    for _ in range(2):
+        for (A, indptr, indices, data), itype in zip(systems, (jnp.int32, jnp.int64)):
+            B = rng.standard_normal((A.shape[0], 3))
+            args = (jnp.asarray(data), jnp.asarray(B), jnp.asarray(indptr, itype), jnp.asarray(indices, itype))
+            X, ok = solve(*args)
+            assert bool(ok)
+            np.testing.assert_allclose(np.asarray(X), np.linalg.solve(A, B), rtol=0, atol=1e-12 * np.abs(X).max())
+            Xt, ok = solve(*args, transpose=True)
+            np.testing.assert_allclose(np.asarray(Xt), np.linalg.solve(A.T, B), rtol=0, atol=1e-12 * np.abs(Xt).max())
+    # a batch of matrices on one structure (vmap: one host call per member)
+    A, indptr, indices, data = systems[0]
+    scales = jnp.asarray([1.0, 2.0, -3.0])
+    b = rng.standard_normal(A.shape[0])
+    xs, oks = jax.vmap(lambda s: linalg.solve(s * jnp.asarray(data), jnp.asarray(b), jnp.asarray(indptr),
+                                              jnp.asarray(indices)))(scales)
+    assert np.all(np.asarray(oks))
+    for s, xv in zip(np.asarray(scales), np.asarray(xs)):
+        np.testing.assert_allclose(xv, np.linalg.solve(s * A, b), rtol=0, atol=1e-12 * np.abs(xv).max())
