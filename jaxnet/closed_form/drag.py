@@ -73,7 +73,11 @@ import jax.numpy as jnp
 
 from jaxnet import geometry
 
-_EYE = jnp.eye(3)
+
+def _identity():
+    """The 3x3 identity, made where it is used: a module-level jnp constant would start JAX's backend when
+    the package is imported (0.3-0.45 s, and before a user could choose the platform)."""
+    return jnp.eye(3)
 
 # The helpers below work on stacks of vectors and matrices (leading axes "..."): one call computes the
 # Jacobians of both twine families at the relative velocities of all three vertices of a moving element (6
@@ -104,7 +108,7 @@ def _inverse(value):
 def _abs_times_jacobian(v):
     """(..., 3, 3) ∂(|v| v)/∂v = |v| I + v v^T/|v|; 0 at v = 0 (|v| by ``safe_norm``, as the force uses)."""
     length = geometry.safe_norm(v)
-    return _matrices(length) * _EYE + _outer(v, v) * _matrices(_inverse(length))
+    return _matrices(length) * _identity() + _outer(v, v) * _matrices(_inverse(length))
 
 
 def _split(axis, water_velocity):
@@ -117,7 +121,7 @@ def _split(axis, water_velocity):
     c_t = (along * inv_sq)[..., None] * axis
     c_n = c - c_t
     # ∂c_t/∂W = [W c^T + (c.W) I]/|W|² - 2 (c.W) W W^T/|W|⁴ (= [ê c_n^T + (c.ê)(I - ê ê^T)]/|W|)
-    dct_daxis = ((_outer(axis, c) + _matrices(along) * _EYE) * _matrices(inv_sq)
+    dct_daxis = ((_outer(axis, c) + _matrices(along) * _identity()) * _matrices(inv_sq)
                  - _matrices(2.0 * along * inv_sq * inv_sq) * _outer(axis, axis))
     dct_dc = _outer(axis, axis) * _matrices(inv_sq)
     return c_t, c_n, dct_daxis, dct_dc
@@ -143,7 +147,7 @@ def twine_drag_jacobians(axis, length, diameter, cd_normal, cd_tangential, water
     normal = _matrices(k * cd_normal) * _abs_times_jacobian(c_n)
     tangential = _matrices(k * cd_tangential) * _abs_times_jacobian(c_t)
     j_axis = (tangential - normal) @ dct_daxis
-    j_velocity = normal @ (_EYE - dct_dc) + tangential @ dct_dc
+    j_velocity = normal @ (_identity() - dct_dc) + tangential @ dct_dc
     return j_axis, j_velocity
 
 
@@ -232,10 +236,10 @@ def _unit_across_jacobians(axis, water_velocity, inv_c2):
     has = sq > 1e-24 * _dot(axis, axis)
     inv_length = jnp.where(has, 1.0 / jnp.sqrt(jnp.where(has, sq, 1.0)), 0.0)
     e = across * inv_length[..., None]
-    project = (_EYE - _outer(e, e)) * _matrices(inv_length)
-    da_daxis = _EYE - _outer(c, c) * _matrices(inv_c2)
+    project = (_identity() - _outer(e, e)) * _matrices(inv_length)
+    da_daxis = _identity() - _outer(c, c) * _matrices(inv_c2)
     # d(1/|c|²)/dc = -2 c/|c|⁴ (0 in still water, where 1/|c|² is the constant 0)
-    da_dc = (-_matrices(inv_c2) * (_matrices(along) * _EYE + _outer(c, axis))
+    da_dc = (-_matrices(inv_c2) * (_matrices(along) * _identity() + _outer(c, axis))
              + _matrices(2.0 * along * inv_c2 * inv_c2) * _outer(c, c))
     return e, project @ da_daxis, project @ da_dc
 
@@ -266,7 +270,7 @@ def _femnet_catch_jacobians(U, V, count, l0, diameter, cd_normal, cd_tangential,
     # F_U reaches the total through P F_U + (F_U.ê_U) ê_V: a linear map of F_U
     carry_u = in_line + _outer(e_v, e_u)
     along_c = _dot(force_u, c)
-    d_in_line_dc = (_matrices(inv_c2) * (_outer(c, force_u) + _matrices(along_c) * _EYE)
+    d_in_line_dc = (_matrices(inv_c2) * (_outer(c, force_u) + _matrices(along_c) * _identity())
                     - _matrices(2.0 * along_c * inv_c2 * inv_c2) * _outer(c, c))
     j_u = carry_u @ (count * ju_axis) + _outer(e_v, _row_times(force_u, de_u_daxis))
     j_v = count * jv_axis + _matrices(across_u) * de_v_daxis
@@ -339,7 +343,7 @@ def _relative_stiffness(coefficients, jacobians, j_velocity, water_gradient, tim
     """
     k = coefficients[0].shape[0]
     # vertex i's own position moves c_i twice: the water's velocity there, and its velocity (x_i - x_i^n)/Δt
-    own = j_velocity @ (water_gradient - _EYE / time_step)
+    own = j_velocity @ (water_gradient - _identity() / time_step)
     # built in the layout of the result, (i, m, j, n) (measured: a transpose at the end costs as much as the rest)
     blocks = jnp.eye(k)[:, None, :, None] * own[:, :, None, :]
     for w, j in zip(coefficients, jacobians):
@@ -410,7 +414,7 @@ def moving_node_drag_stiffness(drag_area, relative_velocity, water_gradient, tim
       time_step Δt (s); water_density kg/m³.
     """
     j_c = (0.5 * water_density * drag_area) * _abs_times_jacobian(relative_velocity)
-    return -j_c @ (water_gradient - _EYE / time_step)
+    return -j_c @ (water_gradient - _identity() / time_step)
 
 
 def current_slope(z, speed, direction, profile_depth, profile_factor, surface_level=0.0):

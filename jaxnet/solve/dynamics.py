@@ -94,8 +94,9 @@ class Implicit:
       Why not autodiff as in statics: a time step is a few iterations, so the tangent is a large part of its
       cost, and the moving drag's autodiff tangent (jacfwd through the drag computed once per vertex) is most
       of it: on the 339-unknown cage in waves the closed forms take a step from 15.1 to 12.6 ms (2.31 Newton
-      iterations per step; measured once under a load of 2.6 on 2 cores)
-      (``validation/dynamics_cost.py``).
+      iterations per step; measured once under a load of 2.6 on 2 cores), and the linear solve's one-argument
+      callback (:func:`jaxnet.linalg.solve`) to 9-12 ms, against 14-15 ms with autodiff
+      (``validation/dynamics_cost.py``; runs on this shared 2-core machine vary by up to 1.5x).
     """
 
     time_step: float = 0.01
@@ -470,6 +471,10 @@ def simulate(scene, end_time, solver: Implicit | None = None, loading: Loading |
     model = model_lib.active_terms(scene, dynamic=True)
     pattern = assemble.build_pattern(scene, model)
     masses = tuple(jnp.asarray(m) for m in lumped_masses(scene))
+    # The jitted calls below take these trees at every record: their numpy leaves would be copied to the
+    # device at each call (about 0.15 ms per call on the cage in waves, recorded every step by default).
+    scene_arg, pattern, loading_arg = jax.tree.map(lambda a: jnp.asarray(a) if isinstance(a, np.ndarray) else a,
+                                                   (scene, pattern, loading))
     fixed_nodes = np.flatnonzero(np.asarray(scene.nodes.fixed).any(axis=1))
     x_start = np.asarray(scene_at(scene, loading, 0.0).nodes.position if x0 is None else x0, dtype=float)
     v_start = np.zeros_like(x_start) if v0 is None else np.asarray(v0, dtype=float)
@@ -485,7 +490,7 @@ def simulate(scene, end_time, solver: Implicit | None = None, loading: Loading |
             state = State(**{f.name: jnp.asarray(checkpoint[f.name]) for f in dataclasses.fields(State)})
 
     def keep(s):
-        fig = record_figures(s, scene, loading, model, fixed_nodes)
+        fig = record_figures(s, scene_arg, loading_arg, model, fixed_nodes)
         times.append(float(s.t))
         positions.append(np.asarray(s.x))
         velocities.append(np.asarray(s.v))
@@ -509,7 +514,7 @@ def simulate(scene, end_time, solver: Implicit | None = None, loading: Loading |
         with bar:
             for k, target in enumerate(targets):
                 t_call = _time.perf_counter()
-                state = _advance_jit(state, float(target), scene, pattern, masses, loading, solver.time_step,
+                state = _advance_jit(state, float(target), scene_arg, pattern, masses, loading_arg, solver.time_step,
                                      solver.min_time_step, model=model, newton=solver.newton)
                 jax.block_until_ready(state)
                 if k == 0:
