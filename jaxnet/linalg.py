@@ -65,7 +65,7 @@ _MAX_SOLVERS = 64  # structures x threads
 
 
 #: the solver each thread used last: a Newton loop solves on one structure over and over, and comparing it
-#: (a memcmp) is several times cheaper than digesting it (measured 0.25 ms per time step on the cage in waves)
+#: (a memcmp, ~10 us) is far cheaper than digesting it (about 0.1 ms per solve on the cage in waves)
 _LAST = threading.local()
 
 
