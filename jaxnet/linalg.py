@@ -29,6 +29,7 @@ takes a zero pivot, it takes the column's largest entry instead.
 
 from __future__ import annotations
 
+import concurrent.futures
 import functools
 import hashlib
 import threading
@@ -50,6 +51,11 @@ REFINEMENTS = 2
 #: SuperLU's panel size (columns updated together): 1 is 15-20 % faster than scipy's default on the
 #: FEMNET tangents (their supernodes are small); it changes neither the pivots nor the fill.
 PANEL_SIZE = 1
+#: SuperLU's relaxed-supernode size (subtrees of the elimination tree of at most this many columns are
+#: merged into one supernode). SuperLU's default, 10, costs 10-17 % on the FEMNET tangents and the cage of
+#: 339 unknowns, and 3.2x at 8451 unknowns (the cage meshed at 0.3 m: 107 against 33 ms per factorisation,
+#: the same fill); 1, 2 and 3 are within 3 % of each other on all of them (``validation/superlu_options.py``).
+RELAX = 2
 
 
 def matvec(data, rows, indices, v):
@@ -97,9 +103,42 @@ def _host_solve(data, rhs, indptr, indices, transpose=False, reuse=False):
     return x, np.asarray(ok)
 
 
+#: the Python threads that run the callbacks' host solves: calling thread id -> a one-thread executor
+_WORKERS: dict = {}
+_WORKERS_LOCK = threading.Lock()
+
+
+def _on_solver_thread(function, *args, **kwargs):
+    """``function(*args, **kwargs)`` run on a thread that Python made (one per calling thread, the same for
+    every call from it); its result, or its exception raised here.
+
+    Why. XLA runs a host callback on a thread of its own, and Python gives such a thread a new thread
+    state at every call. scipy's SuperLU records the memory it allocates with the thread state of the call
+    that allocates it, and frees memory only if the thread state of the call that frees it recorded it
+    (scipy's ``_superlu_utils.c``, a record per thread). A :class:`HostSolver` keeps its last factor until
+    the next factorisation, so the factor made in one callback was dropped in the next, under another thread
+    state, and never freed: the size of L and U lost per factorisation (measured: the jitted Newton loop on
+    the 339-unknown cage grew by 183 kB per factorisation; the cage in waves by 86 MB per 200 time steps; the
+    diffrax reference on it by 50 MB/s, 22 GB in 7 minutes). A thread Python made keeps one thread state,
+    so every factor is freed where it was made. One such thread per calling thread: the callbacks of
+    several devices (``jaxnet.design.batch``) still solve at the same time, and the per-thread solvers
+    (:data:`_SOLVERS`, :data:`_LAST`) stay apart.
+    """
+    caller = threading.get_ident()
+    with _WORKERS_LOCK:
+        worker = _WORKERS.get(caller)
+        if worker is None:
+            worker = _WORKERS[caller] = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="jaxnet-superlu")
+    return worker.submit(function, *args, **kwargs).result()
+
+
 def _host_solve_packed(packed, nnz, rhs_shape, transpose=False, reuse=False):
-    """:func:`_host_solve` of the arguments :func:`solve` packed into one array."""
-    packed = np.asarray(packed)
+    """:func:`_host_solve` of the arguments :func:`solve` packed into one array, on the calling thread's
+    solver thread (:func:`_on_solver_thread`)."""
+    return _on_solver_thread(_unpack_and_solve, np.asarray(packed), nnz, rhs_shape, transpose, reuse)
+
+
+def _unpack_and_solve(packed, nnz, rhs_shape, transpose=False, reuse=False):
     m = int(np.prod(rhs_shape))
     n = rhs_shape[0]
     structure = packed[nnz + m:].astype(np.int64)
@@ -197,7 +236,7 @@ class HostSolver:
             # CSR of A read as CSC is A^T: factorise A^T and solve with trans="T" (no conversion).
             at = sp.csc_matrix((data, self.indices, self.indptr), shape=(n, n))
             self._lu = spla.splu(at, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=self.pivot_threshold,
-                                 panel_size=PANEL_SIZE, options=options)
+                                 panel_size=PANEL_SIZE, relax=RELAX, options=options)
             self._perm = None
             # perm_c maps a column to its place (after SuperLU's postorder of the elimination tree): the
             # symmetric permutation that reproduces the ordering takes rows and columns in its inverse's order.
@@ -206,7 +245,7 @@ class HostSolver:
             at = self._permuted
             np.take(data, self._slot, out=at.data)  # in place: no new matrix to validate
             self._lu = spla.splu(at, permc_spec="NATURAL", diag_pivot_thresh=self.pivot_threshold,
-                                 panel_size=PANEL_SIZE, options=options)
+                                 panel_size=PANEL_SIZE, relax=RELAX, options=options)
             self._perm = self.order
 
     def _set_order(self, order):

@@ -1,6 +1,7 @@
 """Error against run time of jaxnet's dynamics: the book's implicit scheme and the diffrax reference.
 
-    python validation/dynamics_cost.py [--sizes 1.6 1.0 0.5] [--cage-end 3.0] [--no-cage] [--plot FILE.png]
+    python validation/dynamics_cost.py [--sizes 1.6 1.0 0.5 0.3 0.16] [--cage-end 3.0] [--no-cage]
+                                       [--cage-reference-end 1.0] [--plot FILE.png] [--breakdown]
 
 1. Pendulum (a 1.5 kg mass on an elastic bar, EA = 2e4 N, released horizontal under gravity): the mass's
    position at t = 1 s, against diffrax's Kvaerno5 at rtol 1e-10 (the reference solution). Rows: the book
@@ -12,8 +13,14 @@
    held at the end, for Δt = 40 ... 5 ms against Δt = 2.5 ms (the finest run: the book scheme converges at
    first order, so its own fine run is the reference for the coarse ones), with wall time, steps per second
    and Newton iterations per step; then, at Δt = 10 ms, the cost per step with each stiffness path.
+   Then its work-precision against an independent reference (``--cage-reference-end``, default 1 s): the
+   same two outputs by the book scheme at Δt = 40 ... 2.5 ms and by diffrax's Kvaerno5 at rtol 1e-3 ...
+   1e-5, against Kvaerno5 at rtol 1e-6 (records every 50 ms; the reactions of the reference come from the
+   equations of motion at its saved states, the held nodes' inertia taken with the prescribed motion's exact
+   acceleration), error against wall time, and the plot's second panel.
 3. Cost against size: steps per second and Newton iterations per step of the cage in waves meshed finer
-   and finer (``--sizes``, meshing steps in m), after compilation, with the compile time.
+   and finer (``--sizes``, meshing steps in m: 137 to 10361 nodes), after compilation, with the compile time
+   and the static solve that gives the start.
 4. Where a step's time goes (``--breakdown``): on the same cage at Δt = 10 ms, the pieces of a Newton
    iteration timed alone, compiled (the evaluation of the residual, the tangent on each path and term by
    term, the sparse solve through the host callback and on the host alone), and the fixed cost of a step
@@ -56,22 +63,27 @@ def timed(run, compile_first=True):
     return out, time.perf_counter() - t0
 
 
-def plot(pendulum_rows, path):
-    """Work-precision plot of the pendulum: error against wall time, one line per method."""
+def plot(pendulum_rows, path, cage_rows=None):
+    """Work-precision plot: error against wall time, one line per method; the pendulum, and the cage in
+    waves when ``cage_rows`` (method, wall time, relative error of the peak collar reaction) are given."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(6, 4))
-    for method, marker in (("book scheme", "o-"), ("Kvaerno5 (diffrax)", "s-")):
-        rows = [(w, e) for m, w, e in pendulum_rows if m == method]
-        ax.loglog([w for w, _ in rows], [e for _, e in rows], marker, label=method)
-    ax.set_xlabel("wall time (s)")
-    ax.set_ylabel("error of the position at t = 1 s (m)")
-    ax.set_title("Pendulum: error against run time")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend()
+    panels = [(pendulum_rows, "Pendulum", "error of the position at t = 1 s (m)")]
+    if cage_rows:
+        panels.append((cage_rows, "Cage in waves (339 unknowns)", "relative error of the peak collar reaction"))
+    fig, axes = plt.subplots(1, len(panels), figsize=(6 * len(panels), 4), squeeze=False)
+    for ax, (rows_all, title, ylabel) in zip(axes[0], panels):
+        for method, marker in (("book scheme", "o-"), ("Kvaerno5 (diffrax)", "s-")):
+            rows = [(w, e) for m, w, e in rows_all if m == method and e > 0]
+            ax.loglog([w for w, _ in rows], [e for _, e in rows], marker, label=method)
+        ax.set_xlabel("wall time (s)")
+        ax.set_ylabel(ylabel)
+        ax.set_title(f"{title}: error against run time")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend()
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     print(f"\nwrote {path}")
@@ -147,23 +159,115 @@ def cage_table(end):
     return runs
 
 
-def size_table(steps):
+def reference_figures(scene, loading, ref):
+    """The collar's total vertical reaction (N) at each saved time of a reference run, and the volume held
+    (m³) at the last: the same figures as a book-scheme record. The reactions are minus the out-of-balance
+    force at the fixed coordinates, the held nodes' own inertia -(M + M_a) a included, with a the prescribed
+    motion's exact acceleration (the book scheme takes its backward difference: first-order close)."""
+    import jax
+    import jax.numpy as jnp
+
+    from jaxnet import catch as catch_lib, model as model_lib
+
+    model = model_lib.active_terms(scene, dynamic=True)
+    masses = tuple(jnp.asarray(m) for m in dynamics.lumped_masses(scene))
+    fixed = np.asarray(scene.nodes.fixed)
+
+    def position(t):
+        return dynamics.scene_at(scene, loading, t).nodes.position
+
+    acceleration = jax.jit(jax.jacfwd(jax.jacfwd(position)))
+    force = jax.jit(dynamics.out_of_balance, static_argnames=("model",))
+    reaction_z = []
+    for t, x, v in zip(ref.times, ref.positions, ref.velocities):
+        f = np.asarray(force(jnp.asarray(x), jnp.asarray(v), float(t), scene, masses, loading, model=model))
+        f = f - np.asarray(masses[0]) * np.asarray(acceleration(jnp.asarray(float(t))))
+        reaction_z.append(float(np.where(fixed, -f, 0.0)[:, 2].sum()))
+    e = scene.enclosure
+    volume = float(catch_lib.enclosed_volume(jnp.asarray(ref.positions[-1]), scene.netting.vertices,
+                                             jnp.dot(e.center, e.axis), e.axis, sign=scene.netting.outward))
+    return np.asarray(reaction_z), volume
+
+
+def peak(reaction_z):
+    """The reaction (N) of largest magnitude among the records after t = 0 (at t = 0 a book-scheme record has
+    no inertia in it: the acceleration there is unknown)."""
+    later = np.asarray(reaction_z)[1:]
+    return float(later[np.argmax(np.abs(later))])
+
+
+def cage_reference_table(end, reference_rtol=1e-6):
+    """Work-precision of the book scheme and of Kvaerno5 on the cage in waves, against Kvaerno5 at
+    ``reference_rtol`` over [0, end] (module docstring, item 2). Returns the rows (method, wall, error)."""
     from jaxnet.scenes import cage_in_waves
 
-    print("\n## Cost against size: the cage in waves, Δt = 10 ms, 0.5 s from the static equilibrium\n")
-    print("| meshing step (m) | nodes | unknowns | compile + first 0.1 s (s) | steps/s | ms per step | Newton it./step |")
+    scene, loading = cage_in_waves(step=1.6)
+    x0 = np.asarray(statics.solve(scene)[0].x)
+    record = 0.05
+    saveat = np.linspace(0.0, end, int(round(end / record)) + 1)
+
+    def run_reference(rtol):
+        return reference.reference(scene, end, loading, saveat=saveat, rtol=rtol, atol=rtol * 1e-2, x0=x0)
+
+    t0 = time.perf_counter()
+    exact = run_reference(reference_rtol)
+    wall_exact = time.perf_counter() - t0
+    reaction_exact, volume_exact = reference_figures(scene, loading, exact)
+    peak_exact = peak(reaction_exact)
+    print(f"\n## Cage in waves ({scene.n_dof} unknowns), 0 to {end:g} s from the static equilibrium: against "
+          f"Kvaerno5 at rtol {reference_rtol:g} ({exact.steps_accepted} steps, +{exact.steps_rejected} rejected, "
+          f"{wall_exact:.0f} s with its compilation)\n")
+    print(f"Peak collar reaction (z, the largest in magnitude after t = 0) of the reference {peak_exact:.2f} N, "
+          f"volume held at {end:g} s {volume_exact:.4f} m³. Wall times after compilation (the book scheme: a second "
+          "run; Kvaerno5: its run less its compile time).\n")
+    print("| method | setting | peak reaction error | volume error | wall (s) | steps | Newton it./step |")
     print("|---|---|---|---|---|---|---|")
+    rows = []
+    for h in (0.04, 0.02, 0.01, 0.005, 0.0025):
+        opts = dynamics.Implicit(time_step=h)
+        tr, wall = timed(lambda: dynamics.simulate(scene, end, opts, loading, record_every=record, x0=x0,
+                                                   progress=False))
+        err = abs(peak(tr.figures["reaction_total_N"][:, 2]) - peak_exact) / abs(peak_exact)
+        verr = abs(tr.figures["volume_m3"][-1] - volume_exact) / volume_exact
+        rows.append(("book scheme", wall, err))
+        print(f"| book scheme | Δt = {h * 1e3:g} ms | {err:.2e} | {verr:.2e} | {wall:.2f} | {tr.steps} | "
+              f"{tr.mean_iterations:.2f} |")
+    for rtol in (1e-3, 1e-4, 1e-5):
+        ref = run_reference(rtol)
+        wall = ref.wall_s - ref.compile_s
+        reaction, volume = reference_figures(scene, loading, ref)
+        err = abs(peak(reaction) - peak_exact) / abs(peak_exact)
+        rows.append(("Kvaerno5 (diffrax)", wall, err))
+        print(f"| Kvaerno5 (diffrax) | rtol = {rtol:g} | {err:.2e} | {abs(volume - volume_exact) / volume_exact:.2e} | "
+              f"{wall:.2f} | {ref.steps_accepted} (+{ref.steps_rejected} rejected) | |")
+    return rows
+
+
+def size_table(steps):
+    """Steps per second against size (module docstring, item 3): 0.5 s of the cage in waves from its static
+    equilibrium, 0.1 s from 3000 nodes on (a step there takes a large part of a second)."""
+    from jaxnet.scenes import cage_in_waves
+
+    print("\n## Cost against size: the cage in waves, Δt = 10 ms, from the static equilibrium\n")
+    print("| meshing step (m) | nodes | unknowns | static solve (s) | compile + first 2 steps (s) | simulated (s) | "
+          "steps/s | ms per step | Newton it./step |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for step in steps:
         scene, loading = cage_in_waves(step=step)
+        t0 = time.perf_counter()
         eq, _ = statics.solve(scene)
+        static_s = time.perf_counter() - t0
         x0 = np.asarray(eq.x)
         opts = dynamics.Implicit(time_step=0.01)
-        first = dynamics.simulate(scene, 0.1, opts, loading, record_every=0.1, x0=x0, progress=False)
+        end = 0.5 if scene.n_nodes < 3000 else 0.1
         t0 = time.perf_counter()
-        tr = dynamics.simulate(scene, 0.5, opts, loading, record_every=0.5, x0=x0, progress=False)
+        dynamics.simulate(scene, 0.02, opts, loading, record_every=0.02, x0=x0, progress=False)
+        first = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        tr = dynamics.simulate(scene, end, opts, loading, record_every=end, x0=x0, progress=False)
         wall = time.perf_counter() - t0
-        print(f"| {step:g} | {scene.n_nodes} | {scene.n_dof} | {first.compile_s:.1f} | {tr.steps / wall:.1f} | "
-              f"{wall / tr.steps * 1e3:.1f} | {tr.mean_iterations:.2f} |")
+        print(f"| {step:g} | {scene.n_nodes} | {scene.n_dof} | {static_s:.1f} | {first:.1f} | {end:g} | "
+              f"{tr.steps / wall:.1f} | {wall / tr.steps * 1e3:.1f} | {tr.mean_iterations:.2f} |", flush=True)
 
 
 def _median_ms(run, calls=100, repeats=3):
@@ -242,18 +346,24 @@ def breakdown():
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--sizes", type=float, nargs="*", default=[1.6, 1.0, 0.5])
+    parser.add_argument("--sizes", type=float, nargs="*", default=[1.6, 1.0, 0.5, 0.3, 0.16])
     parser.add_argument("--cage-end", type=float, default=3.0)
     parser.add_argument("--no-cage", action="store_true")
+    parser.add_argument("--cage-reference-end", type=float, default=1.0,
+                        help="length (s) of the cage's work-precision against Kvaerno5; 0 skips it")
     parser.add_argument("--plot", default="validation/dynamics_work_precision.png")
     parser.add_argument("--breakdown", action="store_true", help="only the cost breakdown of a step (item 4)")
     args = parser.parse_args()
     if args.breakdown:
         breakdown()
         return
-    plot(pendulum_table(), args.plot)
+    pendulum_rows = pendulum_table()
+    cage_rows = None
     if not args.no_cage:
         cage_table(args.cage_end)
+        if args.cage_reference_end > 0:
+            cage_rows = cage_reference_table(args.cage_reference_end)
+    plot(pendulum_rows, args.plot, cage_rows)
     if args.sizes:
         size_table(args.sizes)
 
