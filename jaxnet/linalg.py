@@ -3,7 +3,8 @@
 The tangent of a net is sparse, often nearly singular (slack twines, a flat membrane has no out-of-plane
 stiffness) and badly conditioned (EA/l0 against small geometric stiffness): Krylov methods with cheap
 preconditioners do not converge on it (measured: ../shared/notes/solvers.md), so it is factorised by
-SuperLU (scipy), called from inside jitted code through ``jax.pure_callback``. The structure (indptr,
+SuperLU (scipy), called from inside jitted code through ``jax.pure_callback`` and run on a Python thread
+of this module's (:func:`_on_solver_thread`: SuperLU's memory is freed only there). The structure (indptr,
 indices) is passed as arguments, so one compiled program serves every scene of the same shape. The
 minimum-degree ordering on A^T + A suits the structurally symmetric pattern of finite elements (about
 half the fill of COLAMD on these matrices).

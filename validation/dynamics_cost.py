@@ -219,7 +219,8 @@ def cage_reference_table(end, reference_rtol=1e-6):
           f"{wall_exact:.0f} s with its compilation)\n")
     print(f"Peak collar reaction (z, the largest in magnitude after t = 0) of the reference {peak_exact:.2f} N, "
           f"volume held at {end:g} s {volume_exact:.4f} m³. Wall times after compilation (the book scheme: a second "
-          "run; Kvaerno5: its run less its compile time).\n")
+          "run; Kvaerno5: its run less its compile time). The reference's own error is of the order of its "
+          "tolerance: errors below about 10 x rtol of the reference are not resolved.\n")
     print("| method | setting | peak reaction error | volume error | wall (s) | steps | Newton it./step |")
     print("|---|---|---|---|---|---|---|")
     rows = []

@@ -93,10 +93,10 @@ class Implicit:
       where the assembly hands it the vertices' velocities, :func:`jaxnet.closed_form.registry.covered`).
       Why not autodiff as in statics: a time step is a few iterations, so the tangent is a large part of its
       cost, and the moving drag's autodiff tangent (jacfwd through the drag computed once per vertex) is most
-      of it: on the 339-unknown cage in waves the closed forms take a step from 15.1 to 12.6 ms (2.31 Newton
-      iterations per step; measured once under a load of 2.6 on 2 cores), and the linear solve's one-argument
-      callback (:func:`jaxnet.linalg.solve`) to 9-12 ms, against 14-15 ms with autodiff
-      (``validation/dynamics_cost.py``; runs on this shared 2-core machine vary by up to 1.5x).
+      of it: on the 339-unknown cage in waves, 2.34 Newton iterations per step, a step takes 3.9 ms with the
+      closed forms and 4.1 ms with autodiff (median of 5 runs each, ``validation/dynamics_cost.py``, after the
+      fix of the host solves' memory, :func:`jaxnet.linalg._on_solver_thread`; before it, on the same
+      machine, 5.2 and 6.7 ms).
     """
 
     time_step: float = 0.01
