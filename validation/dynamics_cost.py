@@ -286,30 +286,42 @@ def _median_ms(run, calls=100, repeats=3):
     return float(np.median(times))
 
 
+def time_step_problem(mesh_step, run_time, time_step=0.01):
+    """The next time step of the cage in waves meshed at ``mesh_step`` (m), ``run_time`` (s) into a run from its
+    static equilibrium: (scene, loading, model, pattern, scene at the step's end, its
+    :class:`~jaxnet.solve.dynamics.TimeStep`, the free coordinates Newton starts from, the loads (N)), what the
+    step's Newton iteration evaluates and differentiates."""
+    import jax.numpy as jnp
+
+    from jaxnet import assemble, model as model_lib
+    from jaxnet.scenes import cage_in_waves
+
+    scene, loading = cage_in_waves(step=mesh_step)
+    x_eq = np.asarray(statics.solve(scene)[0].x)
+    model = model_lib.active_terms(scene, dynamic=True)
+    pattern = assemble.build_pattern(scene, model)
+    masses = tuple(jnp.asarray(m) for m in dynamics.lumped_masses(scene))
+    state = dynamics.simulate(scene, run_time, dynamics.Implicit(time_step=time_step), loading, record_every=run_time,
+                              x0=x_eq, progress=False).state
+    scene_t = dynamics.scene_at(scene, loading, state.t + time_step)
+    water_load = masses[1] * dynamics.water_acceleration(state.x, scene_t, loading, True)
+    step = dynamics.TimeStep(state.x, state.v, jnp.asarray(time_step), masses[0], water_load)
+    x = (state.x + time_step * state.v).ravel()[pattern.free]
+    return scene, loading, model, pattern, scene_t, step, x, assemble.loads(scene_t, model) + water_load
+
+
 def breakdown():
     """The pieces of a time step of the cage in waves, each timed alone (module docstring, item 4)."""
     import equinox as eqx
     import jax
     import jax.numpy as jnp
 
-    from jaxnet import assemble, linalg, model as model_lib
-    from jaxnet.scenes import cage_in_waves
+    from jaxnet import assemble, linalg
 
-    scene, loading = cage_in_waves(step=1.6)
-    x_eq = np.asarray(statics.solve(scene)[0].x)
-    model = model_lib.active_terms(scene, dynamic=True)
-    pattern = assemble.build_pattern(scene, model)
-    masses = tuple(jnp.asarray(m) for m in dynamics.lumped_masses(scene))
-    # a state of the run: 0.5 s into it
-    state = dynamics.simulate(scene, 0.5, dynamics.Implicit(), loading, record_every=0.5, x0=x_eq, progress=False).state
-    h = 0.01
-    scene_t = dynamics.scene_at(scene, loading, state.t + h)
-    water_load = masses[1] * dynamics.water_acceleration(state.x, scene_t, loading, True)
-    step = dynamics.TimeStep(state.x, state.v, jnp.asarray(h), masses[0], water_load)
-    x = (state.x + h * state.v).ravel()[pattern.free]
-    load = assemble.loads(scene_t, model) + water_load
+    scene, loading, model, pattern, scene_t, step, x, load = time_step_problem(1.6, 0.5)
+    h = float(step.time_step)
     evaluate = jax.jit(statics._evaluate, static_argnames=("model",))
-    zero = jnp.zeros_like(state.x)
+    zero = jnp.zeros_like(step.x_previous)
     _, force, _, _, forces_state = evaluate(x, zero, load, 1.0, scene_t, pattern, model=model, step=step)
     rows = [("evaluation (energy, its gradient, drag forces)", _median_ms(
         lambda: evaluate(x, zero, load, 1.0, scene_t, pattern, model=model, step=step)))]

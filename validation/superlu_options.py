@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import pathlib
+import sys
 import time
 
 import numpy as np
@@ -25,7 +26,10 @@ import scipy.sparse.linalg as spla
 import jaxnet  # noqa: F401
 from jaxnet import linalg
 
-DATA = pathlib.Path(__file__).resolve().parents[1] / "tests" / "data" / "femnet"
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+DATA = ROOT / "tests" / "data" / "femnet"
+if __package__ in (None, ""):  # run as a script: the repository root on the path, for validation.dynamics_cost
+    sys.path.insert(0, str(ROOT))
 OPTIONS = [dict(relax=r, panel_size=p) for p in (1, 20) for r in (1, 2, 3, 10)]
 
 
@@ -54,24 +58,12 @@ def cage_tangent(step):
     """(data, indptr, indices): the tangent of a time step of the cage in waves meshed at ``step`` (m)."""
     import jax.numpy as jnp
 
-    from jaxnet import assemble, model as model_lib
-    from jaxnet.scenes import cage_in_waves
-    from jaxnet.solve import dynamics, statics
+    from jaxnet.solve import statics
+    from validation.dynamics_cost import time_step_problem
 
-    scene, loading = cage_in_waves(step=step)
-    x_eq = np.asarray(statics.solve(scene)[0].x)
-    model = model_lib.active_terms(scene, dynamic=True)
-    pattern = assemble.build_pattern(scene, model)
-    masses = tuple(jnp.asarray(m) for m in dynamics.lumped_masses(scene))
-    state = dynamics.simulate(scene, 0.1, dynamics.Implicit(), loading, record_every=0.1, x0=x_eq,
-                              progress=False).state
-    h = 0.01
-    scene_t = dynamics.scene_at(scene, loading, state.t + h)
-    water_load = masses[1] * dynamics.water_acceleration(state.x, scene_t, loading, True)
-    step_ = dynamics.TimeStep(state.x, state.v, jnp.asarray(h), masses[0], water_load)
-    x = (state.x + h * state.v).ravel()[pattern.free]
-    load = assemble.loads(scene_t, model) + water_load
-    forces_state = statics._evaluate(x, jnp.zeros_like(state.x), load, 1.0, scene_t, pattern, model, step_)[4]
+    scene, _, model, pattern, scene_t, step_, x, load = time_step_problem(step, 0.1)
+    forces_state = statics._evaluate(x, jnp.zeros_like(step_.x_previous), load, 1.0, scene_t, pattern, model,
+                                     step_)[4]
     data = statics._tangent(x, forces_state, 1.0, scene_t, pattern, model, "closed_form", step_)
     return np.asarray(data), np.asarray(pattern.indptr), np.asarray(pattern.indices)
 
