@@ -33,6 +33,7 @@ from __future__ import annotations
 import concurrent.futures
 import functools
 import hashlib
+import os
 import threading
 
 import jax
@@ -104,7 +105,7 @@ def _host_solve(data, rhs, indptr, indices, transpose=False, reuse=False):
     return x, np.asarray(ok)
 
 
-#: the Python threads that run the callbacks' host solves: calling thread id -> a one-thread executor
+#: the Python threads that run the callbacks' host solves: (process, calling thread) -> a one-thread executor
 _WORKERS: dict = {}
 _WORKERS_LOCK = threading.Lock()
 
@@ -125,7 +126,8 @@ def _on_solver_thread(function, *args, **kwargs):
     several devices (``jaxnet.design.batch``) still solve at the same time, and the per-thread solvers
     (:data:`_SOLVERS`, :data:`_LAST`) stay apart.
     """
-    caller = threading.get_ident()
+    # by process too: a forked child inherits the table but not the threads (it would wait forever)
+    caller = (os.getpid(), threading.get_ident())
     with _WORKERS_LOCK:
         worker = _WORKERS.get(caller)
         if worker is None:
