@@ -56,7 +56,7 @@ PANEL_SIZE = 1
 #: SuperLU's relaxed-supernode size (subtrees of the elimination tree of at most this many columns are
 #: merged into one supernode). SuperLU's default, 10, costs 10-17 % on the FEMNET tangents and the cage of
 #: 339 unknowns, and 3.4x at 8451 unknowns (the cage meshed at 0.3 m: 98 against 29 ms per factorisation,
-#: the same fill); 1, 2 and 3 are within 3 % of each other on all of them (``validation/superlu_options.py``).
+#: the same fill); 1, 2 and 3 are within 5 % of each other on all of them (``validation/superlu_options.py``).
 RELAX = 2
 
 
