@@ -9,6 +9,7 @@ import jax
 import numpy as np
 
 from jaxnet import assemble, catch as catch_lib, model as model_lib
+from jaxnet.solve import programs
 from jaxnet.terms import cable, pressure, tension
 
 #: result.json force groups: name -> the terms whose total force (over all nodes) it sums
@@ -60,9 +61,9 @@ def forces_by_term(scene, x):
 
 
 # compiled once per scene shape (evaluated op by op they take seconds on a large net)
-_term_forces = jax.jit(assemble.term_forces, static_argnames="model")
-_catch_front = jax.jit(catch_lib.catch_front)
-_catch_summary = jax.jit(catch_lib.catch_summary)
+_term_forces = programs.jit(assemble.term_forces, static_argnames="model")
+_catch_front = programs.jit(catch_lib.catch_front)
+_catch_summary = programs.jit(catch_lib.catch_summary)
 
 
 def force_breakdown(scene, x):

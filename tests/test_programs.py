@@ -59,28 +59,71 @@ import jaxnet
 from jaxnet.solve import programs
 jax.config.update("jax_compilation_cache_dir", sys.argv[1])
 jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
-program = programs.obtain("scaled", jax.jit(lambda x, s: s * jnp.sin(x)), (np.linspace(0.0, 1.0, 7), 2.0))
-print(float(program(np.linspace(0.0, 1.0, 7), 3.0).sum()))
+scaled, x = jax.jit(lambda x, s: s * jnp.sin(x)), np.linspace(0.0, 1.0, 7)
+if sys.argv[2] == "jax":  # compiled by JAX's own jit call: kept in JAX's cache only
+    print(float(np.asarray(scaled(x, 3.0)).sum()))
+else:
+    program = programs.obtain("scaled", scaled, (x, 2.0))
+    print(float(np.asarray(program(x, 3.0)).sum()))  # summed by numpy: no other program
 """
+
+
+def _run_process(cache, mode):
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-c", _PROCESS, str(cache), mode], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr[-2000:]
+    return float(out.stdout.split()[-1])
+
+
+def test_a_program_is_kept_by_jaxnet_alone_and_the_next_process_loads_it(tmp_path):
+    """jaxnet keeps its programs whole; JAX's own cache gets no second copy of them (its write would be
+    on the solve's path). The next process loads the program and computes the same."""
+    expected = 3.0 * np.sin(np.linspace(0.0, 1.0, 7)).sum()
+    assert _run_process(tmp_path, "jaxnet") == pytest.approx(expected, rel=1e-14)
+    assert [p.name for p in tmp_path.iterdir()] == [programs.SUBDIRECTORY]  # nothing in JAX's cache
+    kept = list((tmp_path / programs.SUBDIRECTORY).iterdir())
+    assert len(kept) == 1
+    stamp = kept[0].stat().st_mtime_ns
+    assert _run_process(tmp_path, "jaxnet") == pytest.approx(expected, rel=1e-14)
+    assert [p.stat().st_mtime_ns for p in (tmp_path / programs.SUBDIRECTORY).iterdir()] == [stamp]  # loaded
 
 
 def test_a_program_jax_took_from_its_own_cache_is_not_kept_on_disk(tmp_path):
     """On CPU an executable JAX loaded from its persistent cache serialises without its kernels: kept on disk it
     would load in the next process and fail at its first call. Such a program serves its process only."""
-    import subprocess
-    import sys
-
-    def run():
-        out = subprocess.run([sys.executable, "-c", _PROCESS, str(tmp_path)], capture_output=True, text=True)
-        assert out.returncode == 0, out.stderr[-2000:]
-        return float(out.stdout.split()[-1])
-
     expected = 3.0 * np.sin(np.linspace(0.0, 1.0, 7)).sum()
-    assert run() == pytest.approx(expected, rel=1e-14)  # compiled afresh: kept by JAX and by jaxnet
-    kept = tmp_path / programs.SUBDIRECTORY
-    assert len(list(kept.iterdir())) == 1
-    for path in kept.iterdir():
-        path.unlink()
-    assert run() == pytest.approx(expected, rel=1e-14)  # JAX's cache answers: not kept
-    assert list(kept.iterdir()) == []
-    assert run() == pytest.approx(expected, rel=1e-14)  # and the next process is still right
+    assert _run_process(tmp_path, "jax") == pytest.approx(expected, rel=1e-14)  # now in JAX's cache
+    assert len(list(tmp_path.iterdir())) >= 1
+    assert _run_process(tmp_path, "jaxnet") == pytest.approx(expected, rel=1e-14)  # JAX's cache answers
+    assert not (tmp_path / programs.SUBDIRECTORY).exists() or list((tmp_path / programs.SUBDIRECTORY).iterdir()) == []
+    assert _run_process(tmp_path, "jaxnet") == pytest.approx(expected, rel=1e-14)  # and the next process is right
+
+
+def test_jit_compiles_with_the_package_options(monkeypatch):
+    """:func:`programs.jit` hands :data:`programs.COMPILER_OPTIONS` to XLA (an option XLA does not know is
+    refused, so a bad one shows that they reach it), a caller's own options on top."""
+    import jax.numpy as jnp
+
+    x = np.linspace(0.0, 1.0, 5)
+    np.testing.assert_allclose(programs.jit(jnp.sin)(x), np.sin(x), rtol=1e-15)
+    monkeypatch.setattr(programs, "COMPILER_OPTIONS", {"xla_no_such_option": True})
+    with pytest.raises(Exception, match="xla_no_such_option"):
+        programs.jit(lambda v: jnp.cos(v))(x)
+    # the caller's options are merged over the package's: a valid override does not bring the bad one back
+    monkeypatch.setattr(programs, "COMPILER_OPTIONS", {"xla_cpu_use_fusion_emitters": False})
+    np.testing.assert_allclose(programs.jit(lambda v: jnp.tan(v), compiler_options={"xla_cpu_use_fusion_emitters": True})(x),
+                               np.tan(x), rtol=1e-15)
+
+
+def test_the_package_compiles_through_programs_jit():
+    """Every program of the package is made by :func:`programs.jit` (so with its compiler options): no module
+    calls ``jax.jit`` itself."""
+    import pathlib
+    import re
+
+    root = pathlib.Path(programs.__file__).resolve().parents[1]
+    offenders = [str(p.relative_to(root)) for p in root.rglob("*.py")
+                 if p.name != "programs.py" and re.search(r"\bjax\.jit\(", p.read_text())]
+    assert offenders == []

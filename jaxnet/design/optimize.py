@@ -38,7 +38,7 @@ import numpy as np
 import optax
 
 from jaxnet.design import objectives as objectives_lib
-from jaxnet.solve import implicit
+from jaxnet.solve import implicit, programs
 
 #: stop reasons
 CONVERGED, MAX_STEPS, SOLVE_FAILED = "gradient below tolerance", "maximum number of steps", "equilibrium failed"
@@ -138,11 +138,11 @@ def optimize(space, objective, theta, optimizer=None, steps=50, bounds=None, sca
         o = objectives_lib.Outcome(eq.x, scene, model)
         return objective(o), (eq.x, eq.status, eq.iterations, _violation(objective, o))
 
-    value_and_grad = jax.jit(jax.value_and_grad(loss, has_aux=True))
+    value_and_grad = programs.jit(jax.value_and_grad(loss, has_aux=True))
     extra = isinstance(optimizer, optax.GradientTransformationExtraArgs)
     # an optimiser with a line search (L-BFGS) calls the value function inside its update: one compiled update,
     # the warm start an argument (a fresh closure per step would recompile the line search every step)
-    extra_update = jax.jit(lambda g, state, z, value, start: optimizer.update(
+    extra_update = programs.jit(lambda g, state, z, value, start: optimizer.update(
         g, state, z, value=value, grad=g, value_fn=lambda zz: loss(zz, start)[0]))
 
     def evaluate(z, start):

@@ -59,7 +59,7 @@ gradients agreed with fourth-order differences of the whole run to 5e-10 and 1e-
         return integrate(mooring_force, space.scene(theta), structure, loading, time_step=0.05, n_steps=10,
                          x0=x_rest, reduce=functools.partial(smooth_peak, width=0.01))
 
-    value, gradient = jax.jit(jax.value_and_grad(peak_pull, argnums=(0, 1)))(d, ratio)
+    value, gradient = programs.jit(jax.value_and_grad(peak_pull, argnums=(0, 1)))(d, ratio)
 
 Units: m, s, kg, N.
 """
@@ -75,7 +75,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxnet import assemble, catch as catch_lib, geometry, model as model_lib
-from jaxnet.solve import dynamics, implicit, statics
+from jaxnet.solve import dynamics, implicit, programs, statics
 from jaxnet.terms import inertia
 
 __all__ = ["Instant", "lumped_masses", "step_force", "implicit_step", "series", "trajectory", "integrate", "mean",

@@ -64,7 +64,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxnet import assemble, catch as catch_lib, geometry, model as model_lib, scene as scene_lib
-from jaxnet.solve import statics
+from jaxnet.solve import programs, statics
 from jaxnet.terms import inertia
 
 #: stop reasons of a dynamic run (``State.status``)
@@ -195,8 +195,8 @@ class State(eqx.Module):
 
 # jitted: op by op, the vmaps below dispatch (and, at the first call, compile) each primitive apart: 8 ms per
 # simulate on the cage in waves, against 0.2 ms compiled
-_netting_vertex_masses = jax.jit(jax.vmap(inertia.netting_vertex_mass))
-_twine_determinants = jax.jit(jax.vmap(geometry.twine_determinant))
+_netting_vertex_masses = programs.jit(jax.vmap(inertia.netting_vertex_mass))
+_twine_determinants = programs.jit(jax.vmap(geometry.twine_determinant))
 
 
 def lumped_masses(scene):
@@ -285,7 +285,7 @@ def out_of_balance(x, v, t, scene, masses, loading: Loading, model):
     return f
 
 
-_out_of_balance_jit = jax.jit(out_of_balance, static_argnames=("model",))
+_out_of_balance_jit = programs.jit(out_of_balance, static_argnames=("model",))
 
 
 def prescribed_velocity(scene, loading: Loading, t):
@@ -359,7 +359,7 @@ def advance(state: State, t_end, scene, pattern, masses, loading: Loading, time_
     return jax.tree.map(lambda a, b: jax.lax.convert_element_type(a, b.dtype), out, state)
 
 
-_advance_jit = jax.jit(advance, static_argnames=("model", "newton"))
+_advance_jit = programs.jit(advance, static_argnames=("model", "newton"))
 
 
 # -- what a record holds ---------------------------------------------------------------------------------
@@ -386,7 +386,7 @@ def _totals(state: State, scene, loading, model):
     return out
 
 
-_totals_jit = jax.jit(_totals, static_argnames=("model",))
+_totals_jit = programs.jit(_totals, static_argnames=("model",))
 
 
 def record_figures(state: State, scene, loading, model, fixed_nodes):

@@ -12,8 +12,9 @@ traces and lowers every program before it can look one up: about 3 s on ``c2``, 
   digest of every ``.py`` file of the package, so an edited model never runs a stale program).
 
 A program found in memory (this process) is reused as it is; one found on disk is loaded (tenths of a
-second, no tracing); otherwise it is traced, compiled and, when a directory is set, written there (atomically:
-a run that is stopped leaves no partial file). The directory is JAX's compilation cache directory when one
+second, no tracing); otherwise it is traced, compiled and, when a directory is set, written there by a thread
+of its own while the solve goes on (atomically: a run that is stopped leaves no partial file), and not into
+JAX's own cache as well. The directory is JAX's compilation cache directory when one
 is configured (``jax_compilation_cache_dir``, which ``jaxnet run`` sets; ``--no-cache`` leaves it unset),
 subdirectory ``jaxnet-programs``: one switch for both caches. A file that cannot be read or loaded (another
 jaxlib, a truncated write) is compiled again and replaced, never trusted.
@@ -25,6 +26,7 @@ own cache entries are executables: the directory is trusted as much as the user'
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
 import os
@@ -35,11 +37,30 @@ import threading
 
 import jax
 import numpy as np
+from jax._src import config as _jax_config
 from jax.experimental import serialize_executable
 
 
 #: subdirectory of JAX's compilation cache directory where the programs are kept
 SUBDIRECTORY = "jaxnet-programs"
+
+#: XLA options every jaxnet program is compiled with (:func:`jit`). XLA's CPU backend emits each fusion
+#: through its MLIR "fusion emitters" by default; its older elemental emitter compiles jaxnet's programs
+#: (many small per-element fusions over (E, 3, 3) stacks) in about half the time and runs them as fast or
+#: faster. Measured on FEMNET's cod-end c2 (2 cores, jax 0.10.2, closed-form stiffness): the tangent compiles
+#: in 1.03 s instead of 1.85 s and runs in 3.05 against 3.57 ms; the evaluation 0.88 against 1.24 s, 0.56
+#: against 0.64 ms; the cage in waves' time step 3.55 against 4.10 ms (``validation/compile_options.py``).
+#: A CPU option: other backends ignore it.
+COMPILER_OPTIONS = {"xla_cpu_use_fusion_emitters": False}
+
+
+def jit(fun=None, **kwargs):
+    """``jax.jit`` with :data:`COMPILER_OPTIONS` (a caller's own ``compiler_options`` take precedence);
+    usable as a decorator, with or without keywords."""
+    options = {**COMPILER_OPTIONS, **(kwargs.pop("compiler_options", None) or {})}
+    if fun is None:
+        return functools.partial(jit, compiler_options=options, **kwargs)
+    return jax.jit(fun, compiler_options=options, **kwargs)
 
 _MEMORY: dict = {}
 _LOCK = threading.Lock()
@@ -155,19 +176,35 @@ def lookup(name, args, static_kwargs=None):
     return program
 
 
-def compile(name, jitted, args, static_kwargs=None):  # noqa: A001 (the module's verb)
+def _without_jax_cache_writes():
+    """A context in which JAX writes nothing to its own persistent cache (this thread only): a program
+    jaxnet keeps on disk whole would be kept twice, and JAX's write is on the solve's path (c2: 0.15 s,
+    half a megabyte). JAX's setting is a thread-local state of its private config module; without it
+    (another jax), JAX writes as usual."""
+    state = getattr(_jax_config, "persistent_cache_min_compile_time_secs", None)
+    return state(float("inf")) if callable(state) else contextlib.nullcontext()
+
+
+def compile(name, jitted, args, static_kwargs=None, traced=None):  # noqa: A001 (the module's verb)
     """Compile ``jitted`` (a ``jax.jit`` function) for ``args`` and ``static_kwargs``, keep the program in
-    memory and, when a directory is set, on disk, and return it: a callable taking ``args`` only (same
-    structure, shapes and dtypes). Thread-safe: the solver compiles its programs in parallel threads."""
+    memory and, when a directory is set, on disk (written by a thread of its own while the caller goes on),
+    and return it: a callable taking ``args`` only (same structure, shapes and dtypes).
+    ``traced``: ``jitted.trace(*args, **static_kwargs)`` if the caller has it already (not traced again).
+    Thread-safe: the solver compiles its programs in parallel threads."""
     k, path = _identity(name, args, static_kwargs)
     _listen_to_jax_cache()
     _THREAD.jax_cache_hit = False
-    program = jitted.lower(*args, **(static_kwargs or {})).compile()
+    if traced is None:
+        traced = jitted.trace(*args, **(static_kwargs or {}))
+    with _without_jax_cache_writes() if path is not None else contextlib.nullcontext():
+        program = traced.lower().compile()
     # an executable JAX took from its own persistent cache serialises without its kernels on CPU: the file
     # would load, then fail at its first call (jax 0.10.2: "Function convert_bitcast_fusion not found").
     # Such a program serves this process only; the next one gets it from JAX's cache again.
     if path is not None and not _THREAD.jax_cache_hit:
-        _store(path, program)
+        # serialising and writing take tenths of a second (c2: 0.2 s for 1.2 MB): done beside the solve,
+        # which needs only the program in memory. Not a daemon thread: the interpreter waits for it at exit.
+        threading.Thread(target=_store, args=(path, program), name=f"jaxnet-store-{name}").start()
     with _LOCK:
         _MEMORY[k] = program
     return program

@@ -86,7 +86,7 @@ import optimistix as optx
 import scipy.sparse as sp
 
 from jaxnet import assemble, linalg, model as model_lib, scene as scene_lib
-from jaxnet.solve import dynamics
+from jaxnet.solve import dynamics, programs
 
 #: the solvers by name: implicit (stiff, error-controlled) and explicit (non-stiff checks only)
 IMPLICIT = {"Kvaerno3": diffrax.Kvaerno3, "Kvaerno4": diffrax.Kvaerno4, "Kvaerno5": diffrax.Kvaerno5}
@@ -298,7 +298,7 @@ def _solve(y0, ts, t_end, dt0, rtol, atol, scene, masses, free_index, loading, p
     return (ys, reached[0], sol.result, sol.stats["num_accepted_steps"], sol.stats["num_rejected_steps"])
 
 
-_solve_jit = jax.jit(_solve, static_argnames=("model", "solver", "linear_solver", "gmres_rtol", "n_colours", "max_steps",
+_solve_jit = programs.jit(_solve, static_argnames=("model", "solver", "linear_solver", "gmres_rtol", "n_colours", "max_steps",
                                               "progress"))
 
 
@@ -313,7 +313,7 @@ def _fill(ts, ys, scene, loading, free_index):
     return jax.vmap(one)(ts, *ys)
 
 
-_fill_jit = jax.jit(_fill)
+_fill_jit = programs.jit(_fill)
 
 
 def free_masses(scene):
