@@ -77,7 +77,6 @@ from jaxnet import model
 from jaxnet.design import cut as cut_lib
 from jaxnet.net import CableEnd, CableNodes, CableRef, Corner, HexTwine, Nearest, Net, PanelRef, Side
 from jaxnet.scene import Scene
-from jaxnet.solve import programs
 
 __all__ = ["FAMILIES", "Mounting", "DesignSpace"]
 
@@ -219,7 +218,8 @@ class DesignSpace:
         # the stretched lengths of the mounted sides at the reference, by the same jnp function as scene()
         self._side_stretched_ref = np.asarray(self._side_stretched(self._initial))
         self._active = self._term_keys(scene)
-        self._moved = programs.jit(self._moved_arrays)
+        # plain jax.jit: it runs inside the caller's traced functions, where XLA refuses options
+        self._moved = jax.jit(self._moved_arrays)
 
     # -- the maps, recorded once -------------------------------------------------------------------
 

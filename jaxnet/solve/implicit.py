@@ -60,7 +60,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxnet import assemble, linalg, model as model_lib, scene as scene_lib
-from jaxnet.solve import programs, statics
+from jaxnet.solve import statics
 
 #: the forward solve of a differentiable equilibrium: pure Newton steps near the root (no continuation),
 #: converged far below the static solver's 1e-3 N, because the derivative is only as good as the root.
@@ -190,7 +190,8 @@ def _solve_root(params, rest, pattern, x0, step, model, newton):
 
 # compiled once per scene shape, terms and options: a call from plain Python (a design loop, a test) reuses
 # the program; inside a caller's jit, grad or vmap it is inlined into the caller's program
-_solve = programs.jit(_solve_root, static_argnames=("model", "newton"))
+# plain jax.jit: it runs inside the caller's traced functions (a loss, a gradient), where XLA refuses options
+_solve = jax.jit(_solve_root, static_argnames=("model", "newton"))
 
 
 def equilibrium(scene, structure: Structure | None = None, x0=None, newton: statics.Newton | None = None,
