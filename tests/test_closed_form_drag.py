@@ -229,6 +229,22 @@ def test_netting_stiffness_equals_jacfwd_on_random_elements(model, current_kind)
 
 
 @pytest.mark.parametrize("model", ["netting", "femnet_catch"])
+def test_netting_stiffness_with_force_gives_the_terms_drag(model):
+    """``with_force=True`` (the shielded drag's tangent uses it instead of the force function) returns the
+    same stiffness and the term's own per-vertex drag, on random elements and on the singular ones."""
+    x, uv, speed, direction, factors, names = netting_batch()
+    c = jax.vmap(lambda x, s, d, fa: current.current_velocity(jnp.dot(geometry.centroid(x), UP), s, d, PROFILE_DEPTH,
+                                                            fa, SURFACE))(x, speed, direction, factors)
+    f = {"netting": closed.netting_drag_stiffness, "femnet_catch": closed.netting_drag_femnet_catch_stiffness}[model]
+    k, forces = jax.vmap(lambda x, uv, c: f(x, uv, L0, D, CN, CT, c, RHO, with_force=True))(x, uv, c)
+    expected = jax.vmap(netting_force(model))(x, uv, c)
+    scale = np.abs(np.asarray(expected)).max()
+    assert scale > 0.0
+    np.testing.assert_allclose(forces, expected, rtol=1e-12, atol=1e-14 * scale)
+    np.testing.assert_array_equal(k, jax.vmap(netting_closed(model))(x, uv, c))
+
+
+@pytest.mark.parametrize("model", ["netting", "femnet_catch"])
 def test_netting_depth_term_equals_jacfwd(model):
     # the depth term alone (sheared minus uniform at the same c): a wrong dc/dz term shows here at full
     # size, not diluted by the rest of the stiffness

@@ -142,19 +142,31 @@ def twine_drag_jacobians(axis, length, diameter, cd_normal, cd_tangential, water
       (j_axis, j_velocity): (3, 3) (or (..., 3, 3)) ∂F/∂axis in N/m and ∂F/∂water_velocity in N·s/m (row:
       force component, column: axis or velocity component). Both finite everywhere; j_axis = 0 for a zero axis.
     """
+    _, j_axis, j_velocity = _twine_drag_and_jacobians(axis, length, diameter, cd_normal, cd_tangential,
+                                                      water_velocity, water_density)
+    return j_axis, j_velocity
+
+
+def _twine_drag_and_jacobians(axis, length, diameter, cd_normal, cd_tangential, water_velocity, water_density):
+    """(force, j_axis, j_velocity): the whole drag (normal + tangential, N, (..., 3)) of
+    :func:`jaxnet.terms.drag.twine_drag` with the derivatives of :func:`twine_drag_jacobians`, from one
+    split of the velocity (the catch variant's stiffness and the shielding need the force too)."""
     c_t, c_n, dct_daxis, dct_dc = _split(axis, water_velocity)
     k = 0.5 * water_density * diameter * length
+    force = ((k * cd_normal * geometry.safe_norm(c_n))[..., None] * c_n
+             + (k * cd_tangential * geometry.safe_norm(c_t))[..., None] * c_t)
     normal = _matrices(k * cd_normal) * _abs_times_jacobian(c_n)
     tangential = _matrices(k * cd_tangential) * _abs_times_jacobian(c_t)
     j_axis = (tangential - normal) @ dct_daxis
     j_velocity = normal @ (_identity() - dct_dc) + tangential @ dct_dc
-    return j_axis, j_velocity
+    return force, j_axis, j_velocity
 
 
 def _vertical(velocity_slope, up):
-    """dc/dz up^T as a (3, 3) ∂c/∂(centroid) (0 for a uniform current); up defaults to +z."""
+    """dc/dz up^T as a (3, 3) ∂c/∂(centroid); None for a uniform current (no term at all, rather than
+    products with zeros that XLA would compute); up defaults to +z."""
     if velocity_slope is None:
-        return jnp.zeros((3, 3))
+        return None
     up = jnp.array([0.0, 0.0, 1.0]) if up is None else jnp.asarray(up, dtype=float)
     return _outer(jnp.asarray(velocity_slope, dtype=float), up)
 
@@ -165,7 +177,8 @@ def _spread_stiffness(coefficients, jacobians, j_velocity, dc_dcentroid, vertice
     plus j_velocity ∂c/∂centroid / k (the current taken at the centroid of the k positions)."""
     k = coefficients[0].shape[0]
     blocks = sum(w[:, None, None] * j[None, :, :] for w, j in zip(coefficients, jacobians))  # (k, 3, 3)
-    blocks = blocks + (j_velocity @ dc_dcentroid)[None, :, :] / k
+    if dc_dcentroid is not None:
+        blocks = blocks + (j_velocity @ dc_dcentroid)[None, :, :] / k
     # every vertex gets 1/vertices of the total: the same row block for each
     per_vertex = -jnp.transpose(blocks, (1, 0, 2)) / vertices  # (3 force comps, k, 3 coords)
     return jnp.broadcast_to(per_vertex[None], (vertices, 3, k, 3)).reshape(3 * vertices, 3 * k)
@@ -179,24 +192,27 @@ def _twine_geometry(x, uv):
 
 
 def _both_families(U, V, l0, diameter, cd_normal, cd_tangential, water_velocity, water_density):
-    """:func:`twine_drag_jacobians` of one U and one V twine in one call: ((∂/∂U, ∂/∂c of a U twine),
-    (∂/∂V, ∂/∂c of a V twine)), each (..., 3, 3) for water velocities (..., 3)."""
-    j_axis, j_c = twine_drag_jacobians(jnp.stack([U, V]), l0, diameter, cd_normal, cd_tangential,
-                                       water_velocity[..., None, :], water_density)
-    return (j_axis[..., 0, :, :], j_c[..., 0, :, :]), (j_axis[..., 1, :, :], j_c[..., 1, :, :])
+    """:func:`_twine_drag_and_jacobians` of one U and one V twine in one call: ((drag, ∂/∂U, ∂/∂c of a U
+    twine), (drag, ∂/∂V, ∂/∂c of a V twine)), the drags (..., 3), the derivatives (..., 3, 3), for water
+    velocities (..., 3)."""
+    force, j_axis, j_c = _twine_drag_and_jacobians(jnp.stack([U, V]), l0, diameter, cd_normal, cd_tangential,
+                                                   water_velocity[..., None, :], water_density)
+    return ((force[..., 0, :], j_axis[..., 0, :, :], j_c[..., 0, :, :]),
+            (force[..., 1, :], j_axis[..., 1, :, :], j_c[..., 1, :, :]))
 
 
 def _netting_jacobians(U, V, count, l0, diameter, cd_normal, cd_tangential, water_velocity, water_density):
-    """(∂F/∂U, ∂F/∂V, ∂F/∂c), each (..., 3, 3), of a triangle's whole twine drag F (three times one vertex's
-    share of :func:`jaxnet.terms.drag.netting_drag`): |d|/2 U twines and |d|/2 V twines, each
-    :func:`twine_drag_jacobians`, with the water velocity c (..., 3) relative to the netting."""
-    (ju_axis, ju_c), (jv_axis, jv_c) = _both_families(U, V, l0, diameter, cd_normal, cd_tangential, water_velocity,
-                                                      water_density)
-    return count * ju_axis, count * jv_axis, count * (ju_c + jv_c)
+    """(∂F/∂U, ∂F/∂V, ∂F/∂c, F): the derivatives (..., 3, 3) of a triangle's whole twine drag F (three times
+    one vertex's share of :func:`jaxnet.terms.drag.netting_drag`) and F itself (..., 3): |d|/2 U twines
+    and |d|/2 V twines, each :func:`twine_drag_jacobians`, with the water velocity c (..., 3) relative to
+    the netting."""
+    (fu, ju_axis, ju_c), (fv, jv_axis, jv_c) = _both_families(U, V, l0, diameter, cd_normal, cd_tangential,
+                                                              water_velocity, water_density)
+    return count * ju_axis, count * jv_axis, count * (ju_c + jv_c), count * (fu + fv)
 
 
 def netting_drag_stiffness(x, uv, l0, diameter, cd_normal, cd_tangential, water_velocity, water_density,
-                           velocity_slope=None, up=None):
+                           velocity_slope=None, up=None, with_force=False):
     """(9, 9) drag stiffness K = -∂F/∂x (N/m) of one diamond-mesh triangle, :func:`jaxnet.terms.drag.netting_drag`
     (book 4.136-4.210 for the U and V twines, corrected: |d|/2 twines, no 1/sin α, 1/|cos α| singularity).
 
@@ -209,21 +225,20 @@ def netting_drag_stiffness(x, uv, l0, diameter, cd_normal, cd_tangential, water_
         of the current at the centroid, z = centroid . up (:func:`current_slope`), which adds the term of
         the current moving with the element's height.
       up: (3,) unit vertical along which z is measured; None is (0, 0, 1). Only used with velocity_slope.
+      with_force: also return the drag itself, :func:`jaxnet.terms.drag.netting_drag`'s (3, 3) per-vertex
+        forces (N), from the same intermediate values (a Python bool).
     Vertex-major layout (entry (3 i + m, 3 j + n): coordinate m of vertex i, n of vertex j).
     """
     coefficients, U, V, count = _twine_geometry(x, uv)
-    j_u, j_v, j_c = _netting_jacobians(U, V, count, l0, diameter, cd_normal, cd_tangential, water_velocity,
-                                       water_density)
-    return _spread_stiffness(coefficients, (j_u, j_v), j_c, _vertical(velocity_slope, up), 3)
+    j_u, j_v, j_c, total = _netting_jacobians(U, V, count, l0, diameter, cd_normal, cd_tangential, water_velocity,
+                                              water_density)
+    stiffness = _spread_stiffness(coefficients, (j_u, j_v), j_c, _vertical(velocity_slope, up), 3)
+    return (stiffness, _per_vertex(total)) if with_force else stiffness
 
 
-def _twine_force(axis, length, diameter, cd_normal, cd_tangential, water_velocity, water_density):
-    """(normal, tangential) drag of one cylinder (N), as :func:`jaxnet.terms.drag.twine_drag` (the value the
-    catch variant's derivative needs); (..., 3) each for stacks as :func:`twine_drag_jacobians`."""
-    c_t, c_n, _, _ = _split(axis, water_velocity)
-    k = 0.5 * water_density * diameter * length
-    return ((k * cd_normal * geometry.safe_norm(c_n))[..., None] * c_n,
-            (k * cd_tangential * geometry.safe_norm(c_t))[..., None] * c_t)
+def _per_vertex(total):
+    """A triangle's total force (3,) as the (3, 3) per-vertex forces of the drag terms: a third on each."""
+    return jnp.broadcast_to(total / 3.0, (3, 3))
 
 
 def _unit_across_jacobians(axis, water_velocity, inv_c2):
@@ -250,17 +265,17 @@ def _row_times(v, m):
 
 
 def _femnet_catch_jacobians(U, V, count, l0, diameter, cd_normal, cd_tangential, water_velocity, water_density):
-    """(∂F/∂U, ∂F/∂V, ∂F/∂c), each (..., 3, 3), of a triangle's whole drag as FEMNET loads netting ahead of a
-    catch, F = (|d|/2)[F_V + (F_U.ĉ) ĉ + (F_U.ê_U) ê_V] (:func:`jaxnet.terms.drag.netting_drag_femnet_catch`,
-    three thirds), with the water velocity c (..., 3) relative to the netting.
+    """(∂F/∂U, ∂F/∂V, ∂F/∂c, F): the derivatives (..., 3, 3) of a triangle's whole drag as FEMNET loads
+    netting ahead of a catch, F = (|d|/2)[F_V + (F_U.ĉ) ĉ + (F_U.ê_U) ê_V]
+    (:func:`jaxnet.terms.drag.netting_drag_femnet_catch`, three thirds), and F itself (..., 3), with the
+    water velocity c (..., 3) relative to the netting.
 
     Differentiated term by term: ∂(P F_U) with P = c c^T/|c|², ∂(F_U.ê_U) ê_V and (F_U.ê_U) ∂ê_V, with
     ∂ê the derivative of a unit vector across the flow (module docstring for its singular set).
     """
-    (ju_axis, ju_c), (jv_axis, jv_c) = _both_families(U, V, l0, diameter, cd_normal, cd_tangential, water_velocity,
-                                                      water_density)
-    normal_u, tangential_u = _twine_force(U, l0, diameter, cd_normal, cd_tangential, water_velocity, water_density)
-    force_u = count * (normal_u + tangential_u)
+    (fu, ju_axis, ju_c), (fv, jv_axis, jv_c) = _both_families(U, V, l0, diameter, cd_normal, cd_tangential,
+                                                              water_velocity, water_density)
+    force_u = count * fu
     c = water_velocity
     inv_c2 = _inverse(_dot(c, c))
     in_line = _outer(c, c) * _matrices(inv_c2)
@@ -276,21 +291,24 @@ def _femnet_catch_jacobians(U, V, count, l0, diameter, cd_normal, cd_tangential,
     j_v = count * jv_axis + _matrices(across_u) * de_v_daxis
     j_c = (count * jv_c + d_in_line_dc + carry_u @ (count * ju_c)
            + _outer(e_v, _row_times(force_u, de_u_dc)) + _matrices(across_u) * de_v_dc)
-    return j_u, j_v, j_c
+    total = count * fv + (along_c * inv_c2)[..., None] * c + across_u[..., None] * e_v
+    return j_u, j_v, j_c, total
 
 
 def netting_drag_femnet_catch_stiffness(x, uv, l0, diameter, cd_normal, cd_tangential, water_velocity,
-                                        water_density, velocity_slope=None, up=None):
+                                        water_density, velocity_slope=None, up=None, with_force=False):
     """(9, 9) stiffness K = -∂F/∂x (N/m) of FEMNET's netting drag ahead of a catch,
     :func:`jaxnet.terms.drag.netting_drag_femnet_catch`: F = (|d|/2)[F_V + (F_U.ĉ) ĉ + (F_U.ê_U) ê_V] / 3
     (:func:`_femnet_catch_jacobians` for its derivatives).
 
-    Args: as :func:`netting_drag_stiffness` (same units, same ``velocity_slope`` and ``up``).
+    Args: as :func:`netting_drag_stiffness` (same units, same ``velocity_slope``, ``up`` and ``with_force``:
+    the forces are :func:`jaxnet.terms.drag.netting_drag_femnet_catch`'s).
     """
     coefficients, U, V, count = _twine_geometry(x, uv)
-    j_u, j_v, j_c = _femnet_catch_jacobians(U, V, count, l0, diameter, cd_normal, cd_tangential, water_velocity,
-                                            water_density)
-    return _spread_stiffness(coefficients, (j_u, j_v), j_c, _vertical(velocity_slope, up), 3)
+    j_u, j_v, j_c, total = _femnet_catch_jacobians(U, V, count, l0, diameter, cd_normal, cd_tangential,
+                                                   water_velocity, water_density)
+    stiffness = _spread_stiffness(coefficients, (j_u, j_v), j_c, _vertical(velocity_slope, up), 3)
+    return (stiffness, _per_vertex(total)) if with_force else stiffness
 
 
 def bar_drag_stiffness(x, rest_length, diameter, cd_normal, cd_tangential, water_velocity, water_density,
@@ -356,8 +374,8 @@ def _moving_netting(element_jacobians, x, uv, l0, diameter, cd_normal, cd_tangen
     """:func:`_relative_stiffness` of a triangle, its element Jacobians (:func:`_netting_jacobians` or
     :func:`_femnet_catch_jacobians`) taken at the three vertices' relative velocities in one call."""
     (a, b), U, V, count = _twine_geometry(x, uv)
-    j_u, j_v, j_c = element_jacobians(U, V, count, l0, diameter, cd_normal, cd_tangential, relative_velocity,
-                                      water_density)
+    j_u, j_v, j_c, _ = element_jacobians(U, V, count, l0, diameter, cd_normal, cd_tangential, relative_velocity,
+                                         water_density)
     return _relative_stiffness((a, b), (j_u, j_v), j_c, water_gradient, time_step)
 
 

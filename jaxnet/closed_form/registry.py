@@ -70,7 +70,10 @@ def _catch_pressure(x, p, env, state):
 
 def _water(x, env):
     """The current at the centroid of the element's vertices x (k, 3), as the force terms see it
-    (:func:`jaxnet.model._water_velocity`), and its slope dc/dz there (m/s per m of height)."""
+    (:func:`jaxnet.model._water_velocity`), and its slope dc/dz there (m/s per m of height); the slope is
+    None for a uniform current (a profile of fewer than 2 points: known from the shapes, when tracing)."""
+    if env.profile_depth.shape[0] < 2:
+        return model._water_velocity(x, env), None
     z = jnp.dot(geometry.centroid(x), env.up)
     slope = drag.current_slope(z, env.current_speed, env.current_direction, env.profile_depth, env.profile_factor,
                                env.surface_level)
@@ -113,9 +116,10 @@ def _netting_drag(x, p, env, state, models, shielded, moving=False, waves=False,
                                            relative, gradient, time_step, rho)
             f = jnp.stack([drag_force(x, p, relative[i], rho)[i] for i in range(3)]) if shielded else 0.0
         else:
+            # the shielding's product rule needs the drag itself: from the closed form's own intermediate values
             k = _NETTING_DRAG[code](x, p.uv, p.l0, p.diameter, p.cd_normal, p.tangential_ratio * p.cd_normal, c, rho,
-                                    slope, env.up)
-            f = drag_force(x, p, c, rho) if shielded else 0.0
+                                    slope, env.up, with_force=shielded)
+            k, f = k if shielded else (k, 0.0)
         if len(models) > 1:
             k, f = jnp.where(p.drag_model == code, k, 0.0), jnp.where(p.drag_model == code, f, 0.0)
         stiffness, force = stiffness + k, force + f

@@ -24,7 +24,6 @@ import dataclasses
 import math
 
 import numpy as np
-from scipy.spatial import Delaunay, cKDTree
 
 __all__ = ["PanelMesh", "PanelError", "side_divisions", "mesh_panel"]
 
@@ -412,6 +411,9 @@ def _interior_points(uv, area, h, seg, div, convex, bpts, segs):
         half = 0.5 * np.hypot(*(b - a).T)
         long = np.nonzero(half > _CLEARANCE * h * (1.0 - 1e-9))[0]
         if long.size:
+            from scipy.spatial import cKDTree  # here: scipy.spatial costs 0.05 s at import, a case read
+            # from FEMNET's own mesh does not mesh
+
             tree = cKDTree(pts)
             mid = 0.5 * (a[long] + b[long])
             drop = tree.query_ball_point(mid, half[long] * (1.0 + 1e-9))
@@ -642,6 +644,8 @@ def _triangulate(nodes, uv_c, area, segs, scale, name):
     # Delaunay is translation/scale invariant; centre and normalise for robustness
     centre = uv_c.mean(axis=0)
     try:
+        from scipy.spatial import Delaunay  # here, as cKDTree above
+
         dl = Delaunay((nodes - centre) / scale)
     except Exception as exc:  # qhull failure
         raise _err(name, f"Delaunay triangulation failed ({exc})") from exc

@@ -523,6 +523,7 @@ def host_loop(start, scene, pattern, model, opts: Newton, pieces=None):
     stage_start, softened = res, False
     balance = []  # after each iteration, the elastic scale that best balances the loads there
     final = len(scales) - 1
+    tangent_at = None  # (x, state, stage) of the last tangent: held, so a new x or state is a new object
     while st == RUNNING:
         if not softened and final > 0 and _overstretched(hist[1:it + 1], balance, opts):
             # plain Newton is stalling: the stiffness continuation starts here, with half the iterations
@@ -553,7 +554,9 @@ def host_loop(start, scene, pattern, model, opts: Newton, pieces=None):
                 print(f"  stiffness x {scales[stage]:.3g}")
         X = positions(x)
         e = e_stored - float(np.sum((load + f_nc) * X))
-        data = np.asarray(tangent(x, state, scales[stage], scene, pattern))
+        if tangent_at is None or tangent_at[0] is not x or tangent_at[1] is not state or tangent_at[2] != stage:
+            # an iteration that took no step leaves x as it was: its tangent serves again, only mu changes
+            data, tangent_at = np.asarray(tangent(x, state, scales[stage], scene, pattern)), (x, state, stage)
         dx, ok = factor.solve(data + mu * springs, f)
         biggest = nodal(dx).max()
         dx = dx * min(1.0, opts.max_step / max(biggest, 1e-300))
