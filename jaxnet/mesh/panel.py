@@ -411,8 +411,8 @@ def _interior_points(uv, area, h, seg, div, convex, bpts, segs):
         half = 0.5 * np.hypot(*(b - a).T)
         long = np.nonzero(half > _CLEARANCE * h * (1.0 - 1e-9))[0]
         if long.size:
-            from scipy.spatial import cKDTree  # here: scipy.spatial costs 0.05 s at import, a case read
-            # from FEMNET's own mesh does not mesh
+            # imported here: scipy.spatial takes 0.05 s to import, which a net read on FEMNET's mesh never needs
+            from scipy.spatial import cKDTree
 
             tree = cKDTree(pts)
             mid = 0.5 * (a[long] + b[long])
@@ -644,7 +644,7 @@ def _triangulate(nodes, uv_c, area, segs, scale, name):
     # Delaunay is translation/scale invariant; centre and normalise for robustness
     centre = uv_c.mean(axis=0)
     try:
-        from scipy.spatial import Delaunay  # here, as cKDTree above
+        from scipy.spatial import Delaunay  # imported here, as cKDTree above
 
         dl = Delaunay((nodes - centre) / scale)
     except Exception as exc:  # qhull failure

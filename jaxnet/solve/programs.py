@@ -46,11 +46,11 @@ SUBDIRECTORY = "jaxnet-programs"
 
 #: XLA options every jaxnet program is compiled with (:func:`jit`). XLA's CPU backend emits each fusion
 #: through its MLIR "fusion emitters" by default; its older elemental emitter compiles jaxnet's programs
-#: (many small per-element fusions over (E, 3, 3) stacks) in about half the time and runs them as fast or
-#: faster. Measured on FEMNET's cod-end c2 (2 cores, jax 0.10.2, closed-form stiffness): the tangent compiles
-#: in 1.03 s instead of 1.85 s and runs in 3.05 against 3.57 ms; the evaluation 0.88 against 1.24 s, 0.56
-#: against 0.64 ms; the cage in waves' time step 3.55 against 4.10 ms (``validation/compile_options.py``).
-#: A CPU option: other backends ignore it.
+#: (many small per-element fusions over (E, 3, 3) stacks) 1.4-1.6x faster, and they run as fast, within
+#: the noise (``validation/compile_options.py``, 2 cores, jax 0.10.2): FEMNET's c2 compiles its tangent in
+#: 0.85 s instead of 1.37 s and its evaluation in 0.70 s instead of 1.01 s, and runs them in 3.02 and
+#: 0.64 ms against 3.15 and 0.65 ms. Most of a first solve is compilation. A CPU option: other backends
+#: ignore it.
 COMPILER_OPTIONS = {"xla_cpu_use_fusion_emitters": False}
 
 
@@ -61,6 +61,7 @@ def jit(fun=None, **kwargs):
     if fun is None:
         return functools.partial(jit, compiler_options=options, **kwargs)
     return jax.jit(fun, compiler_options=options, **kwargs)
+
 
 _MEMORY: dict = {}
 _LOCK = threading.Lock()
