@@ -199,6 +199,39 @@ def test_c2_on_femnet_mesh_with_femnet_laws_gives_femnet_answer():
     assert fig["catch"]["holds_the_volume"] and fig["catch"]["volume_modelled_m3"] == pytest.approx(0.2, rel=1e-6)
 
 
+def test_c2_iterations_without_a_step_reuse_their_tangent(monkeypatch, capsys):
+    """c2's solve has iterations whose direction the line search cannot use (at the start of a softened
+    stage): x stays, so the next iteration's tangent is the same matrix and is not computed again. One
+    tangent per iteration, less one per iteration that took no step (its progress line says "step 0.000"),
+    and the same equilibrium as FEMNET's."""
+    from jaxnet.solve import statics
+
+    calls = {"tangent": 0}
+    compile_pieces = statics._compile_pieces
+
+    def counting(*args, **kwargs):
+        pieces = dict(compile_pieces(*args, **kwargs))
+        tangent = pieces["tangent"]
+
+        def counted(*a):
+            calls["tangent"] += 1
+            return tangent(*a)
+
+        pieces["tangent"] = counted
+        return pieces
+
+    monkeypatch.setattr(statics, "_compile_pieces", counting)
+    scene, solver, _ = femnet.read_mdg(DATA / "c2.mdg", DATA / "c2.don")
+    eq, _ = solve(scene, solver, verbose=True)
+    steps = [float(line.split("step")[1]) for line in capsys.readouterr().out.splitlines() if "newton" in line]
+    assert len(steps) == int(eq.iterations) and eq.converged
+    no_step = sum(step == 0.0 for step in steps[:-1])
+    assert no_step >= 1  # the case has some (else this test tests nothing)
+    assert calls["tangent"] == int(eq.iterations) - no_step
+    pos, _, _, _ = _sta("c2", scene)
+    assert np.linalg.norm(np.asarray(eq.x) - pos, axis=1).max() <= 1e-4  # m
+
+
 def test_c2_on_femnet_mesh_with_jaxnet_laws_differs_as_named():
     scene, solver, info = femnet.read_mdg(DATA / "c2.mdg", DATA / "c2.don", femnet_laws=False)
     assert not info["femnet_laws"] and not np.any(np.asarray(scene.netting.drag_model))
