@@ -95,7 +95,7 @@ class SolverCompiled(AssertionError):
 
 #: (module, attribute) of every entry point that compiles a solver program
 _ENTRY_POINTS = (("jaxnet.solve.statics", "_compile_pieces"), ("jaxnet.solve.statics", "_newton_jit"),
-                 ("jaxnet.solve.statics", "_evaluate_jit"), ("jaxnet.solve.statics", "_tangent_jit"),
+                 ("jaxnet.solve.statics", "_evaluate_jit"), ("jaxnet.solve.statics", "_tangent_blocks_jit"),
                  ("jaxnet.solve.dynamics", "_out_of_balance_jit"), ("jaxnet.solve.dynamics", "_advance_jit"),
                  ("jaxnet.solve.implicit", "_solve"))
 

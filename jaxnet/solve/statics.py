@@ -392,8 +392,19 @@ _newton_jit = programs.jit(newton_loop, static_argnames=("model", "opts"))
 
 # -- the host loop: the same iteration driven from Python, its pieces compiled once --------------------
 
+def _tangent_blocks(x, state, scale, scene, pattern, model, stiffness="autodiff"):
+    """The tangent's element matrices at free coordinates x, {family: (E, 3k, 3k)} (N/m,
+    :func:`jaxnet.assemble.tangent_blocks`): what :func:`_tangent` sums into the pattern. The host loop sums
+    them in a program of its own (:data:`_scatter_jit`): in one program with them, XLA recomputes each
+    element's intermediates for every entry it scatters (FEMNET's c2 on jaxnet's mesh: the whole tangent
+    3.2-3.4 ms in one program, 1.7-1.9 ms in two)."""
+    X = assemble.positions(x, scene, pattern)
+    return assemble.tangent_blocks(X, scene, model, state, scale, stiffness)
+
+
 _evaluate_jit = programs.jit(_evaluate, static_argnames=("model",))
-_tangent_jit = programs.jit(_tangent, static_argnames=("model", "stiffness"))
+_tangent_blocks_jit = programs.jit(_tangent_blocks, static_argnames=("model", "stiffness"))
+_scatter_jit = programs.jit(assemble.scatter_stiffnesses)
 
 
 def _springs(scene, pattern, model):
@@ -404,18 +415,21 @@ _springs_jit = programs.jit(_springs, static_argnames=("model",))
 # jitted although it runs once per solve: op by op, its vmaps compile dozens of small programs (1.7 s cold)
 _loads_jit = programs.jit(assemble.loads, static_argnames=("model",))
 
+
 def _compile_pieces(start, scene, pattern, model, stiffness="autodiff"):
-    """The evaluation, tangent, spring network and loads compiled for this scene's shape and terms, as a dict
-    of callables taking their dynamic arguments only (:mod:`jaxnet.solve.programs`: from this process's
-    memory, else from disk, else compiled in parallel threads). A second solve of a scene of the same shape
-    (another load, another panel cut, another start) reuses them and compiles nothing; a second process
-    loads them from disk, without tracing.
+    """The evaluation, the tangent's element matrices ("tangent"), their sum into the pattern ("scatter",
+    :func:`_tangent_blocks` says why apart), the spring network and the loads, compiled for this scene's
+    shape and terms, as a dict of callables taking their dynamic arguments only
+    (:mod:`jaxnet.solve.programs`: from this process's memory, else from disk, else compiled in parallel
+    threads). A second solve of a scene of the same shape (another load, another panel cut, another start)
+    reuses them and compiles nothing; a second process loads them from disk, without tracing.
 
     The order matters on a first solve: tracing holds the GIL, XLA's compilation does not. So the
-    evaluation is traced first and alone, and compiles while the tangent (and the small spring network
-    and loads) are traced, each then compiling in turn. Its trace also gives the shapes of the force
-    terms' states (the catch front), the tangent's arguments. (Measured on FEMNET's c2, 2 cores: 2.2 s
-    from start to all compiled, against 2.6 s with every program traced at once.)"""
+    evaluation is traced first and alone, and compiles while the tangent is traced, which then compiles
+    while the small scatter, spring network and loads are traced. Each trace gives the next one's
+    argument shapes: the evaluation's, the force terms' states (the catch front); the tangent's, its
+    element matrices. (Measured on FEMNET's c2, 2 cores: 2.2 s from start to all compiled, against 2.6 s
+    with every program traced at once.)"""
     zero = jnp.zeros(scene.nodes.position.shape)
     evaluate_args = (start, zero, zero, 1.0, scene, pattern)
     found = {"evaluate": programs.lookup("evaluate", evaluate_args, {"model": model})}
@@ -430,7 +444,18 @@ def _compile_pieces(start, scene, pattern, model, stiffness="autodiff"):
             shapes = found["evaluate"].out_info[4]
         # placeholders for the states: strongly typed as the evaluation returns them
         state = jax.tree.map(lambda s: jnp.zeros(s.shape, s.dtype), shapes)
-        rest = {"tangent": (_tangent_jit, (start, state, 1.0, scene, pattern), {"model": model, "stiffness": stiffness}),
+        tangent_args, tangent_static = (start, state, 1.0, scene, pattern), {"model": model, "stiffness": stiffness}
+        found["tangent"] = programs.lookup("tangent", tangent_args, tangent_static)
+        if found["tangent"] is None:
+            traced = _tangent_blocks_jit.trace(*tangent_args, **tangent_static)
+            jobs["tangent"] = pool.submit(programs.compile, "tangent", _tangent_blocks_jit, tangent_args,
+                                          tangent_static, traced)
+            blocks = traced.out_info
+        else:
+            blocks = found["tangent"].out_info
+        # the element matrices' placeholders, for the program that sums them into the pattern
+        blocks = jax.tree.map(lambda b: jnp.zeros(b.shape, b.dtype), blocks)
+        rest = {"scatter": (_scatter_jit, (blocks, pattern), {}),
                 "springs": (_springs_jit, (scene, pattern), {"model": model}),
                 "loads": (_loads_jit, (scene,), {"model": model})}
         for name, (jitted, args, static) in rest.items():
@@ -485,7 +510,7 @@ def host_loop(start, scene, pattern, model, opts: Newton, pieces=None):
     ``pieces``: the compiled programs (:func:`_compile_pieces`), obtained here if not given."""
     if pieces is None:
         pieces = _compile_pieces(jnp.asarray(start), scene, pattern, model, opts.stiffness)
-    evaluate, tangent = pieces["evaluate"], pieces["tangent"]
+    evaluate, tangent, scatter = pieces["evaluate"], pieces["tangent"], pieces["scatter"]
     n_nodes = scene.n_nodes
     free = np.asarray(pattern.free)
     indptr, indices = np.asarray(pattern.indptr), np.asarray(pattern.indices)
@@ -556,7 +581,8 @@ def host_loop(start, scene, pattern, model, opts: Newton, pieces=None):
         e = e_stored - float(np.sum((load + f_nc) * X))
         if tangent_at is None or tangent_at[0] is not x or tangent_at[1] is not state or tangent_at[2] != stage:
             # an iteration that took no step leaves x as it was: its tangent serves again, only mu changes
-            data, tangent_at = np.asarray(tangent(x, state, scales[stage], scene, pattern)), (x, state, stage)
+            blocks = tangent(x, state, scales[stage], scene, pattern)  # element matrices, on the device
+            data, tangent_at = np.asarray(scatter(blocks, pattern)), (x, state, stage)
         dx, ok = factor.solve(data + mu * springs, f)
         biggest = nodal(dx).max()
         dx = dx * min(1.0, opts.max_step / max(biggest, 1e-300))
