@@ -373,12 +373,13 @@ def tangent_blocks(x, scene, model, state=None, elastic_scale=1.0, stiffness="au
     """The element matrices of :func:`tangent` before they are summed into the pattern: {family: (E, 3k, 3k)}
     (N/m), every term of a family summed element by element. Same arguments as :func:`tangent` (no pattern).
 
-    :func:`tangent` is :func:`scatter_stiffnesses` of these. Why they are also offered apart: XLA (CPU)
-    fuses the element computation into the scatter's loop, which runs entry by entry, so the per-element
-    intermediates are computed again for every one of the 81 entries of a triangle. FEMNET's c2 (jaxnet's
-    mesh): the netting's tension and knot contact take 0.74 ms alone and 1.9 ms with their scatter in the
-    same program, against 0.89 ms with the scatter in a program of its own. The static solver's host loop
-    runs the two programs one after the other (:mod:`jaxnet.solve.statics`)."""
+    :func:`tangent` is :func:`scatter_stiffnesses` of these. Why they are also offered apart: compiled
+    into one program, XLA's CPU backend runs the pair far slower than as two programs, apparently because
+    it fuses the element computation into the scatter and computes it again entry by entry (an
+    ``optimization_barrier`` between them does not help). FEMNET's c2 (jaxnet's mesh): the netting's
+    tension and knot contact take 0.74 ms alone, 1.9 ms with their scatter in the same program, 0.89 ms
+    with the scatter in a program of its own. The static solver's host loop runs the two programs one
+    after the other (:func:`jaxnet.solve.statics._tangent_blocks`)."""
     if stiffness not in STIFFNESS_PATHS:
         raise ValueError(f"stiffness must be one of {STIFFNESS_PATHS}, not {stiffness!r}")
     by_hand = tuple(t for t in model if stiffness == "closed_form"
