@@ -126,13 +126,15 @@ def build_pattern(scene, model) -> Pattern:
         s = np.searchsorted(unique, keys)
         slots[family] = np.where(keys >= 0, s, nnz).astype(np.int64)
     diagonal = np.searchsorted(unique, np.arange(n, dtype=np.int64) * (n + 1))
+    # device_put, not jnp.asarray: jax 0.10 stages a numpy array through a program compiled per shape
+    # (6 arrays: 30 ms of a first solve)
     return Pattern(
-        free=jnp.asarray(free),
-        slots={k: jnp.asarray(v) for k, v in slots.items()},
-        diagonal=jnp.asarray(diagonal),
-        indptr=jnp.asarray(indptr),
-        indices=jnp.asarray(indices),
-        rows=jnp.asarray(rows),
+        free=jax.device_put(free),
+        slots={k: jax.device_put(v) for k, v in slots.items()},
+        diagonal=jax.device_put(diagonal),
+        indptr=jax.device_put(indptr),
+        indices=jax.device_put(indices),
+        rows=jax.device_put(rows),
     )
 
 
@@ -181,14 +183,18 @@ def _previous(scene, conn, motion):
     return jnp.zeros((conn.shape[0], 0)) if motion is None else motion.x_previous[conn]
 
 
-def states(x, scene, model):
+def states(x, scene, model, previous=None):
     """Global quantities some force terms need (e.g. the catch front), computed once from positions x: terms
-    that share a state function (the catch pressure and the netting drag behind the front) share its value."""
+    that share a state function (the catch pressure and the netting drag behind the front) share its value.
+    ``previous``: the states at nearby positions (a dict as returned here: the solver's last iterate), from
+    which their solutions start; None to start from scratch. The answer is the same, to each solution's
+    tolerance."""
     by_function, out = {}, {}
     for t in model:
         if t.term.kind == "force" and t.term.state is not None:
             if t.term.state not in by_function:
-                by_function[t.term.state] = t.term.state(x, scene)
+                start = None if previous is None else previous.get(t.name)
+                by_function[t.term.state] = t.term.state(x, scene, start)
             out[t.name] = by_function[t.term.state]
     return out
 

@@ -91,16 +91,19 @@ class CatchFront(NamedTuple):
       netting node, and volume < the requested one).
     converged: the iteration met its tolerance (|V - volume| <= rtol · volume, or a bracket narrower than
       rtol times the net's length) within max_iter steps.
+    passes: the passes over the elements the search took (one volume and section each): 2 (the most upstream
+      node's plane, the start) plus its Newton or bisection steps.
     """
 
     position: jax.Array
     volume: jax.Array
     holds: jax.Array
     converged: jax.Array
+    passes: jax.Array
 
 
 def _solve_front(x, triangles, axis, volume, symmetry, sign, guess, rtol, max_iter):
-    """Newton on V(s) = volume, safeguarded by bisection. Returns (s, V(s), holds, converged).
+    """Newton on V(s) = volume, safeguarded by bisection. Returns (s, V(s), holds, converged, passes).
 
     One loop, one pass over the elements per step: the first at s_min (does the net hold the volume at
     all?), the second at the start, then up to ``max_iter`` Newton or bisection steps while the net holds
@@ -148,7 +151,7 @@ def _solve_front(x, triangles, axis, volume, symmetry, sign, guess, rtol, max_it
     s = jnp.where(volume <= 0.0, s_max, jnp.where(holds, s, s_min))
     v = jnp.where(volume <= 0.0, 0.0, jnp.where(holds, v, v_min))
     converged = jnp.where(holds & (volume > 0.0), converged, True)
-    return s, v, holds, converged
+    return s, v, holds, converged, it
 
 
 @jax.custom_jvp
@@ -197,11 +200,11 @@ def catch_front(x, triangles, axis, volume, symmetry=1.0, sign=1.0, guess=None, 
     symmetry = jnp.asarray(symmetry, dtype=x.dtype)
     sign = jnp.asarray(sign, dtype=x.dtype)
     guess = jnp.asarray(jnp.nan if guess is None else guess, dtype=x.dtype)
-    solved, _, holds, converged = jax.lax.stop_gradient(
+    solved, _, holds, converged, passes = jax.lax.stop_gradient(
         _solve_front(x, triangles, axis, volume, symmetry, sign, guess, rtol, max_iter))
     s = _implicit_front(x, triangles, axis, volume, symmetry, sign, solved, holds)
     v = symmetry * _element_sums(x, triangles, s, axis, sign)[0]
-    return CatchFront(s, v, holds, converged)
+    return CatchFront(s, v, holds, converged, passes)
 
 
 class CatchSummary(NamedTuple):

@@ -31,6 +31,7 @@ takes a zero pivot, it takes the column's largest entry instead.
 from __future__ import annotations
 
 import concurrent.futures
+import dataclasses
 import functools
 import hashlib
 import os
@@ -60,6 +61,28 @@ PANEL_SIZE = 1
 RELAX = 2
 
 
+#: bytes of the block :func:`_keep_factor_memory` allocates and frees once per process
+_MALLOC_PRIMER = 16 << 20
+_PRIMED = []
+
+
+def _keep_factor_memory():
+    """Let the C heap keep the memory of SuperLU's factors between factorisations (once per process).
+
+    Why. Each factorisation allocates its L and U afresh (a few MB on the FEMNET cases) and frees them at
+    the next. glibc's malloc serves blocks above its mmap threshold (128 kB at start) by mmap, returns them
+    to the system on free, and every page of the next factor is then faulted in again (FEMNET's c2: 480
+    page faults, 0.7 ms of a 3.6 ms factorisation). glibc raises that threshold (and the trim threshold, to
+    twice it) to the size of any mmapped block freed, up to 32 MB: freeing one 16 MB block makes the later
+    factors come from the heap and stay there (c2: 118 faults and 2.9 ms per factorisation). Elsewhere than
+    glibc this is one allocation and its release, nothing more. The process may keep up to 32 MB more heap.
+    """
+    if not _PRIMED:
+        _PRIMED.append(True)
+        block = np.empty(_MALLOC_PRIMER, dtype=np.uint8)  # numpy takes large arrays from malloc
+        del block
+
+
 def matvec(data, rows, indices, v):
     """y = A v for a CSR matrix given by its entries ``data``, their rows and column ``indices``."""
     return jax.ops.segment_sum(data * v[indices], rows, num_segments=v.shape[0], indices_are_sorted=True)
@@ -77,6 +100,21 @@ _MAX_SOLVERS = 64  # structures x threads
 _LAST = threading.local()
 
 
+def _structure_digest(indptr, indices):
+    """A digest of a CSR structure (indptr, indices): the key of the per-structure caches."""
+    return hashlib.blake2b(np.ascontiguousarray(indptr).tobytes() + np.ascontiguousarray(indices).tobytes(),
+                           digest_size=16).digest()
+
+
+#: the fill-reducing ordering of each structure factorised so far, with the permuted structure it gives
+#: (structure digest -> :class:`_Ordering`): the ordering depends on the structure only, so a second solve of
+#: a scene of the same shape (another load, another start: a warm solve) skips SuperLU's ordering step
+#: and the permutation's set-up (FEMNET's c2: its first factorisation 7.4 ms, the later ones 3.2 ms)
+_ORDERINGS: dict = {}
+_ORDERINGS_LOCK = threading.Lock()
+_MAX_ORDERINGS = 64
+
+
 def _host_solver(indptr, indices):
     indptr, indices = np.asarray(indptr), np.asarray(indices)
     last = getattr(_LAST, "solver", None)
@@ -90,7 +128,7 @@ def _host_solver(indptr, indices):
 def _lookup_solver(indptr, indices):
     # one solver per structure and thread: the callbacks of a program sharded over several devices run in
     # several of XLA's threads at once, and a solver holds its last factor (not to be shared mid-solve)
-    key = (hashlib.blake2b(indptr.tobytes() + indices.tobytes(), digest_size=16).digest(), threading.get_ident())
+    key = (_structure_digest(indptr, indices), threading.get_ident())
     with _SOLVERS_LOCK:
         solver = _SOLVERS.get(key)
         if solver is None:
@@ -170,6 +208,19 @@ def host_matvec(data, indptr, indices, v):
     return sp.csr_matrix((data, indices, indptr), shape=(n, n)) @ v
 
 
+@dataclasses.dataclass(frozen=True)
+class _Ordering:
+    """A fill-reducing symmetric permutation of one CSR structure (:class:`HostSolver`): ``order`` (the
+    unknowns in elimination order), ``slot`` (entry k of the permuted A^T, in CSC order, is CSR entry
+    slot[k] of A) and the permuted A^T's CSC ``indices`` and ``indptr`` (int32, SuperLU's). Read-only once
+    made: solvers of one structure share it."""
+
+    order: np.ndarray
+    slot: np.ndarray
+    indices: np.ndarray
+    indptr: np.ndarray
+
+
 class HostSolver:
     """Repeated direct solves A x = b on the host for matrices of one fixed sparsity (a Newton solve's
     tangents). The fill-reducing ordering (minimum degree on A^T + A) is computed once, at the first
@@ -196,6 +247,7 @@ class HostSolver:
 
     def __init__(self, indptr, indices, pivot_threshold=PIVOT_THRESHOLD, tolerance=TOLERANCE,
                  refinements=REFINEMENTS):
+        _keep_factor_memory()
         self.indptr, self.indices = np.asarray(indptr), np.asarray(indices)
         self.n = self.indptr.shape[0] - 1
         self.pivot_threshold, self.tolerance, self.max_refinements = pivot_threshold, tolerance, refinements
@@ -232,38 +284,55 @@ class HostSolver:
         return True
 
     def _factor_diagonal(self, data):
-        """Factorisation preferring diagonal pivots, in the stored order (computed here the first time)."""
+        """Factorisation preferring diagonal pivots, in the stored order (computed here the first time, or
+        taken from the orderings of the structures seen before, :data:`_ORDERINGS`)."""
         n = self.n
         options = {"SymmetricMode": True}  # rows eliminated in the columns' order: diagonal pivots
         if self.order is None:
-            # CSR of A read as CSC is A^T: factorise A^T and solve with trans="T" (no conversion).
-            at = sp.csc_matrix((data, self.indices, self.indptr), shape=(n, n))
-            self._lu = spla.splu(at, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=self.pivot_threshold,
-                                 panel_size=PANEL_SIZE, relax=RELAX, options=options)
-            self._perm = None
-            # perm_c maps a column to its place (after SuperLU's postorder of the elimination tree): the
-            # symmetric permutation that reproduces the ordering takes rows and columns in its inverse's order.
-            self._set_order(np.argsort(self._lu.perm_c))
-        else:
-            at = self._permuted
-            np.take(data, self._slot, out=at.data)  # in place: no new matrix to validate
-            self._lu = spla.splu(at, permc_spec="NATURAL", diag_pivot_thresh=self.pivot_threshold,
-                                 panel_size=PANEL_SIZE, relax=RELAX, options=options)
-            self._perm = self.order
+            key = _structure_digest(self.indptr, self.indices)
+            with _ORDERINGS_LOCK:
+                known = _ORDERINGS.get(key)
+            if known is None:
+                # CSR of A read as CSC is A^T: factorise A^T and solve with trans="T" (no conversion).
+                at = sp.csc_matrix((data, self.indices, self.indptr), shape=(n, n))
+                self._lu = spla.splu(at, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=self.pivot_threshold,
+                                     panel_size=PANEL_SIZE, relax=RELAX, options=options)
+                self._perm = None
+                # perm_c maps a column to its place (after SuperLU's postorder of the elimination tree): the
+                # symmetric permutation that reproduces the ordering takes rows and columns in its inverse's
+                # order.
+                known = self._ordering(np.argsort(self._lu.perm_c))
+                with _ORDERINGS_LOCK:
+                    if len(_ORDERINGS) >= _MAX_ORDERINGS:
+                        _ORDERINGS.pop(next(iter(_ORDERINGS)))
+                    _ORDERINGS[key] = known
+                self._use(known)
+                return
+            self._use(known)
+        at = self._permuted
+        np.take(data, self._slot, out=at.data)  # in place: no new matrix to validate
+        self._lu = spla.splu(at, permc_spec="NATURAL", diag_pivot_thresh=self.pivot_threshold,
+                             panel_size=PANEL_SIZE, relax=RELAX, options=options)
+        self._perm = self.order
 
-    def _set_order(self, order):
-        """Store ``order`` and the CSC structure of the permuted A^T, with the map from A's CSR entries
-        to its entries, so that later matrices are permuted by one gather."""
+    def _ordering(self, order):
+        """The :class:`_Ordering` of ``order`` on this structure: the CSC structure of the permuted A^T and
+        the map from A's CSR entries to its entries, so that a matrix is permuted by one gather."""
         rank = np.empty_like(order)
         rank[order] = np.arange(self.n)
         # Entry k of the CSR of A is entry (indices[k], rows[k]) of A^T, moved to (rank[.], rank[.]).
         new_row, new_col = rank[self.indices], rank[self._rows]
-        self._slot = np.lexsort((new_row, new_col))  # by column, rows ascending within each column
+        slot = np.lexsort((new_row, new_col))  # by column, rows ascending within each column
         indptr = np.concatenate([[0], np.cumsum(np.bincount(new_col, minlength=self.n))])
         # int32 indices, SuperLU's: splu would copy wider ones at every call.
-        self._permuted = sp.csc_matrix((np.zeros(self._slot.shape[0]), new_row[self._slot].astype(np.intc),
-                                        indptr.astype(np.intc)), shape=(self.n, self.n))
-        self.order = order
+        return _Ordering(order, slot, new_row[slot].astype(np.intc), indptr.astype(np.intc))
+
+    def _use(self, ordering):
+        """Factorise in ``ordering`` from now on (the permuted matrix of this solver's own, its values
+        overwritten at each factorisation)."""
+        self.order, self._slot = ordering.order, ordering.slot
+        self._permuted = sp.csc_matrix((np.zeros(self._slot.shape[0]), ordering.indices, ordering.indptr),
+                                       shape=(self.n, self.n))
 
     def _factor_pivoted(self):
         """Refactorise the stored matrix with partial pivoting (the robust, slower fallback)."""

@@ -46,7 +46,9 @@ class Term:
       p one row of the family; for a load, ``element(p, env, **options) -> (k, 3)`` forces in N; for a
       force, ``element(x, p, env, state, **options) -> (k, 3)`` forces in N.
     options: ``options(scene) -> dict | None``, the static choices for this scene, None if inactive.
-    state: for a force term, optional ``state(x, scene)``: a global quantity of positions x (N, 3).
+    state: for a force term, optional ``state(x, scene, previous=None)``: a global quantity of positions x
+      (N, 3), solved for; ``previous``, its value at nearby positions (the solver's last iterate), only a
+      start for that solution (the same answer, sooner), or None.
     elastic: for an energy, True if it is the net's own elastic energy (twines, bars, mesh opening, knots,
       bending), which the static solver's stiffness continuation scales; False for the potentials of
       loads (weight and buoyancy at the surface) and of the surroundings (the sea bed).
@@ -241,14 +243,18 @@ def _bottom_friction(x, p, env, state, axis, floor):
                                  env.bottom_friction, t, axis, floor)[None, :]
 
 
-def _catch_state(x, scene):
+def _catch_state(x, scene, previous=None):
     """The catch front (abscissa along the axis, m) for positions x, with the pressure and axis (None without a
     catch). The state of the catch pressure and of the netting drag (the shielding of the netting behind the
-    front): the same function, so that :func:`jaxnet.assemble.states` solves for the front once."""
+    front): the same function, so that :func:`jaxnet.assemble.states` solves for the front once.
+    ``previous``: this state at the solver's last iterate, whose front starts the search (the front moves
+    little from one iterate to the next: FEMNET's c2 takes 4-5 passes over its elements instead of 8)."""
     c, env = scene.catch, scene.environment
     if c is None:
         return None
-    front = catch_lib.catch_front(x, scene.netting.vertices, c.axis, c.volume, c.symmetry, sign=scene.netting.outward)
+    guess = None if previous is None else previous["front"]
+    front = catch_lib.catch_front(x, scene.netting.vertices, c.axis, c.volume, c.symmetry, sign=scene.netting.outward,
+                                  guess=guess)
     p = pressure.dynamic_pressure(env.water_density, c.drag_coefficient, env.current_speed)
     return {"front": front.position, "pressure": p, "axis": c.axis}
 

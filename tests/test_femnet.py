@@ -52,6 +52,21 @@ def test_mdg_counts_and_twine_convention(case):
     np.testing.assert_allclose(np.linalg.norm(vec[:, 1], axis=1).max(), scene.netting.l0[0], rtol=2e-3)
 
 
+def test_reading_a_case_runs_no_jax_program(caplog):
+    # a first run pays for every program it compiles: reading a case (c2: knots, a catch, a cable, symmetry)
+    # and building its scene compile none (the knot stiffness once took three, 60 ms)
+    jax.clear_caches()
+    jax.config.update("jax_log_compiles", True)
+    try:
+        with caplog.at_level("WARNING"):
+            net, _, _ = femnet.read_don(DATA / "c2.don")
+            scene = net.build()
+    finally:
+        jax.config.update("jax_log_compiles", False)
+    compiled = [r.getMessage().split(" with ")[0] for r in caplog.records if r.getMessage().startswith("Compiling")]
+    assert scene.n_nodes == 787 and compiled == []
+
+
 def test_read_don_maps_types_symmetry_and_catch():
     net, solver, info = femnet.read_don(DATA / "c2.don")
     scene = net.build()

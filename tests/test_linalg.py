@@ -96,6 +96,31 @@ def test_the_ordering_is_computed_once_and_reused_for_new_values():
     np.testing.assert_allclose(solver.apply(A2 @ x1), x1, rtol=0, atol=1e-12 * np.abs(x1).max())
 
 
+
+def test_a_second_solver_of_the_same_structure_takes_the_first_ones_ordering():
+    # a warm solve (a new HostSolver on a structure already factorised) skips the ordering step: it takes
+    # the same permutation, with its own permuted matrix, and solves as accurately
+    rng = np.random.default_rng(11)
+    x, edges = sheet(6, 5)
+    mask = block_mask(len(x), edges)
+    A1, A2 = random_on(mask, rng), random_on(mask, rng)
+    indptr, indices, data1 = csr(mask, A1)
+    data2 = csr(mask, A2)[2]
+    b = rng.standard_normal(A1.shape[0])
+    first = linalg.HostSolver(indptr, indices)
+    assert first.solve(data1, b)[1]
+    second = linalg.HostSolver(indptr.copy(), indices.copy())  # equal arrays, not the same objects
+    x2, ok = second.solve(data2, b)
+    assert ok and second.order is first.order and second._permuted is not first._permuted
+    np.testing.assert_allclose(x2, np.linalg.solve(A2, b), rtol=0, atol=1e-12 * np.abs(x2).max())
+    # the first solver's factor is untouched by the second's factorisation
+    np.testing.assert_allclose(first.apply(b), np.linalg.solve(A1, b), rtol=0, atol=1e-11 * np.abs(first.apply(b)).max())
+    # another structure gets its own ordering
+    other = block_mask(len(x), edges[:-3])
+    other_indptr, other_indices, other_data = csr(other, random_on(other, rng))
+    third = linalg.HostSolver(other_indptr, other_indices)
+    assert third.solve(other_data, b)[1] and third.order is not first.order
+
 def test_a_nearly_singular_net_tangent_is_solved_backward_stably():
     rng = np.random.default_rng(2)
     mask, A = net_tangent(rng)

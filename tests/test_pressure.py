@@ -304,6 +304,20 @@ def test_front_when_the_net_cannot_hold_the_catch():
     np.testing.assert_allclose(volume(x, tri, float(res.position), AXIS, 1.0, 1.0), 0.3 * full, rtol=1e-10)
 
 
+def test_a_front_started_near_its_solution_takes_fewer_passes():
+    # the solver's evaluations start the front from the last iterate's (model._catch_state): the same front,
+    # to the tolerance, in fewer passes over the elements than from the middle of the net
+    x, tri = NOISY_CONE
+    full = float(volume(x, tri, 0.0, AXIS, 1.0, 1.0))
+    cold = front(x, tri, AXIS, 0.4 * full, 1.0, 1.0, NO_GUESS)
+    moved = x + 1e-3 * RNG.normal(size=x.shape)  # the next iterate
+    again = front(moved, tri, AXIS, 0.4 * full, 1.0, 1.0, NO_GUESS)
+    warm = front(moved, tri, AXIS, 0.4 * full, 1.0, 1.0, float(cold.position))
+    assert bool(again.converged) and bool(warm.converged)
+    np.testing.assert_allclose(warm.position, again.position, rtol=0, atol=1e-9 * LENGTH)
+    assert int(warm.passes) <= 4 < int(again.passes), (int(warm.passes), int(again.passes))
+
+
 def test_front_position_derivative():
     x, tri = NOISY_CONE
     position = lambda y, v: catch.catch_front(y, tri, AXIS, v).position  # noqa: E731

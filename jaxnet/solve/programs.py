@@ -51,7 +51,7 @@ SUBDIRECTORY = "jaxnet-programs"
 #: 0.85 s instead of 1.37 s and its evaluation in 0.70 s instead of 1.01 s, and runs them in 3.02 and
 #: 0.64 ms against 3.15 and 0.65 ms. Most of a first solve is compilation. A CPU option: other backends
 #: ignore it.
-COMPILER_OPTIONS = {"xla_cpu_use_fusion_emitters": False}
+COMPILER_OPTIONS = {"xla_cpu_use_fusion_emitters": False, "xla_cpu_experimental_ynn_fusion_type": ""}
 
 
 def jit(fun=None, **kwargs):
@@ -155,9 +155,15 @@ def _store(path, compiled):
             os.remove(temporary)
 
 
-def _identity(name, args, static_kwargs):
+def identity(name, args, static_kwargs=None):
+    """:func:`key` of the program ``name`` for positional ``args`` and ``static_kwargs`` (its static
+    arguments by keyword, with a stable repr)."""
     static = tuple(sorted((n, _stable(v)) for n, v in (static_kwargs or {}).items()))
-    k = key(name, static, args)
+    return key(name, static, args)
+
+
+def _identity(name, args, static_kwargs):
+    k = identity(name, args, static_kwargs)
     where = directory()
     return k, None if where is None else where / f"{name}-{k}.jaxexe"
 

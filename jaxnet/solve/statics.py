@@ -170,7 +170,7 @@ class Equilibrium(eqx.Module):
 
     @property
     def converged(self):
-        return bool(self.status == CONVERGED)
+        return int(self.status) == CONVERGED  # on the host: no JAX comparison (a program compiled)
 
     @property
     def reason(self):
@@ -194,12 +194,40 @@ def _progress(it, res, damping, step):
 # -- the pieces of one iteration, shared by the two drivers (jitted loop and host loop) ----------------
 
 
-def _evaluate(x, f_frozen, load, scale, scene, pattern, model, step=None):
+def _placeholders(shapes):
+    """States standing for "none yet" (:func:`_evaluate`'s ``previous`` before a first evaluation): NaN where
+    the leaf is real (a NaN start is ignored: the catch front then starts from the middle of the net),
+    zeros otherwise, with the shapes and dtypes of ``shapes``, strongly typed as :func:`_evaluate` returns
+    its states (a weakly typed leaf would compile the evaluation a second time)."""
+    return jax.tree.map(
+        lambda a: np.full(a.shape, np.nan if jnp.issubdtype(a.dtype, jnp.inexact) else 0, a.dtype), shapes)
+
+
+#: the force terms' state shapes per scene signature (programs.key of the states' arguments): found by tracing
+#: the states alone (c2: 20-50 ms), once per process for a scene shape, not at every warm solve
+_STATE_SHAPES: dict = {}
+
+
+def _unknown_states(scene, pattern, model):
+    """:func:`_placeholders` of the force terms' states of ``scene`` (the first evaluation's ``previous``)."""
+    key = programs.identity("states", (scene, pattern), {"model": model})
+    shapes = _STATE_SHAPES.get(key)
+    if shapes is None:
+        x = jax.ShapeDtypeStruct(pattern.free.shape, jnp.float64)
+        shapes = _STATE_SHAPES[key] = jax.eval_shape(
+            lambda x: assemble.states(assemble.positions(x, scene, pattern), scene, model), x)
+    return _placeholders(shapes)
+
+
+
+def _evaluate(x, f_frozen, load, scale, scene, pattern, model, step=None, previous=None):
     """At free coordinates x: the residual and what the line search needs, in one traced evaluation.
     ``load``: the (N, 3) constant nodal loads (N), computed once per solve; ``scale``: the factor on the
     elastic energies (1, or less during the stiffness continuation); ``step``: None in statics, in a time
     step its past and masses (:class:`jaxnet.solve.dynamics.TimeStep`: the inertia energy joins the stored
-    energy, the drag takes the vertices' velocities).
+    energy, the drag takes the vertices' velocities); ``previous``: the force terms' states at the last
+    accepted iterate (what this returns as ``state``), which start their solutions here
+    (:func:`jaxnet.assemble.states`), or None.
 
     Returns (energy, force, f_nc, merit, state): the stored energy (J); the out-of-balance force (N, 3)
     at every node (at fixed coordinates minus the reactions); the non-conservative nodal forces (N, 3);
@@ -209,7 +237,7 @@ def _evaluate(x, f_frozen, load, scale, scene, pattern, model, step=None):
     X = assemble.positions(x, scene, pattern)
     e, grad = jax.value_and_grad(_stored_energy)(X, scene, model, scale, step)
     if any(t.term.kind == "force" for t in model):
-        state = assemble.states(X, scene, model)
+        state = assemble.states(X, scene, model, previous)
         f_nc = assemble.forces(X, scene, model, state, None if step is None else step.motion)
         # strongly typed, as the placeholders the tangent is compiled with (a weakly typed leaf, from a
         # Python scalar, would make a second compilation of the tangent at the first iteration)
@@ -320,8 +348,7 @@ def newton_loop(x0, scene, pattern, model, opts: Newton, step=None):
     zero_free = jnp.zeros_like(x0)
     zero = jnp.zeros_like(load)
     # placeholders of the right types for the accepted iterate and its direction, filled by the first pass
-    s0 = jax.tree.map(lambda a: jnp.zeros(a.shape, a.dtype), jax.eval_shape(
-        lambda: _evaluate(x0, zero, load, 1.0, scene, pattern, model, step)[4]))
+    s0 = _placeholders(jax.eval_shape(lambda: _evaluate(x0, zero, load, 1.0, scene, pattern, model, step)[4]))
     f64 = jnp.asarray(0.0)
     carry0 = dict(
         x=x0, f=zero_free, force=zero, e_stored=f64, f_nc=zero, s=s0, mu=jnp.asarray(opts.damping), it=jnp.asarray(0),
@@ -338,7 +365,7 @@ def newton_loop(x0, scene, pattern, model, opts: Newton, step=None):
         # the start point first; an unusable direction is judged without a trial (its pass re-evaluates x)
         x_try = c["x"] + jnp.where(started & usable, alpha, 0.0) * c["dx"]
         e_try, force_try, nc_try, m_try, s_try = _evaluate(x_try, jnp.where(started, c["f_nc"], zero), load, 1.0,
-                                                           scene, pattern, model, step)
+                                                           scene, pattern, model, step, c["s"])
         f_try = force_try.ravel()[free]
         done = usable & _accepts(m_try, f_try, c["e"], alpha, c["slope"], c["roundoff"], c["res_now"], jnp)
         trials = jnp.where(usable, c["k"] + 1, 0)
@@ -402,7 +429,13 @@ def _tangent_blocks(x, state, scale, scene, pattern, model, stiffness="autodiff"
     return assemble.tangent_blocks(X, scene, model, state, scale, stiffness)
 
 
-_evaluate_jit = programs.jit(_evaluate, static_argnames=("model",))
+def _evaluate_from(x, f_frozen, load, scale, scene, pattern, previous, model):
+    """:func:`_evaluate` in statics from the force terms' states ``previous`` (the host loop's evaluation:
+    every dynamic argument positional, the model last)."""
+    return _evaluate(x, f_frozen, load, scale, scene, pattern, model, None, previous)
+
+
+_evaluate_jit = programs.jit(_evaluate_from, static_argnames=("model",))
 _tangent_blocks_jit = programs.jit(_tangent_blocks, static_argnames=("model", "stiffness"))
 _scatter_jit = programs.jit(assemble.scatter_stiffnesses)
 
@@ -430,8 +463,8 @@ def _compile_pieces(start, scene, pattern, model, stiffness="autodiff"):
     argument shapes: the evaluation's, the force terms' states (the catch front); the tangent's, its
     element matrices. (Measured on FEMNET's c2, 2 cores: 2.2 s from start to all compiled, against 2.6 s
     with every program traced at once.)"""
-    zero = jnp.zeros(scene.nodes.position.shape)
-    evaluate_args = (start, zero, zero, 1.0, scene, pattern)
+    zero = np.zeros(scene.nodes.position.shape)
+    evaluate_args = (start, zero, zero, 1.0, scene, pattern, _unknown_states(scene, pattern, model))
     found = {"evaluate": programs.lookup("evaluate", evaluate_args, {"model": model})}
     jobs = {}
     with concurrent.futures.ThreadPoolExecutor(4) as pool:
@@ -443,7 +476,7 @@ def _compile_pieces(start, scene, pattern, model, stiffness="autodiff"):
         else:
             shapes = found["evaluate"].out_info[4]
         # placeholders for the states: strongly typed as the evaluation returns them
-        state = jax.tree.map(lambda s: jnp.zeros(s.shape, s.dtype), shapes)
+        state = jax.tree.map(lambda s: np.zeros(s.shape, s.dtype), shapes)
         tangent_args, tangent_static = (start, state, 1.0, scene, pattern), {"model": model, "stiffness": stiffness}
         found["tangent"] = programs.lookup("tangent", tangent_args, tangent_static)
         if found["tangent"] is None:
@@ -454,7 +487,7 @@ def _compile_pieces(start, scene, pattern, model, stiffness="autodiff"):
         else:
             blocks = found["tangent"].out_info
         # the element matrices' placeholders, for the program that sums them into the pattern
-        blocks = jax.tree.map(lambda b: jnp.zeros(b.shape, b.dtype), blocks)
+        blocks = jax.tree.map(lambda b: np.zeros(b.shape, b.dtype), blocks)
         rest = {"scatter": (_scatter_jit, (blocks, pattern), {}),
                 "springs": (_springs_jit, (scene, pattern), {"model": model}),
                 "loads": (_loads_jit, (scene,), {"model": model})}
@@ -509,14 +542,17 @@ def host_loop(start, scene, pattern, model, opts: Newton, pieces=None):
     trial. Same rules (shared functions), same result; prints progress as it goes when verbose.
     ``pieces``: the compiled programs (:func:`_compile_pieces`), obtained here if not given."""
     if pieces is None:
-        pieces = _compile_pieces(jnp.asarray(start), scene, pattern, model, opts.stiffness)
+        pieces = _compile_pieces(np.asarray(start, dtype=float), scene, pattern, model, opts.stiffness)
     evaluate, tangent, scatter = pieces["evaluate"], pieces["tangent"], pieces["scatter"]
     n_nodes = scene.n_nodes
     free = np.asarray(pattern.free)
     indptr, indices = np.asarray(pattern.indptr), np.asarray(pattern.indices)
     factor = linalg.HostSolver(indptr, indices)
-    springs = np.asarray(pieces["springs"](scene, pattern))
-    load_device = pieces["loads"](scene)  # constant: computed once, passed to every evaluation
+    # The scene and pattern moved to the device once: the programs take them at every call, and a numpy
+    # leaf is copied to the device at each (c2: 22 copies per call, 30-40 us of its 100-140 us dispatch).
+    scene_on_device, pattern_on_device = jax.device_put((scene, pattern))
+    springs = np.asarray(pieces["springs"](scene_on_device, pattern_on_device))
+    load_device = pieces["loads"](scene_on_device)  # constant: computed once, passed to every evaluation
     load = np.asarray(load_device)
     X0 = np.asarray(scene.nodes.position, dtype=float).ravel()
 
@@ -533,12 +569,14 @@ def host_loop(start, scene, pattern, model, opts: Newton, pieces=None):
     scales = stiffness_stages(opts)
     stage = len(scales) - 1  # plain Newton (the net as it is) until the continuation starts
 
-    def run(x, f_frozen):
-        e, force, f_nc, m, state = evaluate(x, f_frozen, load_device, scales[stage], scene, pattern)
+    def run(x, f_frozen, previous):
+        # previous: the force terms' states at the last accepted iterate, where their solutions start
+        e, force, f_nc, m, state = evaluate(x, f_frozen, load_device, scales[stage], scene_on_device,
+                                            pattern_on_device, previous)
         return float(e), np.asarray(force), np.asarray(f_nc), float(m), state
 
     x = np.asarray(start, dtype=float)
-    e_stored, force, f_nc, _, state = run(x, np.zeros_like(load))
+    e_stored, force, f_nc, _, state = run(x, np.zeros_like(load), _unknown_states(scene, pattern, model))
     f = force.ravel()[free]
     hist = np.full(opts.max_iter + 1, np.nan)
     res = nodal(f).max()
@@ -559,7 +597,7 @@ def host_loop(start, scene, pattern, model, opts: Newton, pieces=None):
             # plain Newton goes on from the better start, by the residual of the net as it is: where the
             # continuation began, or where it got to (a net nearly stiffened back is often much closer)
             stage = final
-            here = run(x, f_nc)
+            here = run(x, f_nc, state)
             f_here = here[1].ravel()[free]
             if nodal(f_here).max() < nodal(resume[1]).max():
                 e_stored, force, f_nc, state, f = here[0], here[1], here[2], here[4], f_here
@@ -572,7 +610,7 @@ def host_loop(start, scene, pattern, model, opts: Newton, pieces=None):
         if stage < final and (stage < 0 or res <= max(opts.tol, opts.stage_rtol * stage_start)):
             # next stage: the same positions, a stiffer net (the residual jumps, mu is kept)
             stage += 1
-            e_stored, force, f_nc, _, state = run(x, f_nc)
+            e_stored, force, f_nc, _, state = run(x, f_nc, state)
             f = force.ravel()[free]
             res = stage_start = nodal(f).max()
             if opts.verbose:
@@ -581,8 +619,9 @@ def host_loop(start, scene, pattern, model, opts: Newton, pieces=None):
         e = e_stored - float(np.sum((load + f_nc) * X))
         if tangent_at is None or tangent_at[0] is not x or tangent_at[1] is not state or tangent_at[2] != stage:
             # an iteration that took no step leaves x as it was: its tangent serves again, only mu changes
-            blocks = tangent(x, state, scales[stage], scene, pattern)  # element matrices, on the device
-            data, tangent_at = np.asarray(scatter(blocks, pattern)), (x, state, stage)
+            # element matrices, on the device
+            blocks = tangent(x, state, scales[stage], scene_on_device, pattern_on_device)
+            data, tangent_at = np.asarray(scatter(blocks, pattern_on_device)), (x, state, stage)
         dx, ok = factor.solve(data + mu * springs, f)
         biggest = nodal(dx).max()
         dx = dx * min(1.0, opts.max_step / max(biggest, 1e-300))
@@ -595,7 +634,7 @@ def host_loop(start, scene, pattern, model, opts: Newton, pieces=None):
         trials, alpha, accepted, m_new = 0, 1.0, False, np.inf
         while usable and trials < opts.line_search and not accepted:
             alpha = 1.0 if trials == 0 else 0.5 * alpha
-            e_try, force_try, nc_try, m_new, s_try = run(x + alpha * dx, f_nc)
+            e_try, force_try, nc_try, m_new, s_try = run(x + alpha * dx, f_nc, state)
             f_try = force_try.ravel()[free]
             accepted = bool(_accepts(m_new, f_try, e, alpha, slope, roundoff, res_now, np))
             trials += 1
@@ -619,14 +658,10 @@ def host_loop(start, scene, pattern, model, opts: Newton, pieces=None):
     nodal_f = nodal(f)
     X = positions(x)
     return Equilibrium(
-        x=jnp.asarray(X),
-        force=jnp.asarray(force),
-        residual_N=jnp.asarray(nodal_f.max()),
-        iterations=jnp.asarray(it),
-        status=jnp.asarray(st),
-        worst_node=jnp.asarray(int(np.argmax(nodal_f))),
-        history=jnp.asarray(hist),
-        energy=jnp.asarray(e_stored - float(np.sum((load + f_nc) * X))),
+        # device_put, not jnp.asarray: jax 0.10 stages numpy values through a program compiled per shape
+        **jax.device_put(dict(x=X, force=force, residual_N=nodal_f.max(), iterations=np.int64(it), status=np.int64(st),
+                              worst_node=np.int64(np.argmax(nodal_f)), history=hist,
+                              energy=np.float64(e_stored - float(np.sum((load + f_nc) * X))))),
     )
 
 
@@ -663,7 +698,7 @@ def solve(scene, solver: Newton | None = None, x0=None, raise_on_failure=True, *
                              f"{x0[bad[0][0]].tolist()}")
     start = np.asarray(scene.nodes.position if x0 is None else x0, dtype=float).ravel()[np.asarray(pattern.free)]
     t0 = time.perf_counter()
-    pieces = _compile_pieces(jnp.asarray(start), scene, pattern, model, solver.stiffness)
+    pieces = _compile_pieces(start, scene, pattern, model, solver.stiffness)
     t1 = time.perf_counter()
     eq = host_loop(start, scene, pattern, model, solver, pieces)
     t2 = time.perf_counter()

@@ -85,6 +85,7 @@ from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from jaxnet import geometry
 from jaxnet.terms.opening import half_angle
@@ -92,6 +93,12 @@ from jaxnet.terms.opening import half_angle
 DEFAULT_BAND_FRACTION = 0.1
 FORMS = ("book", "femnet")
 _FEMNET_MIN_ANGLE = 1e-5  # FEMNET's "seuil": below this half angle it divides by sin(1e-5)
+
+
+def _namespace(*values):
+    """numpy for plain numbers and numpy arrays (a ``.don`` reader's material constants: no JAX program
+    compiled for three scalar operations, 60 ms of a first run), jax.numpy for JAX arrays and tracers."""
+    return jnp if any(isinstance(v, jax.Array) for v in values) else np
 
 
 def contact_half_angle(l0, knot_size):
@@ -111,8 +118,9 @@ def default_knot_stiffness(l0, knot_size, ea):
     Args:
       l0: mesh side, the unstretched twine length (m). knot_size: k (m). ea: twine traction stiffness EA (N).
     """
+    xp = _namespace(l0, knot_size, ea)
     has_knot = knot_size > 0.0
-    return jnp.where(has_knot, l0**2 * ea / (100.0 * jnp.where(has_knot, knot_size, 1.0)), 0.0)
+    return xp.where(has_knot, l0**2 * ea / (100.0 * xp.where(has_knot, knot_size, 1.0)), 0.0)
 
 
 def contact_penalty(s, band):
@@ -144,8 +152,9 @@ def femnet_knot_stiffness(l0, knot_size, ea):
     Args:
       l0: unstretched twine length (m). knot_size: k (m). ea: twine traction stiffness EA (N).
     """
+    xp = _namespace(l0, knot_size, ea)
     has_knot = knot_size > 0.0
-    return jnp.where(has_knot, l0**2 * ea / (500.0 * jnp.where(has_knot, knot_size, 1.0)), 0.0)
+    return xp.where(has_knot, l0**2 * ea / (500.0 * xp.where(has_knot, knot_size, 1.0)), 0.0)
 
 
 def femnet_penalty(alpha, contact_angle):
