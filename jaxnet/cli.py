@@ -191,8 +191,9 @@ def main(argv=None):
     run.add_argument("--max-iter", type=int, dest="max_iter", help="maximum Newton iterations")
     run.add_argument("--quiet", action="store_true", help="no per-iteration progress lines")
     run.add_argument("--stiffness", choices=("autodiff", "closed_form"),
-                     help="the tangent's path: autodiff (jax.jacfwd of every term) or closed_form (the book's "
-                          "hand-derived stiffness where a term has one; docs/errata.md); the same matrix either way")
+                     help="the tangent's path: closed_form (the default: the book's hand-derived stiffness where a "
+                          "term has one; docs/errata.md) or autodiff (jax.jacfwd of every term, the reference); the "
+                          "same matrix either way")
     run.add_argument("--jaxnet-laws", action="store_true", dest="jaxnet_laws",
                      help="with a FEMNET case: jaxnet's own laws (the book's, corrected) where FEMNET's differ (knot "
                           "contact, netting drag with a catch: docs/errata.md), instead of FEMNET's")

@@ -223,9 +223,10 @@ class _Ordering:
 
 class HostSolver:
     """Repeated direct solves A x = b on the host for matrices of one fixed sparsity (a Newton solve's
-    tangents). The fill-reducing ordering (minimum degree on A^T + A) is computed once, at the first
-    factorisation, and every later matrix is permuted symmetrically by it and factorised in that order
-    (SuperLU without its own ordering step: 20-50 % of a factorisation on the FEMNET cases). Pivots are
+    tangents). The fill-reducing ordering (minimum degree on A^T + A) is computed once per structure, at the
+    first factorisation (and kept for later solvers of the same structure, :data:`_ORDERINGS`), and every
+    later matrix is permuted symmetrically by it and factorised in that order (SuperLU without its own
+    ordering step: 20-50 % of a factorisation on the FEMNET cases). Pivots are
     taken on the diagonal where they are not too small and every solution is checked; see the module
     docstring for why and for the fallback to partial pivoting.
 

@@ -122,6 +122,32 @@ def test_host_loop_and_jitted_loop_are_the_same_iteration():
     np.testing.assert_allclose(np.asarray(jitted.force), np.asarray(host.force), atol=1e-6)
 
 
+
+def test_the_pattern_is_kept_for_the_same_net_and_rebuilt_for_another():
+    # build_pattern is kept by a digest of the fixed coordinates and the connectivity: an equal scene (a
+    # warm solve, another load) gets the same pattern; another fixing gets its own, with one node fewer free
+    import dataclasses
+
+    import jax
+
+    from jaxnet import assemble, model as model_lib
+
+    net = framed_panel(meshes=12, step=0.1, sinker_kg=2.0)
+    scene, again = net.build(), net.build()
+    model = model_lib.active_terms(scene)
+    first = assemble.build_pattern(scene, model)
+    assert assemble.build_pattern(again, model) is first
+    fixed = np.asarray(scene.nodes.fixed).copy()
+    node = int(np.flatnonzero(~fixed.all(axis=1))[0])
+    freed = int((~fixed[node]).sum())
+    fixed[node] = True
+    held = dataclasses.replace(scene, nodes=dataclasses.replace(scene.nodes, fixed=fixed))
+    other = assemble.build_pattern(held, model)
+    assert other is not first and other.n == first.n - freed > 0
+    fresh = assemble._build_pattern(held, assemble.stiff_families(model), fixed.ravel())
+    assert all(np.array_equal(np.asarray(a), np.asarray(b))
+               for a, b in zip(jax.tree.leaves(other), jax.tree.leaves(fresh)))
+
 def test_stiffness_continuation_stages_rise_geometrically_to_the_net_as_it_is():
     from jaxnet.solve import statics
 

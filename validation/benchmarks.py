@@ -21,8 +21,10 @@ HERE = pathlib.Path(__file__).parent
 SCRIPTS = {
     "femnet_cases.py": ("FEMNET's cases: FEMNET's figures beside jaxnet's, iterations, cold and warm times",
                         ["--repeat", "1"], []),
-    "compile_options.py": ("XLA's CPU emitters: compilation and run times of the solver's programs",
+    "compile_options.py": ("XLA's CPU options: compilation and run times of the solver's programs",
                            ["--runs", "10"], []),
+    "superlu_memory.py": ("SuperLU's factors on the C heap: time and page faults per factorisation",
+                          ["--rounds", "2"], []),
     "dynamics_cost.py": ("Dynamics: error against run time of the book's scheme and the diffrax reference, "
                          "cost per step against FEMNET's, steps per second against size",
                          ["--sizes", "1.6", "--cage-end", "1.0", "--cage-reference-end", "0.2",

@@ -49,8 +49,10 @@ SUBDIRECTORY = "jaxnet-programs"
 #: (many small per-element fusions over (E, 3, 3) stacks) 1.4-1.6x faster, and they run as fast, within
 #: the noise (``validation/compile_options.py``, 2 cores, jax 0.10.2): FEMNET's c2 compiles its tangent in
 #: 0.85 s instead of 1.37 s and its evaluation in 0.70 s instead of 1.01 s, and runs them in 3.02 and
-#: 0.64 ms against 3.15 and 0.65 ms. Most of a first solve is compilation. A CPU option: other backends
-#: ignore it.
+#: 0.64 ms against 3.15 and 0.65 ms. Most of a first solve is compilation. And no YNNPACK fusions (an
+#: empty list of fusion types): by default XLA hands the dots of the (E, 3, 3) stacks and the elementwise
+#: work around them to YNNPACK, which is slower on such small matrices (c2's tangent element matrices
+#: 1.22 ms against 1.35 ms, the same compile time). CPU options: other backends ignore them.
 COMPILER_OPTIONS = {"xla_cpu_use_fusion_emitters": False, "xla_cpu_experimental_ynn_fusion_type": ""}
 
 
