@@ -115,6 +115,41 @@ def test_half_angle_is_half_the_acos_of_4211():
     np.testing.assert_allclose(couple, H * (0.7 - ALPHA0), rtol=1e-12)
 
 
+
+def _plain_half_angle(U, V):
+    """The half angle without its hand-written derivative: autodiff differentiates through the cross product."""
+    return 0.5 * jnp.arctan2(geometry.safe_norm(jnp.cross(U, V)), jnp.dot(U, V))
+
+
+def test_half_angle_derivatives_by_hand_are_autodiffs_and_finite_differences():
+    # geometry.half_opening_angle carries its own JVP (dot products, no sliced cross product): its gradient
+    # and Hessian are the autodiff ones of the plain formula, and central differences of the angle
+    gradient = jax.jit(jax.grad(lambda w: geometry.half_opening_angle(w[:3], w[3:])))
+    plain_gradient = jax.jit(jax.grad(lambda w: _plain_half_angle(w[:3], w[3:])))
+    hessian = jax.jit(jax.jacfwd(jax.grad(lambda w: geometry.half_opening_angle(w[:3], w[3:]))))
+    plain_hessian = jax.jit(jax.jacfwd(jax.grad(lambda w: _plain_half_angle(w[:3], w[3:]))))
+    angle = jax.jit(lambda w: geometry.half_opening_angle(w[:3], w[3:]))
+    for scale in (1.0, 1e-3):  # also nearly closed meshes (U, V nearly parallel)
+        for _ in range(5):
+            U = RNG.normal(size=3)
+            w = np.concatenate([U, 2.0 * U + scale * RNG.normal(size=3)])
+            g = np.asarray(gradient(w))
+            np.testing.assert_allclose(g, plain_gradient(w), rtol=1e-12, atol=1e-14 * np.abs(g).max())
+            np.testing.assert_allclose(hessian(w), plain_hessian(w), rtol=1e-10, atol=1e-12 * np.abs(hessian(w)).max())
+            h = 1e-5 * scale * np.linalg.norm(w)  # the angle varies over the gap between U and V
+            fd = [(angle(w + h * e) - angle(w - h * e)) / (2 * h) for e in np.eye(6)]
+            np.testing.assert_allclose(g, fd, rtol=1e-6, atol=1e-8 * np.abs(g).max())
+    # exactly closed and exactly opened flat (U, V parallel, antiparallel): the angle's derivative is taken as 0
+    for other in (2.0, -2.0):
+        w = np.concatenate([[1.0, 2.0, 3.0], other * np.array([1.0, 2.0, 3.0])])
+        np.testing.assert_array_equal(gradient(w), plain_gradient(w))
+        assert np.all(np.isfinite(hessian(w)))
+    # and the gradient holds no pad (the transpose of a slice), which XLA ran once per slice, each time
+    # recomputing the knot contact's derivative before it
+    U, V = RNG.normal(size=3), RNG.normal(size=3)
+    assert " pad[" not in str(jax.make_jaxpr(jax.grad(geometry.half_opening_angle, argnums=(0, 1)))(U, V))
+    assert " pad[" in str(jax.make_jaxpr(jax.grad(_plain_half_angle, argnums=(0, 1)))(U, V))
+
 @pytest.mark.parametrize("closed", ["U+V", "U-V"])
 def test_closed_meshes_have_finite_energy_forces_and_stiffness(closed):
     # α -> 0 (U parallel to V) and α -> π/2 (U antiparallel to V): E = 2 H α0² resp. 2 H (π/2 - α0)²

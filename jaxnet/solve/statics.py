@@ -208,9 +208,11 @@ def _placeholders(shapes):
         lambda a: np.full(a.shape, np.nan if jnp.issubdtype(a.dtype, jnp.inexact) else 0, a.dtype), shapes)
 
 
-#: the force terms' state shapes per scene signature (programs.key of the states' arguments): found by tracing
-#: the states alone (c2: 20-50 ms), once per process for a scene shape, not at every warm solve
+#: the force terms' state shapes per scene signature (:func:`jaxnet.solve.programs.identity` of the states'
+#: arguments and terms): found by tracing the states alone (c2: 20-50 ms), once per process for a scene
+#: shape, not at every warm solve
 _STATE_SHAPES: dict = {}
+_MAX_STATE_SHAPES = 64
 
 
 def _unknown_states(scene, pattern, model):
@@ -219,10 +221,11 @@ def _unknown_states(scene, pattern, model):
     shapes = _STATE_SHAPES.get(key)
     if shapes is None:
         x = jax.ShapeDtypeStruct(pattern.free.shape, jnp.float64)
-        shapes = _STATE_SHAPES[key] = jax.eval_shape(
-            lambda x: assemble.states(assemble.positions(x, scene, pattern), scene, model), x)
+        shapes = jax.eval_shape(lambda x: assemble.states(assemble.positions(x, scene, pattern), scene, model), x)
+        if len(_STATE_SHAPES) >= _MAX_STATE_SHAPES:
+            _STATE_SHAPES.pop(next(iter(_STATE_SHAPES)))
+        _STATE_SHAPES[key] = shapes
     return _placeholders(shapes)
-
 
 
 def _evaluate(x, f_frozen, load, scale, scene, pattern, model, step=None, previous=None):
