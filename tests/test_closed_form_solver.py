@@ -182,3 +182,24 @@ def test_jitted_newton_loop_runs_on_the_closed_form():
     assert int(jitted.status) == statics.CONVERGED
     assert int(jitted.iterations) == int(host.iterations)
     np.testing.assert_allclose(np.asarray(jitted.x), np.asarray(host.x), atol=1e-9)
+
+
+def test_jitted_newton_loop_threads_the_catch_front_as_the_host_loop():
+    """With a catch, each evaluation starts its front from the last accepted iterate's (``previous``): the
+    one-program loop carries that state as the host loop does, from NaN placeholders (no front yet), and
+    the two reach the same equilibrium in the same iterations, the front holding the catch's volume."""
+    from jaxnet import catch
+
+    scene = codend(meshes_around=8, meshes_along=6, catch_m3=0.01).build()
+    solver = jn.Newton(stall_window=None)
+    host, _ = statics.solve(scene, solver)
+    m = model.active_terms(scene)
+    pattern = assemble.build_pattern(scene, m)
+    x0 = jnp.asarray(np.asarray(scene.nodes.position).ravel()[np.asarray(pattern.free)])
+    jitted = statics._newton_jit(x0, scene, pattern, model=m, opts=solver)
+    assert host.converged and int(jitted.status) == statics.CONVERGED
+    assert int(jitted.iterations) == int(host.iterations)
+    np.testing.assert_allclose(np.asarray(jitted.x), np.asarray(host.x), atol=1e-9)
+    c = scene.catch
+    front = catch.catch_front(host.x, scene.netting.vertices, c.axis, c.volume, c.symmetry, sign=scene.netting.outward)
+    assert bool(front.holds) and float(front.volume) == pytest.approx(float(c.volume), rel=1e-9)

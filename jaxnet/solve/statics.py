@@ -117,8 +117,8 @@ class Newton:
       (``jax.jacfwd`` of every term). Both are the same matrix to rounding (tested per element and on whole
       solves), and the answer does not depend on it: the residual is always the energies' gradient and the
       forces themselves, only the steps towards it are the tangent's. The closed forms are the default
-      because they are cheaper: FEMNET's c2 on jaxnet's mesh, warm 0.33 s against 0.42 s, cold 3.1 s against
-      3.4 s (``validation/femnet_cases.py``).
+      because they are cheaper: FEMNET's c2 on jaxnet's mesh, warm 0.30 s against 0.42 s, cold 2.8 s against
+      3.7 s (``validation/femnet_cases.py``, medians of 3).
     verbose: print one line per iteration.
     """
 
