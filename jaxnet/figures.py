@@ -6,10 +6,11 @@ These are what a gear technologist reads off a solve; the writers in :mod:`jaxne
 from __future__ import annotations
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 
 from jaxnet import assemble, catch as catch_lib, model as model_lib
-from jaxnet.solve import programs
+from jaxnet.solve import programs, statics
 from jaxnet.terms import cable, pressure, tension
 
 #: result.json force groups: name -> the terms whose total force (over all nodes) it sums
@@ -25,14 +26,31 @@ FORCE_GROUPS = {
 }
 
 
+# The figures are computed by compiled programs, each for a scene shape, kept by :mod:`jaxnet.solve.programs`
+# (on disk where the solver's are): evaluated op by op, jax 0.10 compiles a program for every operation,
+# and a first `jaxnet run` of FEMNET's c2 spent 2.1 s in this module against 2.5 s in the solve.
+
+
+def _netting_tensions(x, vertices, uv, l0, ea_traction, ea_compression):
+    tu, tv = jax.vmap(tension.netting_tensions)(x[vertices], uv, l0, ea_traction, ea_compression)
+    return jnp.stack([tu, tv], axis=1)
+
+
+def _bar_tensions(x, ends, rest_length, ea_traction, ea_compression):
+    return jax.vmap(cable.bar_tension)(x[ends], rest_length, ea_traction, ea_compression)
+
+
+_netting_tensions_jit = programs.jit(_netting_tensions)
+_bar_tensions_jit = programs.jit(_bar_tensions)
+
+
 def twine_tensions(scene, x):
     """(E, 2) tensions (N) of the U and V twines of every netting triangle at positions x (N, 3)."""
     net = scene.netting
     if net is None:
         return np.zeros((0, 2))
-    x = np.asarray(x)
-    tu, tv = jax.vmap(tension.netting_tensions)(x[np.asarray(net.vertices)], net.uv, net.l0, net.ea_traction, net.ea_compression)
-    return np.stack([np.asarray(tu), np.asarray(tv)], axis=1)
+    args = (np.asarray(x, dtype=float), net.vertices, net.uv, net.l0, net.ea_traction, net.ea_compression)
+    return np.asarray(programs.obtain("twine_tensions", _netting_tensions_jit, args)(*args))
 
 
 def bar_tensions(scene, x):
@@ -40,35 +58,46 @@ def bar_tensions(scene, x):
     bars = scene.bars
     if bars is None:
         return np.zeros(0)
-    x = np.asarray(x)
-    return np.asarray(jax.vmap(cable.bar_tension)(x[np.asarray(bars.ends)], bars.rest_length, bars.ea_traction, bars.ea_compression))
+    args = (np.asarray(x, dtype=float), bars.ends, bars.rest_length, bars.ea_traction, bars.ea_compression)
+    return np.asarray(programs.obtain("bar_tensions", _bar_tensions_jit, args)(*args))
 
 
 def total_load(scene):
     """(3,) sum of all constant loads (weight, buoyancy, external forces) in N."""
-    return np.asarray(assemble.loads(scene, model_lib.active_terms(scene))).sum(axis=0)
+    model = model_lib.active_terms(scene)  # the solver's own program, which a solve of this scene has compiled
+    return np.asarray(programs.obtain("loads", statics._loads_jit, (scene,), {"model": model})(scene)).sum(axis=0)
 
 
-def forces_by_term(scene, x):
-    """Per active term, the total force (3,) in N it exerts on the net at positions x (N, 3).
+def forces_by_term(scene, x, names=None):
+    """Per active term, the total force (3,) in N it exerts on the net at positions x (N, 3); only the terms
+    ``names`` when given.
 
     Internal terms (twine tension, bending, ...) sum to zero over the whole net; the external ones (drag,
     catch, weight and buoyancy, applied forces) make up, with the reactions, the balance of the net.
     """
-    m = model_lib.active_terms(scene)
-    per_term = _term_forces(jax.numpy.asarray(x), scene, model=m)
+    model = tuple(t for t in model_lib.active_terms(scene) if names is None or t.name in names)
+    args = (np.asarray(x, dtype=float), scene)
+    per_term = programs.obtain("term_forces", _term_forces, args, {"model": model})(*args)
     return {name: np.asarray(f).sum(axis=0) for name, f in per_term.items()}
 
 
-# compiled once per scene shape (evaluated op by op they take seconds on a large net)
 _term_forces = programs.jit(assemble.term_forces, static_argnames="model")
-_catch_front = programs.jit(catch_lib.catch_front)
-_catch_summary = programs.jit(catch_lib.catch_summary)
+
+
+def _catch(x, vertices, axis, volume, symmetry, sign, pressure_, center, up):
+    """The catch front at positions x and FEMNET's catch summary there, in one program."""
+    front = catch_lib.catch_front(x, vertices, axis, volume, symmetry, sign=sign)
+    return front, catch_lib.catch_summary(x, vertices, axis, front.position, pressure_, symmetry, sign=sign,
+                                          center=center, up=up)
+
+
+_catch_jit = programs.jit(_catch)
 
 
 def force_breakdown(scene, x):
-    """result.json's force groups (:data:`FORCE_GROUPS`): total drag on netting, cables, nodes, catch, ... (N)."""
-    by_term = forces_by_term(scene, x)
+    """result.json's force groups (:data:`FORCE_GROUPS`): total drag on netting, cables, nodes, catch, ... (N).
+    Only the terms of the groups are computed (the internal ones, which sum to zero, are not asked for)."""
+    by_term = forces_by_term(scene, x, names={t for terms in FORCE_GROUPS.values() for t in terms})
     return {group: np.sum([by_term[t] for t in terms if t in by_term] or [np.zeros(3)], axis=0)
             for group, terms in FORCE_GROUPS.items()}
 
@@ -78,11 +107,10 @@ def catch_report(scene, x):
     c = scene.catch
     if c is None or scene.netting is None:
         return None
-    net = scene.netting
-    front = _catch_front(jax.numpy.asarray(x), net.vertices, c.axis, c.volume, c.symmetry, sign=net.outward)
-    p = pressure.dynamic_pressure(scene.environment.water_density, c.drag_coefficient, scene.environment.current_speed)
-    summary = _catch_summary(jax.numpy.asarray(x), net.vertices, c.axis, front.position, p, c.symmetry,
-                                               sign=net.outward, center=c.center, up=scene.environment.up)
+    net, env = scene.netting, scene.environment
+    p = pressure.dynamic_pressure(env.water_density, c.drag_coefficient, env.current_speed)
+    args = (np.asarray(x, dtype=float), net.vertices, c.axis, c.volume, c.symmetry, net.outward, p, c.center, env.up)
+    front, summary = programs.obtain("catch_report", _catch_jit, args)(*args)
     return {
         "front_m": float(front.position),
         "holds_the_volume": bool(front.holds),

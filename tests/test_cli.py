@@ -81,7 +81,8 @@ def test_scene_file_and_bad_scene_file(tmp_path, capsys):
 
 
 def test_compiled_programs_are_kept_on_disk_and_reused(tmp_path):
-    """The solver's compiled programs (evaluation, tangent, scatter, spring network, loads) are kept on disk whole
+    """The solver's compiled programs (evaluation, tangent, scatter, spring network, loads) and those of the
+    result's figures (tensions, forces by term) are kept on disk whole
     (:mod:`jaxnet.solve.programs`): a second process solving the same scene loads them, compiles nothing
     (no new program, none rewritten, no new entry in JAX's own cache) and gives the same answer; a damaged
     program file is compiled again and replaced, never trusted. Run in subprocesses: the cache is
@@ -97,7 +98,8 @@ def test_compiled_programs_are_kept_on_disk_and_reused(tmp_path):
                 {p.name: p.stat().st_mtime_ns for p in programs.iterdir()}, set(p.name for p in cache.iterdir()))
 
     first, kept, entries = run("a")
-    assert sorted(name.split("-")[0] for name in kept) == ["evaluate", "loads", "scatter", "springs", "tangent"]
+    assert sorted(name.split("-")[0] for name in kept) == ["bar_tensions", "evaluate", "loads", "scatter", "springs",
+                                                           "tangent", "term_forces", "twine_tensions"]
     second, kept_after, entries_after = run("b")
     assert kept_after == kept and entries_after == entries  # loaded: nothing compiled, nothing written
     assert second["iterations"] == first["iterations"]
