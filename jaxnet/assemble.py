@@ -35,6 +35,7 @@ Sign convention: ``force`` is the out-of-balance force on the nodes (N), zero at
 from __future__ import annotations
 
 import hashlib
+import threading
 
 import equinox as eqx
 import jax
@@ -100,6 +101,7 @@ def _families(model, kind):
 
 #: patterns built so far, by a digest of what decides them (:func:`build_pattern`)
 _PATTERNS: dict = {}
+_PATTERNS_LOCK = threading.Lock()
 _MAX_PATTERNS = 16
 
 
@@ -116,11 +118,14 @@ def build_pattern(scene, model) -> Pattern:
         if family != "nodes":
             digest.update(np.ascontiguousarray(connectivity(scene, family), dtype=np.int64).tobytes())
     key = digest.digest()
-    pattern = _PATTERNS.get(key)
+    with _PATTERNS_LOCK:
+        pattern = _PATTERNS.get(key)
     if pattern is None:
-        if len(_PATTERNS) >= _MAX_PATTERNS:
-            _PATTERNS.pop(next(iter(_PATTERNS)))
-        pattern = _PATTERNS[key] = _build_pattern(scene, families, fixed)
+        pattern = _build_pattern(scene, families, fixed)
+        with _PATTERNS_LOCK:  # solves may run in several threads (jaxnet.design.batch)
+            if len(_PATTERNS) >= _MAX_PATTERNS:
+                _PATTERNS.pop(next(iter(_PATTERNS)))
+            _PATTERNS[key] = pattern
     return pattern
 
 

@@ -65,6 +65,7 @@ from __future__ import annotations
 
 import concurrent.futures
 import dataclasses
+import threading
 import time
 
 import equinox as eqx
@@ -212,19 +213,22 @@ def _placeholders(shapes):
 #: arguments and terms): found by tracing the states alone (c2: 20-50 ms), once per process for a scene
 #: shape, not at every warm solve
 _STATE_SHAPES: dict = {}
+_STATE_SHAPES_LOCK = threading.Lock()
 _MAX_STATE_SHAPES = 64
 
 
 def _unknown_states(scene, pattern, model):
     """:func:`_placeholders` of the force terms' states of ``scene`` (the first evaluation's ``previous``)."""
     key = programs.identity("states", (scene, pattern), {"model": model})
-    shapes = _STATE_SHAPES.get(key)
+    with _STATE_SHAPES_LOCK:
+        shapes = _STATE_SHAPES.get(key)
     if shapes is None:
         x = jax.ShapeDtypeStruct(pattern.free.shape, jnp.float64)
         shapes = jax.eval_shape(lambda x: assemble.states(assemble.positions(x, scene, pattern), scene, model), x)
-        if len(_STATE_SHAPES) >= _MAX_STATE_SHAPES:
-            _STATE_SHAPES.pop(next(iter(_STATE_SHAPES)))
-        _STATE_SHAPES[key] = shapes
+        with _STATE_SHAPES_LOCK:  # solves may run in several threads
+            if len(_STATE_SHAPES) >= _MAX_STATE_SHAPES:
+                _STATE_SHAPES.pop(next(iter(_STATE_SHAPES)))
+            _STATE_SHAPES[key] = shapes
     return _placeholders(shapes)
 
 
