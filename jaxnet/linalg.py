@@ -80,8 +80,7 @@ def _keep_factor_memory():
     """
     if not _PRIMED:
         _PRIMED.append(True)
-        block = np.empty(_MALLOC_PRIMER, dtype=np.uint8)  # numpy takes large arrays from malloc
-        del block
+        np.empty(_MALLOC_PRIMER, dtype=np.uint8)  # from malloc (numpy's large arrays), freed at once
 
 
 def matvec(data, rows, indices, v):

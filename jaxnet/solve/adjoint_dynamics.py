@@ -75,7 +75,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxnet import assemble, catch as catch_lib, geometry, model as model_lib
-from jaxnet.solve import dynamics, implicit, programs, statics
+from jaxnet.solve import dynamics, implicit, statics
 from jaxnet.terms import inertia
 
 __all__ = ["Instant", "lumped_masses", "step_force", "implicit_step", "series", "trajectory", "integrate", "mean",
