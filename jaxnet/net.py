@@ -34,6 +34,7 @@ import numpy as np
 
 from jaxnet.mesh.panel import PanelError, mesh_panel, side_divisions
 from jaxnet.scene import Bars, Environment, Netting, Nodes, Scene, SceneError
+from jaxnet.terms.knot import default_knot_stiffness
 
 
 #: how the current loads netting (``Twine.drag_model``) -> code in ``Netting.drag_model``
@@ -654,22 +655,16 @@ class Net:
         return hit
 
     def _netting(self, meshes, ids):
-        columns = {  # Netting field <- Twine field
-            "l0": "l0", "ea_traction": "ea", "ea_compression": "ea_compression", "diameter": "diameter",
-            "density": "density", "cd_normal": "cd_normal", "tangential_ratio": "tangential_ratio",
-            "opening_stiffness": "opening_stiffness", "rest_angle": "rest_angle", "knot_size": "knot_size",
-            "bending_stiffness": "bending_stiffness",
-        }
-        rows = {k: [] for k in ("vertices", "uv", "panel", "drag_model", "knot_stiffness", "knot_form", *columns)}
+        rows = {k: [] for k in ("vertices", "uv", "panel")}
+        twines = []
         for p, e in self._panel_triangles(meshes, ids, rows, lambda p: not isinstance(p.twine, HexTwine)):
-            for key, field in columns.items():
-                rows[key].append(np.full(e, float(getattr(p.twine, field))))
-            rows["drag_model"].append(np.full(e, DRAG_MODELS[p.twine.drag_model]))
-            rows["knot_stiffness"].append(np.full(e, _knot_stiffness(p.twine)))
-            rows["knot_form"].append(np.full(e, KNOT_FORMS[p.twine.knot_form]))
+            twines.append(p.twine)
         if not rows["vertices"]:
             return None
-        return Netting(**{k: np.concatenate(v) for k, v in rows.items()})
+        panel = np.concatenate(rows["panel"])
+        # the rows of the k-th diamond panel take the k-th diamond material (panel indices count all panels)
+        material = np.concatenate([np.full(len(r), k) for k, r in enumerate(rows["panel"])])
+        return Netting(**{k: np.concatenate(v) for k, v in rows.items()}, **netting_rows(twines, material))
 
     def _panel_triangles(self, meshes, ids, rows, keep):
         """For each kept panel, append its triangles' vertices, twine coordinates and panel index to
@@ -711,10 +706,8 @@ class Net:
             share = seg / seg.sum() if seg.sum() > 0 else np.full(len(seg), 1.0 / len(seg))
             rows["ends"].append(ends)
             rows["rest_length"].append(total * share)
-            for key, value in (("ea_traction", c.rope.ea), ("ea_compression", c.rope.ea_compression),
-                               ("diameter", c.rope.diameter), ("density", c.rope.density),
-                               ("cd_normal", c.rope.cd_normal), ("tangential_ratio", c.rope.tangential_ratio)):
-                rows[key].append(np.full(len(ends), float(value)))
+            for key, value in bar_columns(c.rope).items():
+                rows[key].append(np.full(len(ends), value))
             rows["cable"].append(np.full(len(ends), k))
         return Bars(**{k: np.concatenate(v) for k, v in rows.items()})
 
@@ -724,21 +717,47 @@ def _mesh_length(twine):
     return twine.base_mesh_side if isinstance(twine, HexTwine) else twine.l0
 
 
-def _knot_stiffness(twine):
-    """Knot contact stiffness (N·m/rad): the twine's, or the default of eq. 4.280, H = l0² EA / (100 knot)."""
+def knot_stiffness(twine: Twine) -> float:
+    """Knot contact stiffness (N·m/rad) of the triangles of a diamond-mesh panel of material ``twine``:
+    ``twine.knot_stiffness`` when given, else the default of eq. 4.280
+    (:func:`jaxnet.terms.knot.default_knot_stiffness`), 0 without knots (knot_size 0)."""
     if twine.knot_stiffness is not None:
         return float(twine.knot_stiffness)
-    if twine.knot_size <= 0:
-        return 0.0
-    return twine.l0**2 * twine.ea / (100.0 * twine.knot_size)
+    return float(default_knot_stiffness(float(twine.l0), float(twine.knot_size), float(twine.ea)))
 
 
-def knot_stiffness(twine: Twine) -> float:
-    """Knot contact stiffness (N·m/rad) that :meth:`Net.build` gives the triangles of a diamond-mesh panel of
-    material ``twine``: ``twine.knot_stiffness`` when given, else the default of eq. 4.280,
-    H = l0² EA / (100 knot_size), and 0 without knots (knot_size 0). Public for readers that fill a
-    :class:`~jaxnet.scene.Netting` themselves (FEMNET's ``.mdg`` mesh, :func:`jaxnet.io.femnet.read_mdg`)."""
-    return _knot_stiffness(twine)
+def netting_columns(twine: Twine) -> dict:
+    """The :class:`~jaxnet.scene.Netting` parameters of every triangle of a panel of material ``twine``
+    ({field: value}): the one map from a builder's material to the scene's per-triangle rows, used by
+    :meth:`Net.build` and by readers that fill a ``Netting`` themselves (FEMNET's ``.mdg`` mesh)."""
+    return {"l0": float(twine.l0), "ea_traction": float(twine.ea), "ea_compression": float(twine.ea_compression),
+            "diameter": float(twine.diameter), "density": float(twine.density), "cd_normal": float(twine.cd_normal),
+            "tangential_ratio": float(twine.tangential_ratio), "opening_stiffness": float(twine.opening_stiffness),
+            "rest_angle": float(twine.rest_angle), "knot_size": float(twine.knot_size),
+            "bending_stiffness": float(twine.bending_stiffness), "knot_stiffness": knot_stiffness(twine),
+            "knot_form": KNOT_FORMS[twine.knot_form], "drag_model": DRAG_MODELS[twine.drag_model]}
+
+
+def netting_rows(twines, material) -> dict:
+    """{Netting field: (E,) array} of triangles whose material is ``twines[material[e]]`` (``material``: (E,)
+    indices into the sequence ``twines``): :func:`netting_columns` row by row."""
+    columns = [netting_columns(t) for t in twines]
+    material = np.asarray(material, dtype=np.int64)
+    return {k: np.array([c[k] for c in columns])[material] for k in columns[0]}
+
+
+def bar_columns(rope: Rope) -> dict:
+    """The :class:`~jaxnet.scene.Bars` parameters of every bar of a cable of material ``rope`` ({field: value})."""
+    return {"ea_traction": float(rope.ea), "ea_compression": float(rope.ea_compression),
+            "diameter": float(rope.diameter), "density": float(rope.density), "cd_normal": float(rope.cd_normal),
+            "tangential_ratio": float(rope.tangential_ratio)}
+
+
+def bar_rows(ropes, material) -> dict:
+    """{Bars field: (B,) array} of bars whose material is ``ropes[material[b]]``: :func:`bar_columns` row by row."""
+    columns = [bar_columns(r) for r in ropes]
+    material = np.asarray(material, dtype=np.int64)
+    return {k: np.array([c[k] for c in columns])[material] for k in columns[0]}
 
 
 def outward(position, triangles, center) -> np.ndarray:

@@ -129,7 +129,7 @@ import re
 import numpy as np
 
 from jaxnet import waves as waves_lib
-from jaxnet.net import DRAG_MODELS, KNOT_FORMS, HexTwine, Net, Rope, Side, Twine, knot_stiffness, outward
+from jaxnet.net import HexTwine, Net, Rope, Side, Twine, bar_rows, netting_rows, outward
 from jaxnet.scene import Bars, Catch, Environment, Netting, Nodes, Scene, SceneError, validate
 from jaxnet.solve.statics import Newton
 from jaxnet.terms import knot
@@ -1371,7 +1371,7 @@ def read_mdg(path, don=None, femnet_laws=True):
     n_nodes, at = count_after("nombre de noeuds")
     node_rows = rows("description des noeuds", n_nodes, 7, at)
     n_bars, at = count_after("nombre d'elements")
-    bar_rows = rows("description des elements", n_bars, 6, at)
+    bar_lines = rows("description des elements", n_bars, 6, at)
     n_tri, at = count_after("nombre de surfaces")
     tri_rows = rows("description des surfaces", n_tri, 11, at)
     for header in ("nombre de coulisses", "nombre de surfaces hexagonales"):
@@ -1407,35 +1407,23 @@ def read_mdg(path, don=None, femnet_laws=True):
             if not 0 <= p < len(case.panels):
                 raise SceneError(f"{where}:{r[-1]}: triangle {int(r[0])} belongs to panel {p + 1}, not in {don}")
         twines = [_twine(p, case, femnet_laws) for p in case.panels]
-        cols = {"l0": "l0", "ea_traction": "ea", "ea_compression": "ea_compression", "diameter": "diameter",
-                "density": "density", "cd_normal": "cd_normal", "tangential_ratio": "tangential_ratio",
-                "opening_stiffness": "opening_stiffness", "rest_angle": "rest_angle", "knot_size": "knot_size",
-                "bending_stiffness": "bending_stiffness"}
-        data = {k: np.array([float(getattr(twines[p], f)) for p in panel]) for k, f in cols.items()}
-        data["knot_stiffness"] = np.array([knot_stiffness(twines[p]) for p in panel])
-        data["knot_form"] = np.array([KNOT_FORMS[twines[p].knot_form] for p in panel])
-        data["drag_model"] = np.array([DRAG_MODELS[twines[p].drag_model] for p in panel])
-        netting = Netting(vertices=vertices, uv=uv, panel=panel, **data)
+        netting = Netting(vertices=vertices, uv=uv, panel=panel, **netting_rows(twines, panel))
     bars = None
     if n_bars:
-        ends = np.array([[node_index(v, r[-1]) for v in r[1:3]] for r in bar_rows])
-        cable = np.array([int(r[5]) - 1 for r in bar_rows])
-        for r, c in zip(bar_rows, cable):
+        ends = np.array([[node_index(v, r[-1]) for v in r[1:3]] for r in bar_lines])
+        cable = np.array([int(r[5]) - 1 for r in bar_lines])
+        for r, c in zip(bar_lines, cable):
             if not 0 <= c < len(case.cables):
                 raise SceneError(f"{where}:{r[-1]}: bar {int(r[0])} belongs to cable {c + 1}, not in {don}")
-        share = np.array([r[4] - r[3] for r in bar_rows])
+        share = np.array([r[4] - r[3] for r in bar_lines])
         bad = np.flatnonzero(~(share > 0))
         if bad.size:
-            r = bar_rows[int(bad[0])]
+            r = bar_lines[int(bad[0])]
             raise SceneError(f"{where}:{r[-1]}: bar {int(r[0])}: its share of the cable (pro2 - pro1 = {share[bad[0]]!r}) "
                              "must be > 0")
         ropes = [_rope(c) for c in case.cables]
         rest = share * np.array([case.cables[c].material["l0"].value for c in cable])
-        bars = Bars(ends=ends, rest_length=rest, cable=cable,
-                    **{k: np.array([float(getattr(ropes[c], f)) for c in cable])
-                       for k, f in (("ea_traction", "ea"), ("ea_compression", "ea_compression"), ("diameter", "diameter"),
-                                    ("density", "density"), ("cd_normal", "cd_normal"),
-                                    ("tangential_ratio", "tangential_ratio"))})
+        bars = Bars(ends=ends, rest_length=rest, cable=cable, **bar_rows(ropes, cable))
     netting_nodes = np.unique(netting.vertices) if netting is not None else np.arange(n_nodes)
     catch_spec = _catch(case, position, netting_nodes, planes, env)
     catch = None
