@@ -42,11 +42,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxnet.closed_form import registry as closed_form_registry
-from jaxnet.model import ActiveTerm
-
-#: the two ways of computing the tangent stiffness (:func:`tangent`)
-STIFFNESS_PATHS = ("autodiff", "closed_form")
+from jaxnet.model import STIFFNESS_PATHS, ActiveTerm
 
 class Motion(eqx.Module):
     """The past of an implicit time step, for velocity-dependent forces: the positions x_previous (N, 3) in
@@ -183,7 +179,7 @@ def _family_energy(model, family, elastic_scale=1.0):
         total = 0.0
         for t in terms:
             with jax.named_scope(t.name):
-                e = t.term.element(x, p, env, **t.kwargs())
+                e = t.energy(x, p, env)
             total = total + (elastic_scale * e if t.term.elastic else e)
         return total
 
@@ -197,9 +193,8 @@ def _family_force(model, family):
         total = jnp.zeros_like(x)
         for t in terms:
             # the vertices' velocities (m/s) go to the terms that feel them, in dynamics
-            extra = {"velocity": velocity} if t.term.moving and t.kwargs().get("moving") else {}
             with jax.named_scope(t.name):
-                total = total + t.term.element(x, p, env, state.get(t.name), **t.kwargs(), **extra)
+                total = total + t.force(x, p, env, state.get(t.name), velocity)
         return total
 
     return force
@@ -233,7 +228,7 @@ def states(x, scene, model, previous=None):
 
 def energy(x, scene, model: tuple[ActiveTerm, ...], elastic_scale=1.0):
     """Total stored energy (J) of all energy terms at positions x (N, 3); the elastic terms' (twines,
-    bars, mesh opening, knots, bending: :attr:`jaxnet.model.Term.elastic`) multiplied by ``elastic_scale``
+    bars, mesh opening, knots, bending: :attr:`jaxnet.terms.term.Term.elastic`) multiplied by ``elastic_scale``
     (1 for the net as it is; the static solver's stiffness continuation solves softer nets first)."""
     total = 0.0
     for family in _families(model, "energy"):
@@ -254,7 +249,7 @@ def loads(scene, model):
         with jax.named_scope(t.name):
             family = t.term.family
             fam = scene.nodes if family == "nodes" else getattr(scene, family)
-            per_elem = jax.vmap(lambda p: t.term.element(p, scene.environment, **t.kwargs()))(fam)
+            per_elem = jax.vmap(lambda p: t.load(p, scene.environment))(fam)
             conn = jnp.arange(n)[:, None] if family == "nodes" else connectivity(scene, family)
             f = f.at[conn.ravel()].add(per_elem.reshape(-1, 3))
     return f
@@ -374,16 +369,10 @@ def _family_closed_form(model, family, elastic_scale=1.0):
     def block(x, p, env, state, velocity=None, time_step=None):
         total = 0.0
         for t in terms:
-            entry = closed_form_registry.STIFFNESS[t.name]
             with jax.named_scope(t.name):
-                if t.term.kind == "energy":
-                    k = entry.stiffness(x, p, env, **t.kwargs())
-                    k = elastic_scale * k if t.term.elastic else k
-                else:
-                    # a moving drag (a time step's): its vertices' velocities (m/s) and Δt (s), as _family_force
-                    moving = ({"velocity": velocity, "time_step": time_step}
-                              if t.term.moving and t.kwargs().get("moving") else {})
-                    k = entry.stiffness(x, p, env, state.get(t.name), **t.kwargs(), **moving)
+                # a moving drag (a time step's) takes its vertices' velocities (m/s) and Δt (s)
+                k = t.stiffness(x, p, env, None if state is None else state.get(t.name), velocity, time_step)
+                k = elastic_scale * k if t.term.elastic else k
             total = total + k
         return total
 
@@ -400,7 +389,7 @@ def tangent(x, scene, model, pattern, state=None, elastic_scale=1.0, stiffness="
 
     ``stiffness``: ``"autodiff"`` (every term by ``jax.jacfwd``) or ``"closed_form"``: the terms with a
     hand-derived stiffness (:mod:`jaxnet.closed_form`) use it, the others autodiff
-    (:func:`jaxnet.closed_form.registry.paths` says which is which). A Python str.
+    (:func:`jaxnet.model.stiffness_paths` says which is which). A Python str.
 
     ``motion``: in a time step, the past of the velocity-dependent forces (:class:`Motion`).
     """
@@ -420,8 +409,7 @@ def tangent_blocks(x, scene, model, state=None, elastic_scale=1.0, stiffness="au
     after the other (:func:`jaxnet.solve.statics._tangent_blocks`)."""
     if stiffness not in STIFFNESS_PATHS:
         raise ValueError(f"stiffness must be one of {STIFFNESS_PATHS}, not {stiffness!r}")
-    by_hand = tuple(t for t in model if stiffness == "closed_form"
-                    and closed_form_registry.covered(t, with_velocities=motion is not None))
+    by_hand = tuple(t for t in model if stiffness == "closed_form" and t.has_closed_form(motion is not None))
     rest = tuple(t for t in model if t not in by_hand)
     energies = {f: _family_energy(rest, f, elastic_scale) for f in _families(rest, "energy")}
     element_forces = {f: _family_force(rest, f) for f in _families(rest, "force")}

@@ -11,19 +11,7 @@ import numpy as np
 
 from jaxnet import assemble, catch as catch_lib, model as model_lib
 from jaxnet.solve import programs, statics
-from jaxnet.terms import cable, pressure, tension
-
-#: result.json force groups: name -> the terms whose total force (over all nodes) it sums
-FORCE_GROUPS = {
-    "drag_netting_N": ("netting_drag",),
-    "drag_cables_N": ("bar_drag",),
-    "drag_nodes_N": ("node_drag", "node_box_drag"),
-    "catch_N": ("catch_pressure",),
-    "weight_and_buoyancy_N": ("netting_weight", "bar_weight", "node_weight", "netting_gravity_at_surface",
-                              "bar_gravity_at_surface", "node_gravity_at_surface"),
-    "external_N": ("node_force",),
-    "bottom_N": ("bottom_contact", "bottom_friction"),
-}
+from jaxnet.terms import cable, pressure, tension, term as term_lib
 
 
 # The figures are computed by compiled programs, each for a scene shape, kept by :mod:`jaxnet.solve.programs`
@@ -95,11 +83,13 @@ _catch_jit = programs.jit(_catch)
 
 
 def force_breakdown(scene, x):
-    """result.json's force groups (:data:`FORCE_GROUPS`): total drag on netting, cables, nodes, catch, ... (N).
+    """result.json's force groups (the terms' declared groups, :func:`jaxnet.terms.term.groups`): total drag
+    on netting, cables, nodes, catch, weight, ... (N), every group, zero where none of its terms is active.
     Only the terms of the groups are computed (the internal ones, which sum to zero, are not asked for)."""
-    by_term = forces_by_term(scene, x, names={t for terms in FORCE_GROUPS.values() for t in terms})
+    groups = term_lib.groups()
+    by_term = forces_by_term(scene, x, names={t for terms in groups.values() for t in terms})
     return {group: np.sum([by_term[t] for t in terms if t in by_term] or [np.zeros(3)], axis=0)
-            for group, terms in FORCE_GROUPS.items()}
+            for group, terms in groups.items()}
 
 
 def catch_report(scene, x):

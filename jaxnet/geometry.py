@@ -98,6 +98,14 @@ def knot_count(d):
     return jnp.abs(d) / 2.0
 
 
+def twine_volume(count, length, diameter):
+    """Volume (m³) of ``count`` twines of ``length`` (m) and diameter D (m), count π D²/4 length: the twines
+    of a diamond triangle (count |d|, eqs 4.25-4.26, length l0: the volume of the weight 4.277), of a
+    hexagonal one (|d| of each family, length the sum of the three l0), a bar (count 1, its rest length), or
+    a share of them (count 1/2: half a bar). Numpy or JAX arrays alike."""
+    return count * jnp.pi * diameter**2 / 4.0 * length
+
+
 def surface(x):
     """Cartesian surface of a triangle, |12 ^ 13| / 2 in m² (eq. 4.18)."""
     return 0.5 * safe_norm(jnp.cross(x[1] - x[0], x[2] - x[0]))

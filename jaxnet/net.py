@@ -34,13 +34,14 @@ import numpy as np
 
 from jaxnet.mesh.panel import PanelError, mesh_panel, side_divisions
 from jaxnet.scene import Bars, Environment, Netting, Nodes, Scene, SceneError
-from jaxnet.terms.knot import default_knot_stiffness
+from jaxnet.terms import knot
+from jaxnet.terms.drag import NETTING_DRAG_MODELS
 
 
 #: how the current loads netting (``Twine.drag_model``) -> code in ``Netting.drag_model``
-DRAG_MODELS = {"twines": 0, "loland": 1, "kristiansen-faltinsen": 2, "femnet-catch": 3}
+DRAG_MODELS = {model.name: code for code, model in enumerate(NETTING_DRAG_MODELS)}
 #: knot contact law (``Twine.knot_form``) -> code in ``Netting.knot_form``
-KNOT_FORMS = {"book": 0, "femnet": 1}
+KNOT_FORMS = {form: code for code, form in enumerate(knot.FORMS)}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -723,7 +724,7 @@ def knot_stiffness(twine: Twine) -> float:
     (:func:`jaxnet.terms.knot.default_knot_stiffness`), 0 without knots (knot_size 0)."""
     if twine.knot_stiffness is not None:
         return float(twine.knot_stiffness)
-    return float(default_knot_stiffness(float(twine.l0), float(twine.knot_size), float(twine.ea)))
+    return float(knot.default_knot_stiffness(float(twine.l0), float(twine.knot_size), float(twine.ea)))
 
 
 def netting_columns(twine: Twine) -> dict:

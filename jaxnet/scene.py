@@ -569,17 +569,16 @@ def validate(scene: Scene) -> None:
             bad = np.flatnonzero(~((a > 0) & (a <= np.pi / 2)))
             if bad.size:
                 raise SceneError(f"{culprit(int(bad[0]))}: rest half opening angle must be in (0, pi/2] rad, got {a[bad[0]]!r}")
-        if net.drag_model is not None:
-            m = np.asarray(net.drag_model)
-            bad = np.flatnonzero(~np.isin(m, (0, 1, 2, 3)))
-            if bad.size:
-                raise SceneError(f"{culprit(int(bad[0]))}: drag model code must be 0, 1, 2 or 3, got {m[bad[0]]!r}")
-        if net.knot_form is not None:
-            m = np.asarray(net.knot_form)
-            bad = np.flatnonzero(~np.isin(m, (0, 1)))
-            if bad.size:
-                raise SceneError(f"{culprit(int(bad[0]))}: knot contact form code must be 0 (book) or 1 (FEMNET), "
-                                 f"got {m[bad[0]]!r}")
+        from jaxnet.terms import drag, knot  # the terms read the scene's helpers: imported when needed
+
+        for field, kind, names in (("drag_model", "drag model", [m.name for m in drag.NETTING_DRAG_MODELS]),
+                                   ("knot_form", "knot contact form", list(knot.FORMS))):
+            if getattr(net, field) is not None:
+                m = np.asarray(getattr(net, field))
+                bad = np.flatnonzero(~np.isin(m, np.arange(len(names))))
+                if bad.size:
+                    codes = ", ".join(f"{code} ({name})" for code, name in enumerate(names))
+                    raise SceneError(f"{culprit(int(bad[0]))}: {kind} code must be one of {codes}, got {m[bad[0]]!r}")
         used[tri.ravel()] = True
         edges += [tri[:, [0, 1]], tri[:, [1, 2]]]
     if scene.hexagonal is not None:

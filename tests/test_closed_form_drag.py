@@ -2,7 +2,7 @@
 book's printed drag equations 4.114-4.210 and 4.272-4.276 transcribed and evaluated (errata).
 
 The current may vary with depth: the solver evaluates it at the element's centroid inside the
-differentiated function (``jaxnet.model._water_velocity``); the harness below composes the two the same
+differentiated function (``jaxnet.terms.drag.water_velocity``); the harness below composes the two the same
 way, with a 3-point profile, so that jacfwd sees dc/dz.
 """
 

@@ -21,7 +21,6 @@ import pytest
 
 import jaxnet as jn
 from jaxnet import assemble, model
-from jaxnet.closed_form import registry
 from jaxnet.net import Twine
 from jaxnet.scenes.codend import codend
 from jaxnet.scenes.panel import hanging_panel
@@ -73,12 +72,12 @@ def every_term_codend():
 def test_paths_name_each_term():
     scene, _ = every_term_codend()
     m = model.active_terms(scene)
-    paths = registry.paths(m)
+    paths = model.stiffness_paths(m)
     assert set(paths) == {t.name for t in m if t.term.kind in ("energy", "force")}
     assert set(paths) >= {"netting_tension", "bar_tension", "mesh_opening", "knot_contact", "twine_bending",
                           "netting_drag", "bar_drag", "catch_pressure"}
     assert set(paths.values()) == {"closed_form"}
-    assert set(registry.paths(m, "autodiff").values()) == {"autodiff"}
+    assert set(model.stiffness_paths(m, "autodiff").values()) == {"autodiff"}
 
 
 def test_a_term_without_closed_form_keeps_autodiff():
@@ -87,8 +86,8 @@ def test_a_term_without_closed_form_keeps_autodiff():
     twine = Twine(l0=0.06, ea=1e5, diameter=4e-3, density=1025.0, drag_model="loland")
     scene = codend(meshes_around=8, meshes_along=4, step=0.12, twine=twine).build()
     m = model.active_terms(scene)
-    assert registry.paths(m)["netting_drag"] == "autodiff"
-    assert registry.paths(m)["netting_tension"] == "closed_form"
+    assert model.stiffness_paths(m)["netting_drag"] == "autodiff"
+    assert model.stiffness_paths(m)["netting_tension"] == "closed_form"
     x = jnp.asarray(scene.nodes.position) + 1e-3
     pattern = assemble.build_pattern(scene, m)
     k = {path: np.asarray(TANGENT(x, scene, pattern=pattern, model=m, stiffness=path)) for path in assemble.STIFFNESS_PATHS}
@@ -141,7 +140,7 @@ def test_global_tangents_agree_in_a_current_varying_with_depth():
     for profile in (True, False):
         scene = panel_with_bodies(profile)
         m = model.active_terms(scene)
-        paths = registry.paths(m)
+        paths = model.stiffness_paths(m)
         assert paths["node_drag"] == paths["bar_drag"] == paths["netting_drag"] == "closed_form"
         rng = np.random.default_rng(5)
         x = jnp.asarray(np.asarray(scene.nodes.position) + 0.02 * rng.normal(size=scene.nodes.position.shape))

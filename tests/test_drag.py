@@ -484,14 +484,16 @@ def test_femnet_catch_degenerate_cases_are_finite(case):
 
 
 def test_model_code_3_is_femnet_catch():
-    # the model's code 3 passes Ct = f Cd, as the twine drag (code 0)
+    # the term passes code 3 Ct = f Cd, as the twine drag (code 0)
     from types import SimpleNamespace
 
-    from jaxnet import model
+    from jaxnet.terms import drag as drag_term
 
     x, uv = random_element()
     c = jnp.asarray(RNG.normal(size=3))
-    p = SimpleNamespace(uv=uv, l0=L0, diameter=D, cd_normal=CN, tangential_ratio=CT / CN)
-    name, force = model.NETTING_DRAG[3]
-    assert name == "femnet_catch_drag" and 3 in model.TWINE_DRAG_MODELS
-    np.testing.assert_allclose(force(x, p, c, RHO), femnet_catch_jit(x, uv, c), rtol=1e-13)
+    p = SimpleNamespace(uv=uv, l0=L0, diameter=D, cd_normal=CN, tangential_ratio=CT / CN, drag_model=3)
+    model = drag_term.NETTING_DRAG_MODELS[3]
+    assert model.scope == "femnet_catch_drag" and model.twines
+    a = drag_term.NETTING_DRAG.arguments(p, SimpleNamespace(water_density=RHO), models=(3,), shielded=False)
+    force = model.force(x, a["uv"], a["l0"], a["diameter"], a["cd_normal"], a["cd_tangential"], c, RHO)
+    np.testing.assert_allclose(force, femnet_catch_jit(x, uv, c), rtol=1e-13)

@@ -2,11 +2,11 @@
 and finite differences, and the waves' velocity gradient it needs.
 
 In a time step each vertex i of a drag element takes its share of the element's drag computed with the water's
-velocity relative to it, c_i = w(x_i) - (x_i - x_i^n)/Δt (:func:`jaxnet.model._per_vertex`), w the current at
+velocity relative to it, c_i = w(x_i) - (x_i - x_i^n)/Δt (:func:`jaxnet.terms.drag.per_vertex`), w the current at
 the vertex's depth plus the waves' orbital velocity. The reference is ``jax.jacfwd`` of the term's own element
 force with the velocity formed inside the differentiated function (what the autodiff path of
-:func:`jaxnet.assemble.scatter_hessians` does); the closed form (:mod:`jaxnet.closed_form.drag`, through
-:mod:`jaxnet.closed_form.registry`) takes the velocities and Δt. Cases: random states, still water, vertices
+:func:`jaxnet.assemble.scatter_hessians` does); the closed form (:mod:`jaxnet.closed_form.drag`, as the term
+declares it) takes the velocities and Δt. Cases: random states, still water, vertices
 moving with the water (c_i = 0 with the water moving), water along a twine (c_n = 0), a catch front across the
 netting (the shielding), both netting drag models made of twine drags.
 """
@@ -22,7 +22,7 @@ from elements import central_differences
 
 import jaxnet  # noqa: F401  (float64)
 from jaxnet import assemble, geometry, model as model_lib, waves
-from jaxnet.closed_form import registry
+from jaxnet.terms import drag as drag_term
 from jaxnet.net import Net, Rope, Twine
 from jaxnet.scene import Environment
 from jaxnet.solve import dynamics, statics
@@ -61,11 +61,11 @@ def test_the_scene_has_every_moving_drag_with_a_closed_form():
     for name in ("netting_drag", "bar_drag", "node_drag"):
         assert TERMS[name].kwargs()["moving"] and TERMS[name].kwargs()["waves"]
     # a time step's tangent hands the velocities over: closed forms; without them the moving drags keep autodiff
-    with_v = registry.paths(MODEL, with_velocities=True)
-    without = registry.paths(MODEL)
+    with_v = model_lib.stiffness_paths(MODEL, with_velocities=True)
+    without = model_lib.stiffness_paths(MODEL)
     for name in ("netting_drag", "bar_drag", "node_drag"):
         assert with_v[name] == "closed_form" and without[name] == "autodiff"
-    assert registry.paths(MODEL, "autodiff", with_velocities=True)["netting_drag"] == "autodiff"
+    assert model_lib.stiffness_paths(MODEL, "autodiff", with_velocities=True)["netting_drag"] == "autodiff"
 
 
 @jax.jit
@@ -108,16 +108,13 @@ def element_rows(family, scene=SCENE):
 @functools.partial(jax.jit, static_argnames=("term",))
 def element_stiffness(term, env, x, p, xp, state=None):
     """(closed form, -jacfwd) of one moving drag term on elements x (E, k, 3) with previous positions xp."""
-    options = term.kwargs()
-    entry = registry.STIFFNESS[term.name]
-
     def one(x, p, xp):
         def force(v):
             v = v.reshape(x.shape)
-            return term.term.element(v, p, env, state, **options, velocity=(v - xp) / DT).ravel()
+            return term.force(v, p, env, state, velocity=(v - xp) / DT).ravel()
 
         auto = -jax.jacfwd(force)(x.ravel())
-        return entry.stiffness(x, p, env, state, **options, velocity=(x - xp) / DT, time_step=DT), auto
+        return term.stiffness(x, p, env, state, velocity=(x - xp) / DT, time_step=DT), auto
 
     return jax.vmap(one)(x, p, xp)
 
@@ -125,7 +122,7 @@ def element_stiffness(term, env, x, p, xp, state=None):
 @jax.jit
 def water_at(x, env):
     """(..., 3) the water's velocity (m/s) at points x: the current at their depth and the waves'."""
-    return model_lib.water_velocity_at(x, env, True)
+    return drag_term.water_velocity_at(x, env, True)
 
 
 def states(family, seed):
@@ -214,11 +211,10 @@ def test_moving_drag_stiffness_equals_finite_differences():
     """The closed form against central differences of the element force itself (no autodiff anywhere)."""
     env = eqx.tree_at(lambda e: e.time, SCENE.environment, 0.7)
     for name, family in (("netting_drag", "netting"), ("bar_drag", "bars")):
-        term, entry = TERMS[name], registry.STIFFNESS[name]
-        force = jax.jit(lambda v, p, xp, term=term: term.term.element(v, p, env, None, **term.kwargs(),
-                                                                      velocity=(v - xp) / DT))
-        closed = jax.jit(lambda v, p, xp, entry=entry, term=term: entry.stiffness(v, p, env, None, **term.kwargs(),
-                                                                                 velocity=(v - xp) / DT, time_step=DT))
+        term = TERMS[name]
+        force = jax.jit(lambda v, p, xp, term=term: term.force(v, p, env, None, velocity=(v - xp) / DT))
+        closed = jax.jit(lambda v, p, xp, term=term: term.stiffness(v, p, env, None, velocity=(v - xp) / DT,
+                                                                    time_step=DT))
         x, xp, rows = states(family, seed=11)
         for e in range(2):
             p = jax.tree.map(lambda a: a[e], rows)

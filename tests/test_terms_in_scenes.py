@@ -1,6 +1,6 @@
 """Every registered term, in whole scenes: traced exactly when the scene asks for it, and doing its job.
 
-Part 1 (tracing). For each term of :data:`jaxnet.model.TERMS` a small scene is lowered twice through the
+Part 1 (tracing). For each registered term (:func:`jaxnet.terms.term.registered`) a small scene is lowered twice through the
 Newton program (``statics._newton_jit.lower``, no compilation): once with the term's parameters present
 and non-zero, once with them absent or zero. The term's ``jax.named_scope`` must be in the first program
 and not in the second, and the two programs must differ by that term only. Names are read from the
@@ -37,13 +37,13 @@ import jaxnet as jn
 from jaxnet import assemble, figures, geometry, model
 from jaxnet.net import HexTwine, Net, Rope, Twine
 from jaxnet.scene import Environment
-from jaxnet.terms import bending, opening, screen
+from jaxnet.terms import bending, drag as drag_term, opening, screen, term as term_lib
 from traced import NAMED_LOCATION, lowered_text  # tests/traced.py
 
 RHO = 1025.0  # sea water (kg/m³), the Environment default
 G = 9.81
-TERM_NAMES = tuple(t.name for t in model.TERMS)
-DRAG_SCOPES = tuple(name for name, _ in model.NETTING_DRAG.values())  # twine_drag, loland_screen, ...
+TERM_NAMES = tuple(t.name for t in term_lib.registered())
+DRAG_SCOPES = tuple(m.scope for m in drag_term.NETTING_DRAG_MODELS)  # twine_drag, loland_screen, ...
 SCOPES = frozenset(TERM_NAMES + DRAG_SCOPES)
 
 # ----------------------------------------------------------------------------------------------------
@@ -691,7 +691,8 @@ def test_catch_shields_the_netting_behind_its_front_from_drag():
 
     def shielded(front):
         state = {"front": jnp.asarray(front), "axis": jnp.array([1.0, 0.0, 0.0])}
-        return np.asarray(model_lib._netting_drag(x, p, env, state, models=(0,), shielded=True))
+        arguments = drag_term.NETTING_DRAG.arguments(p, env, models=(0,), shielded=True)
+        return np.asarray(drag_term.netting_drag_on_element(x, state, **arguments))
 
     np.testing.assert_allclose(shielded(1.0), plain, rtol=1e-12)   # front downstream of the triangle
     np.testing.assert_allclose(shielded(-1.0), 0.0, atol=1e-15)    # triangle wholly behind the front

@@ -8,6 +8,7 @@ import numpy as np
 
 import jaxnet as jn
 from jaxnet import assemble, model
+from jaxnet.terms import term as term_lib
 from jaxnet.solve import statics
 
 #: a location of the lowered program with its name stack, e.g. jit(newton_loop)/vmap(netting_drag)/...
@@ -28,4 +29,4 @@ def traced_terms(scene):
     for name in NAMED_LOCATION.findall(lowered_text(scene)):
         if "/" in name:
             words.update(re.findall(r"[A-Za-z_][A-Za-z0-9_]*", name))
-    return words & {t.name for t in model.TERMS}
+    return words & {t.name for t in term_lib.registered()}

@@ -6,7 +6,7 @@ For each size the built-in cod-end (:func:`jaxnet.scenes.codend.codend`) is mesh
 triangles, with a twine that switches on every term the book gives a stiffness for: twine tension (with a
 compression stiffness), mesh opening, knot contact, out-of-plane bending (hinges), twine drag, and the
 catch pressure; its cod line adds bar tension and drag. At its start shape, slightly perturbed (so that
-no element sits on a kink), for every term with a closed form (:mod:`jaxnet.closed_form.registry`):
+no element sits on a kink), for every term with a closed form (declared by the term, :mod:`jaxnet.closed_form`):
 
 * **element**: the (3k, 3k) element matrices of all the term's elements, vmapped and jitted, by the closed
   form and by autodiff (``jax.jacfwd`` of ``jax.grad`` for energies, ``jax.jacfwd`` for forces: the
@@ -38,7 +38,6 @@ import numpy as np
 
 import jaxnet  # noqa: F401  (float64)
 from jaxnet import assemble, model as model_lib
-from jaxnet.closed_form import registry
 from jaxnet.net import Twine
 from jaxnet.scenes.codend import codend
 
@@ -84,8 +83,7 @@ def element_functions(term, scene, state, all_modes=True):
     k = assemble.connectivity(scene, family).shape[1]
     out = {}
     if term.term.kind == "energy":
-        energy = assemble._family_energy((term,), family)
-        flat = lambda v, p: energy(v.reshape(k, 3), p, env)  # noqa: E731
+        flat = lambda v, p: term.energy(v.reshape(k, 3), p, env)  # noqa: E731
         modes = {"jacfwd(grad)": lambda f: jax.jacfwd(jax.grad(f)),
                  "hessian": jax.hessian,
                  "jacrev(grad)": lambda f: jax.jacrev(jax.grad(f))}
@@ -93,15 +91,9 @@ def element_functions(term, scene, state, all_modes=True):
             out[name] = (lambda mode: lambda xe, p: jax.vmap(
                 lambda v, q: mode(lambda w: flat(w, q))(v.ravel()))(xe, p))(mode)
     else:
-        force = assemble._family_force((term,), family)
-        flat = lambda v, p: force(v.reshape(k, 3), p, env, state).ravel()  # noqa: E731
+        flat = lambda v, p: term.force(v.reshape(k, 3), p, env, state.get(term.name)).ravel()  # noqa: E731
         out["jacfwd"] = lambda xe, p: jax.vmap(lambda v, q: -jax.jacfwd(lambda w: flat(w, q))(v.ravel()))(xe, p)
-    hand = registry.STIFFNESS[term.name].stiffness
-    options = term.kwargs()
-    if term.term.kind == "energy":
-        out["closed form"] = lambda xe, p: jax.vmap(lambda v, q: hand(v, q, env, **options))(xe, p)
-    else:
-        out["closed form"] = lambda xe, p: jax.vmap(lambda v, q: hand(v, q, env, state.get(term.name), **options))(xe, p)
+    out["closed form"] = lambda xe, p: jax.vmap(lambda v, q: term.stiffness(v, q, env, state.get(term.name)))(xe, p)
     return out
 
 
@@ -116,7 +108,7 @@ def measure(triangles, repeats, all_modes=True, only=None, elements=True):
     x = jnp.asarray(np.asarray(scene.nodes.position) + 1e-4 * rng.normal(size=scene.nodes.position.shape))
     state = assemble.states(x, scene, model)
     rows = []
-    covered = [t for t in model if registry.covered(t) and (only is None or t.name in only)]
+    covered = [t for t in model if t.has_closed_form() and (only is None or t.name in only)]
     for term in covered:
         family = term.term.family
         conn = assemble.connectivity(scene, family)
@@ -139,7 +131,7 @@ def measure(triangles, repeats, all_modes=True, only=None, elements=True):
         rows.append(dict(elements=int(scene.netting.vertices.shape[0]), term="all terms", level="assembled",
                          method=path, count=int(scene.netting.vertices.shape[0]),
                          **dict(zip(("compile_s", "run_ms", "temp_mb"), timed(fn, (x, pattern), repeats)))))
-    uncovered = [t.name for t in model if t.term.kind in ("energy", "force") and not registry.covered(t)]
+    uncovered = [t.name for t in model if t.term.kind in ("energy", "force") and not t.has_closed_form()]
     return rows, uncovered
 
 

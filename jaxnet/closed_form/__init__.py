@@ -9,7 +9,7 @@ derives a stiffness, the same matrix K = -dF/dx (4.46) written out by hand, in t
 independent, so that comparing them tests both.
 
 One module per term, named as in :mod:`jaxnet.terms`; :mod:`jaxnet.closed_form.chain` holds the chain
-rule from twine vectors to vertices they all share; :mod:`jaxnet.closed_form.registry` maps the
-registered terms of :data:`jaxnet.model.TERMS` onto these functions, for
-``Newton(stiffness="closed_form")``.
+rule from twine vectors to vertices they all share. A term names its closed form in its declaration
+(:class:`jaxnet.terms.term.ClosedForm`): a function here with the term's element signature, returning its
+element matrix; :meth:`jaxnet.model.ActiveTerm.has_closed_form` says where it applies.
 """

@@ -39,7 +39,7 @@ bar, 1 node). ``velocity_slope`` is that dc/dz (m/s per m) at the centroid (:fun
 
 A moving net (an implicit time step, 4.266 and 4.272-4.276). Vertex i of an element takes its share of the
 element's drag computed with the water's velocity relative to it, c_i = w(x_i) - v_i, w the current at the
-vertex's depth plus the waves' orbital velocity, v_i = (x_i - x_i^n)/Δt (:func:`jaxnet.model._per_vertex`).
+vertex's depth plus the waves' orbital velocity, v_i = (x_i - x_i^n)/Δt (:func:`jaxnet.terms.drag.per_vertex`).
 Row block i of K = -∂F/∂x then holds the same twine terms as above taken at c_i, and on its diagonal block
 ∂F/∂c (∂w/∂x(x_i) - I/Δt): the water's velocity varying over the vertex's position (current profile,
 :meth:`jaxnet.waves.Airy.velocity_gradient`) and the damping of the vertex's own velocity
@@ -347,7 +347,7 @@ def node_drag_stiffness(drag_area, water_velocity, water_density, velocity_slope
 def _relative_stiffness(coefficients, jacobians, j_velocity, water_gradient, time_step):
     """(3k, 3k) K = -∂F/∂x (N/m) of an element force of which vertex i takes 1/k of the element's drag
     computed with the water's velocity relative to vertex i, c_i = w(x_i) - (x_i - x_i^n)/Δt (book
-    4.272-4.276; :func:`jaxnet.model._per_vertex`).
+    4.272-4.276; :func:`jaxnet.terms.drag.per_vertex`).
 
     Row block i, column block j:
         -(1/k) [Σ_p coefficients[p][j] jacobians[p][i] + δ_ij j_velocity[i] (∂w/∂x(x_i) - I/Δt)].
@@ -468,3 +468,4 @@ def current_slope(z, speed, direction, profile_depth, profile_factor, surface_le
         slope = jnp.where(inside, rise / run, 0.0)
     # depth = s - z: d/dz = -d/d(depth)
     return (-speed * slope)[..., None] * unit
+

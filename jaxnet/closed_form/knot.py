@@ -124,3 +124,10 @@ def knot_contact_stiffness(x, uv, l0, knot_size, stiffness=None, *, ea=None, ban
             return stiffness * p
 
     return angle_energy_hessian(x, uv, slope, curvature)
+
+
+def knot_contact_stiffness_per_form(x, uv, l0, knot_size, stiffness, knot_form, forms):
+    """(9, 9) stiffness (N/m) of :func:`jaxnet.terms.knot.knot_contact` (same arguments): each triangle under
+    its own contact law, :func:`knot_contact_stiffness` of each law present."""
+    return knot.per_form(lambda form: knot_contact_stiffness(x, uv, l0, knot_size, stiffness, form=form), forms,
+                         knot_form)

@@ -129,3 +129,9 @@ def catch_pressure_stiffness(x, pressure, front, axis, sign=1.0):
     dF = w[:, None, None, None] * jnp.transpose(dn, (1, 0, 2))[None] \
         + n[None, :, None, None] * dw[:, None, :, None] * axis[None, None, None, :]
     return (-(sign * pressure) * dF).reshape(9, 9)
+
+
+def catch_pressure_on_element_stiffness(x, state, sign):
+    """(9, 9) stiffness (N/m) of :func:`jaxnet.terms.pressure.catch_pressure_on_element` (same arguments): the
+    catch front of ``state`` held fixed (:mod:`jaxnet.assemble` says why)."""
+    return catch_pressure_stiffness(x, state["pressure"], state["front"], state["axis"], sign)

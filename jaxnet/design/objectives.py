@@ -38,11 +38,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxnet import assemble, catch as catch_lib, geometry, model as model_lib
-from jaxnet.terms import cable, hexagonal, tension
-
-#: the terms through which the water acts on the net: twine, bar and node drag and the catch's pressure
-#: (the catch's drag); their sum is the towing resistance of a trawl, the current load of a cage.
-HYDRODYNAMIC_TERMS = ("netting_drag", "bar_drag", "node_drag", "node_box_drag", "catch_pressure")
+from jaxnet.terms import cable, hexagonal, tension, term as term_lib
 
 #: element families that carry tensions (and material): diamond netting, hexagonal netting, cable bars
 TENSION_FAMILIES = ("netting", "hexagonal", "bars")
@@ -159,13 +155,13 @@ class Drag(Figure):
         return jnp.dot(total, _unit(jnp.asarray(d, o.x.dtype)))
 
 
-def drag(direction=None, terms=HYDRODYNAMIC_TERMS) -> Drag:
+def drag(direction=None, terms=None) -> Drag:
     """Hydrodynamic drag (N): the sum over all nodes of the forces of the drag terms, along ``direction``.
 
     direction: (3,) any non-zero length; None: the scene's current direction (the towing resistance of a
       trawl, the current load of a cage, positive downstream).
-    terms: names of the force terms counted (default :data:`HYDRODYNAMIC_TERMS`: twine, bar and node drag
-      and the catch's pressure; ``("netting_drag",)`` for the netting alone); terms absent from the model
+    terms: names of the force terms counted (default :func:`jaxnet.terms.term.hydrodynamic_terms`: twine, bar
+      and node drag and the catch's pressure; ``("netting_drag",)`` for the netting alone); terms absent from the model
       count zero. The force of the modelled part (a quarter model gives a quarter of the cod-end's drag),
       which is what the model's reactions balance.
     Differentiated through everything the forces depend on, the catch front's position included (implicit
@@ -173,8 +169,8 @@ def drag(direction=None, terms=HYDRODYNAMIC_TERMS) -> Drag:
     sweeps a node, a kink where an edge lies in the front plane (:mod:`jaxnet.terms.pressure`) and where the
     net just holds the catch (the front jumps to the mouth); gradients finite throughout.
     """
-    force_terms = {t.name for t in model_lib.TERMS if t.kind == "force"}
-    terms = tuple(terms)
+    force_terms = {t.name for t in term_lib.registered() if t.kind == term_lib.FORCE}
+    terms = term_lib.hydrodynamic_terms() if terms is None else tuple(terms)
     unknown = [t for t in terms if t not in force_terms]
     if unknown or not terms:
         raise ValueError(f"drag: terms must be force terms among {sorted(force_terms)}, got {unknown or terms!r}")
@@ -371,20 +367,21 @@ def max_tension(softness=1.0, families=TENSION_FAMILIES) -> MaxTension:
 # -- material --------------------------------------------------------------------------------------
 
 
-def _twine_lengths(scene, families):
-    """(length (m), diameter (m), density (kg/m³)) per element of each family present: the twines of a
-    diamond triangle are |d| of length l0 (|d|/2 U and |d|/2 V twines, 4.25-4.26), of a hexagonal one |d|
-    of each family (after 4.82); a bar is its rest length. The same counts as the weight (4.277)."""
+def _twines(scene, families):
+    """(count, length (m), diameter (m), density (kg/m³)) per element of each family present: a diamond
+    triangle holds |d| twines of length l0 (|d|/2 U and |d|/2 V twines, 4.25-4.26), a hexagonal one |d| of
+    each family (after 4.82: length the sum of the three l0), a bar one of its rest length. The same counts as
+    the weight (4.277)."""
     out = []
     if "netting" in families and scene.netting is not None:
         n = scene.netting
-        out.append((jnp.abs(geometry.twine_determinant(n.uv)) * n.l0, n.diameter, n.density))
+        out.append((jnp.abs(geometry.twine_determinant(n.uv)), n.l0, n.diameter, n.density))
     if "hexagonal" in families and scene.hexagonal is not None:
         h = scene.hexagonal
-        out.append((jnp.abs(geometry.twine_determinant(h.uv)) * jnp.sum(h.l0, axis=-1), h.diameter, h.density))
+        out.append((jnp.abs(geometry.twine_determinant(h.uv)), jnp.sum(h.l0, axis=-1), h.diameter, h.density))
     if "bars" in families and scene.bars is not None:
         b = scene.bars
-        out.append((jnp.asarray(b.rest_length), b.diameter, b.density))
+        out.append((1.0, jnp.asarray(b.rest_length), b.diameter, b.density))
     return out
 
 
@@ -397,8 +394,8 @@ class Material(Figure):
 
     def __call__(self, o: Outcome):
         total = jnp.zeros((), o.x.dtype)
-        for length, diameter, density in _twine_lengths(o.scene, self.families):
-            per = length if self.what == "length" else length * jnp.pi * diameter**2 / 4.0 * density
+        for count, length, diameter, density in _twines(o.scene, self.families):
+            per = count * length if self.what == "length" else geometry.twine_volume(count, length, diameter) * density
             total = total + jnp.sum(per)
         return total if self.price_per_kg is None else self.price_per_kg * total
 

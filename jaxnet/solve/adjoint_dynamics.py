@@ -42,7 +42,7 @@ positions, velocities, out-of-balance force, the scene at that time, the step th
 any pytree of arrays:
 :func:`reactions`, :func:`mooring_force` (the resultant of the reactions at fixed nodes: minus the
 out-of-balance force there, the inertia of the step included), :func:`drag` (by the groups of
-:data:`jaxnet.solve.dynamics.DRAG_GROUPS`), :func:`enclosed_volume`. :func:`series` gives the figure at
+:func:`jaxnet.terms.term.drag_groups`), :func:`enclosed_volume`. :func:`series` gives the figure at
 every step (n, ...); :func:`integrate` reduces it to a scalar with :func:`mean` or :func:`smooth_peak`
 (log-sum-exp: a differentiable maximum, within a stated bound of the true one).
 
@@ -76,7 +76,7 @@ import numpy as np
 
 from jaxnet import assemble, catch as catch_lib, geometry, model as model_lib
 from jaxnet.solve import dynamics, implicit, statics
-from jaxnet.terms import inertia
+from jaxnet.terms import inertia, term as term_lib
 
 __all__ = ["Instant", "lumped_masses", "step_force", "implicit_step", "series", "trajectory", "integrate", "mean",
            "smooth_peak", "reactions", "mooring_force", "drag", "enclosed_volume"]
@@ -356,12 +356,13 @@ def mooring_force(now: Instant, nodes=None, direction=None):
 
 
 def drag(now: Instant, group=None):
-    """(3,) the total drag (N) of a group of :data:`jaxnet.solve.dynamics.DRAG_GROUPS` (``"drag_netting_N"``,
+    """(3,) the total drag (N) of a drag group (:func:`jaxnet.terms.term.drag_groups`: ``"drag_netting_N"``,
     ``"drag_cables_N"``, ``"drag_nodes_N"``), or of every drag term (``group=None``), on the velocities of
     the step relative to the water."""
-    if group is not None and group not in dynamics.DRAG_GROUPS:
-        raise ValueError(f"drag: group must be one of {tuple(dynamics.DRAG_GROUPS)} or None, got {group!r}")
-    names = sum(dynamics.DRAG_GROUPS.values(), ()) if group is None else dynamics.DRAG_GROUPS[group]
+    drag_groups = term_lib.drag_groups()
+    if group is not None and group not in drag_groups:
+        raise ValueError(f"drag: group must be one of {tuple(drag_groups)} or None, got {group!r}")
+    names = sum(drag_groups.values(), ()) if group is None else drag_groups[group]
     terms = tuple(t for t in now.structure.model if t.name in names)
     if not terms:
         return jnp.zeros(3)

@@ -65,7 +65,7 @@ import numpy as np
 
 from jaxnet import assemble, catch as catch_lib, geometry, model as model_lib, scene as scene_lib
 from jaxnet.solve import programs, statics
-from jaxnet.terms import inertia
+from jaxnet.terms import drag, inertia, term as term_lib
 
 #: stop reasons of a dynamic run (``State.status``)
 RUNNING, DONE, STEP_FAILED = 0, 1, 2
@@ -90,7 +90,7 @@ class Implicit:
       nearly undamped (inertia makes the step's tangent regular), without the static continuation, and with
       the hand-derived stiffness where a term has one (``stiffness="closed_form"``: the same matrix as
       autodiff to rounding, tested; the drag, which depends on the velocities here, takes its closed form
-      where the assembly hands it the vertices' velocities, :func:`jaxnet.closed_form.registry.covered`).
+      where the assembly hands it the vertices' velocities, :meth:`jaxnet.model.ActiveTerm.has_closed_form`).
       Why not autodiff as in statics: a time step is a few iterations, so the tangent is a large part of its
       cost, and the moving drag's autodiff tangent (jacfwd through the drag computed once per vertex) is most
       of it: on the 339-unknown cage in waves, 2.34 Newton iterations per step, a step takes 3.9 ms with the
@@ -261,7 +261,7 @@ def water_acceleration(points, scene_t, loading: Loading, waves: bool):
     accel = jnp.zeros_like(points)
     if loading.current_speed is not None:
         rate = jax.jacfwd(loading.current_speed)(env.time)
-        per_speed = model_lib.water_velocity_at(points, eqx.tree_at(lambda e: e.current_speed, env, 1.0), False)
+        per_speed = drag.water_velocity_at(points, eqx.tree_at(lambda e: e.current_speed, env, 1.0), False)
         accel = accel + rate * per_speed
     if waves:
         accel = accel + env.waves.acceleration(points, env.time)
@@ -364,18 +364,14 @@ _advance_jit = programs.jit(advance, static_argnames=("model", "newton"))
 
 # -- what a record holds ---------------------------------------------------------------------------------
 
-#: the drag groups of a record: name -> terms
-DRAG_GROUPS = {"drag_netting_N": ("netting_drag",), "drag_cables_N": ("bar_drag",),
-               "drag_nodes_N": ("node_drag", "node_box_drag")}
-
-
 def _totals(state: State, scene, loading, model):
-    """(3,) total drag (N) of each :data:`DRAG_GROUPS` group at the state (relative velocities included), and
+    """(3,) total drag (N) of each drag group (:func:`jaxnet.terms.term.drag_groups`) at the state (relative
+    velocities included), and
     the volume held (m³) when the scene has an enclosure; one compiled program per run."""
     scene_t = scene_at(scene, loading, state.t)
     motion = assemble.Motion(state.x - state.last_step * state.v, state.last_step)
     out = {}
-    for group, names in DRAG_GROUPS.items():
+    for group, names in term_lib.drag_groups().items():
         terms = tuple(t for t in model if t.name in names)
         if terms:
             out[group] = jnp.sum(assemble.forces(state.x, scene_t, terms, None, motion), axis=0)

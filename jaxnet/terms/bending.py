@@ -101,6 +101,7 @@ import numpy as np
 from jax.custom_derivatives import SymbolicZero
 
 from jaxnet import geometry
+from jaxnet.terms.term import ENERGY, ClosedForm, Term, any_nonzero, register
 
 # Squares of lengths (m²) or of products of lengths below this are treated as a collapsed hinge: the
 # quantity divided by is replaced by 1 and the result by 0 ("double where"), so that value, gradient and
@@ -442,3 +443,10 @@ def hinge_couples(x, uv, l0, ei):
     # N sqrt(sinphi_a sinphi_b) = sqrt(T_f); the square root is only for output, never differentiated at 0
     scale = 4.0 * ei * jnp.abs(theta) / (l0 * _count_sum(uv))
     return scale * jnp.sqrt(t_u), scale * jnp.sqrt(t_v)
+
+
+TWINE_BENDING = register(Term(
+    name="twine_bending", family="hinges", kind=ENERGY, element=hinge_energy,
+    arguments=lambda p, env: {"uv": p.uv, "l0": p.l0, "ei": p.stiffness},
+    active=lambda scene, dynamic: {} if scene.hinges is not None and any_nonzero(scene.hinges.stiffness) else None,
+    elastic=True, closed_form=ClosedForm("jaxnet.closed_form.bending:hinge_stiffness")))

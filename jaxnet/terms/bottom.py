@@ -68,6 +68,10 @@ Units: positions and limits in m, stiffness in N/m, energies in J, forces in N.
 from __future__ import annotations
 
 import jax.numpy as jnp
+import numpy as np
+
+from jaxnet import scene as scene_lib
+from jaxnet.terms.term import BOTTOM, ENERGY, FORCE, Term, any_nonzero, has_current, register
 
 
 def penetration(x, limit, sense):
@@ -144,3 +148,50 @@ def friction_force(x, limit, sense, stiffness, band, friction, direction, axis, 
     on_floor = sense[axis] == floor
     normal = stiffness * contact_force(jnp.where(on_floor, p, 0.0), band)
     return (friction * normal) * direction
+
+
+# -- the terms -------------------------------------------------------------------------------------
+
+
+def _contact(x, limit, sense, stiffness, band):
+    return contact_energy(x[0], limit, sense, stiffness, band)
+
+
+def _friction(x, state, limit, sense, stiffness, band, friction, direction, axis, floor):
+    return friction_force(x[0], limit, sense, stiffness, band, friction, direction, axis, floor)[None, :]
+
+
+def _contact_arguments(p, env):
+    return {"limit": p.limit, "sense": p.limit_sense, "stiffness": env.bottom_stiffness, "band": env.bottom_band}
+
+
+def _friction_arguments(p, env, axis, floor):
+    return {**_contact_arguments(p, env), "friction": env.bottom_friction,
+            "direction": sliding_direction(env.current_direction, axis), "axis": axis, "floor": floor}
+
+
+def _contact_active(scene, dynamic):
+    n = scene.nodes
+    limited = n.limit is not None and n.limit_sense is not None and any_nonzero(n.limit_sense)
+    return {} if limited and scene.environment.bottom_stiffness > 0 else None
+
+
+def _friction_active(scene, dynamic):
+    env = scene.environment
+    if _contact_active(scene, dynamic) is None or not env.bottom_friction > 0 or not has_current(scene):
+        return None
+    where = scene_lib.bottom_axis(env)
+    if where is None:
+        return None  # scene.validate names the problem
+    axis, floor = where
+    on_floor = np.any(np.asarray(scene.nodes.limit_sense)[:, axis] == floor)
+    sliding = np.any(np.delete(np.asarray(env.current_direction, dtype=float), axis) != 0)
+    return {"axis": axis, "floor": floor} if on_floor and sliding else None
+
+
+BOTTOM_CONTACT = register(Term(
+    name="bottom_contact", family="nodes", kind=ENERGY, element=_contact, arguments=_contact_arguments,
+    active=_contact_active, group=BOTTOM))
+BOTTOM_FRICTION = register(Term(
+    name="bottom_friction", family="nodes", kind=FORCE, element=_friction, arguments=_friction_arguments,
+    active=_friction_active, group=BOTTOM))

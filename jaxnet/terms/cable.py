@@ -7,7 +7,8 @@ energy of :func:`jaxnet.terms.tension.elastic_energy` (separate traction and com
 from __future__ import annotations
 
 from jaxnet import geometry
-from jaxnet.terms.tension import elastic_energy, tension
+from jaxnet.terms.tension import elastic_energy, tension, tension_activity
+from jaxnet.terms.term import ENERGY, ClosedForm, Term, register
 
 
 def bar_energy(x, rest_length, ea_traction, ea_compression=None):
@@ -18,3 +19,13 @@ def bar_energy(x, rest_length, ea_traction, ea_compression=None):
 def bar_tension(x, rest_length, ea_traction, ea_compression=None):
     """Tension (N, positive in traction) of one bar, for output."""
     return tension(geometry.safe_norm(x[1] - x[0]), rest_length, ea_traction, ea_compression)
+
+
+def _arguments(p, env, compression):
+    return {"rest_length": p.rest_length, "ea_traction": p.ea_traction,
+            "ea_compression": p.ea_compression if compression else None}
+
+
+BAR_TENSION = register(Term(
+    name="bar_tension", family="bars", kind=ENERGY, element=bar_energy, arguments=_arguments,
+    active=tension_activity("bars"), elastic=True, closed_form=ClosedForm("jaxnet.closed_form.tension:bar_stiffness")))

@@ -105,9 +105,17 @@ the tangent sees dc/dz too (the book's 4.157 takes c constant).
 
 from __future__ import annotations
 
-import jax.numpy as jnp
+import dataclasses
+from typing import Callable
 
-from jaxnet import geometry
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxnet import current, geometry
+from jaxnet.terms import pressure, screen
+from jaxnet.scene import has_free_surface
+from jaxnet.terms.term import (DRAG_CABLES, DRAG_NETTING, DRAG_NODES, FORCE, ClosedForm, Term, any_nonzero, flowing, moving_options, register)
 
 
 def twine_drag(axis, length, diameter, cd_normal, cd_tangential, water_velocity, water_density):
@@ -278,3 +286,197 @@ def box_drag(length, drag_coefficient, water_velocity, water_density, immersed_f
     lx, ly, lz = length[0], length[1], jnp.abs(length[2])
     area = immersed_fraction * jnp.stack([ly * lz, lx * lz, lx * ly])
     return (0.5 * water_density * geometry.safe_norm(water_velocity)) * drag_coefficient * area * water_velocity
+
+
+# -- the water's velocity seen by an element ------------------------------------------------------
+
+
+def water_velocity(x, env):
+    """Current (3,) in m/s at the centroid of an element's vertices x (k, 3): what a static drag sees. Computed
+    inside the differentiated function, so that the stiffness sees how the current varies with depth."""
+    z = jnp.dot(geometry.centroid(x), env.up)
+    return current.current_velocity(z, env.current_speed, env.current_direction, env.profile_depth,
+                                    env.profile_factor, env.surface_level)
+
+
+def water_velocity_at(points, env, waves):
+    """Velocity (..., 3) in m/s of the water at ``points`` (..., 3) and at the environment's time: the
+    current at each point's depth, plus the waves' orbital velocity when ``waves`` (static) is True."""
+    z = points @ env.up
+    c = current.current_velocity(z, env.current_speed, env.current_direction, env.profile_depth,
+                                 env.profile_factor, env.surface_level)
+    if waves:
+        c = c + env.waves.velocity(points, env.time)
+    return c
+
+
+def per_vertex(force, x, env, velocity, waves):
+    """Dynamics (book 4.272-4.276): vertex i of an element takes its share of the element's drag computed
+    with the water's velocity relative to vertex i. ``force(c) -> (k, 3)`` is the element's drag shared
+    over its k vertices for a uniform relative velocity c; row i of force(c_i) is vertex i's share."""
+    relative = water_velocity_at(x, env, waves) - velocity
+    # one batched evaluation (not k unrolled copies: a third of the program to compile)
+    shares = jax.vmap(force)(relative)  # (k, k, 3): [i] the shares of all vertices for vertex i's velocity
+    return shares[jnp.arange(x.shape[0]), jnp.arange(x.shape[0])]
+
+
+# -- how the current loads netting -----------------------------------------------------------------
+
+
+@dataclasses.dataclass(frozen=True)
+class NettingDragModel:
+    """One way the current loads diamond netting (``Netting.drag_model`` code: its index in
+    :data:`NETTING_DRAG_MODELS`).
+
+    name: the material's name for it (``Twine.drag_model``). scope: its name in compiled programs.
+    force: ``force(x, uv, l0, diameter, cd_normal, cd_tangential, c, rho) -> (3, 3)`` vertex forces (N) of a
+      triangle in a uniform relative velocity c (m/s). twines: made of twine drags (Cd, f), so present only
+      where some Cd is not zero.
+    """
+
+    name: str
+    scope: str
+    force: Callable
+    twines: bool
+
+
+def _screen_force(model):
+    return lambda x, uv, l0, diameter, cd_normal, cd_tangential, c, rho: model(x, uv, l0, diameter, c, rho)
+
+
+#: netting drag models, by code
+NETTING_DRAG_MODELS = (
+    NettingDragModel("twines", "twine_drag", netting_drag, twines=True),
+    NettingDragModel("loland", "loland_screen", _screen_force(screen.loland_force), twines=False),
+    NettingDragModel("kristiansen-faltinsen", "kristiansen_faltinsen_screen",
+                     _screen_force(screen.kristiansen_faltinsen_force), twines=False),
+    # FEMNET's drag of netting ahead of a catch (trainee_front -> trainee_fil): the twine drag along the
+    # current, the U twines' cross-flow part turned onto the V twines' (netting_drag_femnet_catch)
+    NettingDragModel("femnet-catch", "femnet_catch_drag", netting_drag_femnet_catch, twines=True),
+)
+
+
+# -- the terms -------------------------------------------------------------------------------------
+
+
+def netting_drag_on_element(x, state, uv, l0, diameter, cd_normal, cd_tangential, drag_model, env, models,
+                            shielded, moving=False, waves=False, velocity=None):
+    """Drag (3, 3) in N on one netting triangle, by its drag model (``drag_model``: a code of
+    :data:`NETTING_DRAG_MODELS`; ``models``: the codes present in the scene, static). In statics the water's
+    velocity is the current at the centroid; in dynamics (``moving``) each vertex takes its share with the
+    velocity relative to it (:func:`per_vertex`). ``shielded``: the scene has a catch, whose front is in
+    ``state`` (:func:`jaxnet.terms.pressure.catch_state`)."""
+    rho = env.water_density
+    total = jnp.zeros((3, 3))
+    for code in models:
+        model = NETTING_DRAG_MODELS[code]
+
+        def force(c, model=model):
+            return model.force(x, uv, l0, diameter, cd_normal, cd_tangential, c, rho)
+
+        with jax.named_scope(model.scope):
+            f = per_vertex(force, x, env, velocity, waves) if moving else force(water_velocity(x, env))
+        total = total + (f if len(models) == 1 else jnp.where(drag_model == code, f, 0.0))
+    if shielded:
+        # netting behind the catch front is backed by fish: the water does not flow through it, and the
+        # catch pressure replaces its drag, as in FEMNET. The part of the triangle ahead of the front keeps
+        # its drag, spread as the consistent load of that part (continuous as the front sweeps the element).
+        behind = pressure.clipped_shape_integrals(pressure.front_heights(x, state["front"], state["axis"]))
+        total = total * (1.0 - 3.0 * behind)[:, None]
+    return total
+
+
+def bar_drag_on_element(x, state, rest_length, diameter, cd_normal, cd_tangential, env, moving=False, waves=False,
+                        velocity=None):
+    """Drag (2, 3) in N on one cable bar: at the current at its middle in statics, per end in dynamics."""
+    def force(c):
+        return bar_drag(x, rest_length, diameter, cd_normal, cd_tangential, c, env.water_density)
+
+    return per_vertex(force, x, env, velocity, waves) if moving else force(water_velocity(x, env))
+
+
+def node_water_velocity(x, env, moving, waves, velocity):
+    """The water's velocity (3,) in m/s relative to a node's body (x: (1, 3)): the current there in statics,
+    minus the node's velocity in dynamics."""
+    return water_velocity_at(x[0], env, waves) - velocity[0] if moving else water_velocity(x, env)
+
+
+def node_drag_on_element(x, state, drag_area, env, moving=False, waves=False, velocity=None):
+    """Drag (1, 3) in N on a node's body of drag area Cd·A (:func:`node_drag`)."""
+    c = node_water_velocity(x, env, moving, waves, velocity)
+    return node_drag(drag_area, c, env.water_density)[None, :]
+
+
+def box_drag_on_element(x, state, length, drag_coefficient, env, floating, moving=False, waves=False, velocity=None):
+    """Drag (1, 3) in N on a node's box body (:func:`box_drag`); only with a free surface (``floating``) can
+    a box be partly immersed, without one it is wholly under water."""
+    c = node_water_velocity(x, env, moving, waves, velocity)
+    f = box_immersed_fraction(jnp.dot(x[0], env.up), length[2], env.surface_level) if floating else 1.0
+    return box_drag(length, drag_coefficient, c, env.water_density, f)[None, :]
+
+
+def _netting_arguments(p, env, models, shielded, **motion):
+    return {"uv": p.uv, "l0": p.l0, "diameter": p.diameter, "cd_normal": p.cd_normal,
+            "cd_tangential": p.tangential_ratio * p.cd_normal, "drag_model": p.drag_model, "env": env,
+            "models": models, "shielded": shielded, **motion}
+
+
+def _bar_arguments(p, env, **motion):
+    return {"rest_length": p.rest_length, "diameter": p.diameter, "cd_normal": p.cd_normal,
+            "cd_tangential": p.tangential_ratio * p.cd_normal, "env": env, **motion}
+
+
+def _netting_active(scene, dynamic):
+    net = scene.netting
+    if net is None or not flowing(scene, dynamic) or net.drag_model is None:
+        return None
+    codes = np.asarray(net.drag_model)
+    has_cd = (np.asarray(net.cd_normal) != 0) if net.cd_normal is not None else np.zeros(codes.shape, bool)
+    present = set(codes.tolist())
+    models = tuple(sorted(code for code in present if not NETTING_DRAG_MODELS[code].twines
+                          or np.any((codes == code) & has_cd)))
+    if not models:
+        return None
+    return {"models": models, "shielded": scene.catch is not None, **moving_options(scene, dynamic)}
+
+
+def _bar_active(scene, dynamic):
+    bars = scene.bars
+    if bars is None or not flowing(scene, dynamic) or not any_nonzero(bars.cd_normal):
+        return None
+    return moving_options(scene, dynamic)
+
+
+def _node_active(scene, dynamic):
+    return moving_options(scene, dynamic) if flowing(scene, dynamic) and any_nonzero(scene.nodes.drag_area) else None
+
+
+def _box_active(scene, dynamic):
+    n = scene.nodes
+    if not flowing(scene, dynamic) or n.drag_length is None or n.drag_coefficient is None:
+        return None
+    length, cd = np.abs(np.asarray(n.drag_length, dtype=float)), np.asarray(n.drag_coefficient, dtype=float)
+    # Cd times the area of each face (the vertical one counts when it has any size)
+    faces = np.stack([length[:, 1] * length[:, 2], length[:, 0] * length[:, 2], length[:, 0] * length[:, 1]], axis=1)
+    return {"floating": has_free_surface(scene), **moving_options(scene, dynamic)} if any_nonzero(cd * faces) else None
+
+
+NETTING_DRAG = register(Term(
+    name="netting_drag", family="netting", kind=FORCE, element=netting_drag_on_element, arguments=_netting_arguments,
+    active=_netting_active, group=DRAG_NETTING, moving=True, state=pressure.catch_state,
+    closed_form=ClosedForm("jaxnet.closed_form.drag_elements:netting_drag_on_element_stiffness",
+                           covers=lambda options: all(NETTING_DRAG_MODELS[c].twines for c in options["models"]))))
+BAR_DRAG = register(Term(
+    name="bar_drag", family="bars", kind=FORCE, element=bar_drag_on_element, arguments=_bar_arguments,
+    active=_bar_active, group=DRAG_CABLES, moving=True,
+    closed_form=ClosedForm("jaxnet.closed_form.drag_elements:bar_drag_on_element_stiffness")))
+NODE_DRAG = register(Term(
+    name="node_drag", family="nodes", kind=FORCE, element=node_drag_on_element,
+    arguments=lambda p, env, **motion: {"drag_area": p.drag_area, "env": env, **motion},
+    active=_node_active, group=DRAG_NODES, moving=True,
+    closed_form=ClosedForm("jaxnet.closed_form.drag_elements:node_drag_on_element_stiffness")))
+NODE_BOX_DRAG = register(Term(
+    name="node_box_drag", family="nodes", kind=FORCE, element=box_drag_on_element,
+    arguments=lambda p, env, floating, **motion: {"length": p.drag_length, "drag_coefficient": p.drag_coefficient,
+                                                  "env": env, "floating": floating, **motion},
+    active=_box_active, group=DRAG_NODES, moving=True))

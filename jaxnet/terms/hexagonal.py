@@ -65,7 +65,9 @@ import jax
 import jax.numpy as jnp
 
 from jaxnet import geometry
-from jaxnet.terms.tension import elastic_energy, tension
+from jaxnet.terms.tension import elastic_energy, tension, tension_activity
+from jaxnet.terms.gravity import hexagonal_weight, netting_arguments, weight_activity
+from jaxnet.terms.term import ENERGY, LOAD, WEIGHT, Term, register
 
 #: Order of the twine families in every (3,) parameter or result of this module.
 FAMILIES = ("l", "m", "n")
@@ -334,3 +336,16 @@ def hexagonal_tensions(x, uv, l0, ea_traction, ea_compression=None):
     U, V, _ = geometry.twine_vectors(x, uv)
     theta = knot_equilibrium(U, V, l0, ea_traction, ea_compression)
     return _family_tensions(theta, U, V, l0, ea_traction, ea_compression)[2]
+
+
+def _arguments(p, env, compression):
+    return {"uv": p.uv, "l0": p.l0, "ea_traction": p.ea_traction,
+            "ea_compression": p.ea_compression if compression else None}
+
+
+HEXAGONAL_TENSION = register(Term(
+    name="hexagonal_tension", family="hexagonal", kind=ENERGY, element=hexagonal_energy, arguments=_arguments,
+    active=tension_activity("hexagonal"), elastic=True))
+HEXAGONAL_WEIGHT = register(Term(
+    name="hexagonal_weight", family="hexagonal", kind=LOAD, element=hexagonal_weight, arguments=netting_arguments,
+    active=weight_activity("hexagonal", at_surface=None), group=WEIGHT))

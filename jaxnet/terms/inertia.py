@@ -93,5 +93,5 @@ def netting_vertex_mass(uv, l0, diameter, density):
     element's |d| twine vectors of length l0 (m) and diameter D (m), |d| π D²/4 l0 / 3 (the twine volume
     of the weight 4.277), times the netting ``density`` (kg/m³) for the mass. uv: (3, 2) twine
     coordinates."""
-    volume = jnp.abs(geometry.twine_determinant(uv)) * jnp.pi * diameter**2 / 4.0 * l0 / 3.0
+    volume = geometry.twine_volume(jnp.abs(geometry.twine_determinant(uv)), l0, diameter) / 3.0
     return density * volume, volume

@@ -89,6 +89,7 @@ import numpy as np
 
 from jaxnet import geometry
 from jaxnet.terms.opening import half_angle
+from jaxnet.terms.term import ENERGY, ClosedForm, Term, any_nonzero, register
 
 DEFAULT_BAND_FRACTION = 0.1
 FORMS = ("book", "femnet")
@@ -255,3 +256,41 @@ def femnet_contact_force(x, uv, l0, knot_size, stiffness=None, *, ea=None):
     active = (alpha < contact) | (alpha > other)
     slope = jax.grad(cosine)(x) / (2.0 * jnp.sin(jnp.maximum(alpha, _FEMNET_MIN_ANGLE)))
     return jnp.where(active, d * stiffness * (alpha - rest), 0.0) * slope
+
+
+# -- the term --------------------------------------------------------------------------------------
+
+
+def per_form(contact, forms, knot_form):
+    """The contact of the laws ``forms`` (codes: indices into :data:`FORMS`) present in a scene, each kept
+    where the triangle's ``knot_form`` code is its own: ``contact(form name)`` summed over the forms (a
+    single form is not masked). Shared by the energy and its closed-form stiffness."""
+    total = 0.0
+    for code in forms:
+        value = contact(FORMS[code])
+        total = total + (value if len(forms) == 1 else jnp.where(knot_form == code, value, 0.0))
+    return total
+
+
+def knot_contact(x, uv, l0, knot_size, stiffness, knot_form, forms):
+    """Energy (J) of the knot contacts of one triangle under its law (``knot_form``: a code of :data:`FORMS`;
+    ``forms``: the codes present in the scene, static); :func:`knot_contact_energy` of each."""
+    return per_form(lambda form: knot_contact_energy(x, uv, l0, knot_size, stiffness, form=form), forms, knot_form)
+
+
+def _arguments(p, env, forms):
+    return {"uv": p.uv, "l0": p.l0, "knot_size": p.knot_size, "stiffness": p.knot_stiffness,
+            "knot_form": p.knot_form, "forms": forms}
+
+
+def _active(scene, dynamic):
+    net = scene.netting
+    if net is None or not any_nonzero(net.knot_size):
+        return None
+    codes = np.zeros(1, int) if net.knot_form is None else np.asarray(net.knot_form)
+    return {"forms": tuple(sorted(set(codes.tolist())))}
+
+
+KNOT_CONTACT = register(Term(
+    name="knot_contact", family="netting", kind=ENERGY, element=knot_contact, arguments=_arguments, active=_active,
+    elastic=True, closed_form=ClosedForm("jaxnet.closed_form.knot:knot_contact_stiffness_per_form")))

@@ -46,6 +46,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 from jaxnet import geometry
+from jaxnet.terms.term import ENERGY, ClosedForm, Term, any_nonzero, register
 
 # |U|²|V|² below this (m⁴) is a collapsed twine: atan2(0, 0) has no derivative.
 _COLLAPSED = 1e-200
@@ -89,3 +90,20 @@ def opening_couple(x, uv, stiffness, rest_angle):
     """Couple per knot C_u = H (α - α0) (N·m, eq. 4.212), positive when the mesh is more open than at rest."""
     alpha, _, valid = half_angle(x, uv)
     return jnp.where(valid, stiffness * (alpha - rest_angle), 0.0)
+
+
+def netting_parameter_activity(name):
+    """The activity rule of a netting term set by one parameter: present where the netting has it, not zero."""
+
+    def active(scene, dynamic):
+        net = scene.netting
+        return {} if net is not None and any_nonzero(getattr(net, name)) else None
+
+    return active
+
+
+MESH_OPENING = register(Term(
+    name="mesh_opening", family="netting", kind=ENERGY, element=opening_energy,
+    arguments=lambda p, env: {"uv": p.uv, "stiffness": p.opening_stiffness, "rest_angle": p.rest_angle},
+    active=netting_parameter_activity("opening_stiffness"), elastic=True,
+    closed_form=ClosedForm("jaxnet.closed_form.opening:opening_stiffness")))

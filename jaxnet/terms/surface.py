@@ -75,7 +75,11 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
+
 from jaxnet import geometry
+from jaxnet.terms.gravity import weight_activity
+from jaxnet.scene import has_free_surface
+from jaxnet.terms.term import ENERGY, WEIGHT, Term, any_nonzero, register
 
 
 def _inside(t):
@@ -174,7 +178,7 @@ def bar_gravity_energy(x, rest_length, diameter, density, water_density, g, up, 
         (plus ballast) divided by pi D²/4.
       water_density, g, up, surface_level: as in :func:`node_gravity_energy`.
     """
-    half_volume = 0.5 * jnp.pi * diameter**2 / 4.0 * rest_length
+    half_volume = geometry.twine_volume(0.5, rest_length, diameter)
     h = _height(x, up, surface_level)
     return jnp.sum(
         density * half_volume * g * (x @ up)
@@ -197,10 +201,53 @@ def netting_gravity_energy(x, uv, l0, diameter, density, water_density, g, up, s
         transition (see the module docstring on Newton with a thin band).
     """
     d = geometry.twine_determinant(uv)
-    vertex_volume = jnp.abs(d) * jnp.pi * diameter**2 / 4.0 * l0 / 3.0
+    vertex_volume = geometry.twine_volume(jnp.abs(d), l0, diameter) / 3.0
     band = diameter if thickness is None else thickness
     h = _height(x, up, surface_level)
     return jnp.sum(
         density * vertex_volume * g * (x @ up)
         - water_density * g * vertex_volume * immersed_fraction_integral(h, band)
     )
+
+
+# -- the terms -------------------------------------------------------------------------------------
+
+
+def _netting_arguments(p, env):
+    return {"uv": p.uv, "l0": p.l0, "diameter": p.diameter, "density": p.density, "water_density": env.water_density,
+            "g": env.gravity, "up": env.up, "surface_level": env.surface_level}
+
+
+def _bar_arguments(p, env):
+    return {"rest_length": p.rest_length, "diameter": p.diameter, "density": p.density,
+            "water_density": env.water_density, "g": env.gravity, "up": env.up, "surface_level": env.surface_level}
+
+
+def _node_arguments(p, env):
+    # a body given no size is taken as the sphere of its volume (1 mm at least) for its waterline band
+    sphere = jnp.cbrt(6.0 * p.volume / jnp.pi)
+    size = jnp.maximum(jnp.where(p.size > 0, p.size, sphere), 1e-3)
+    return {"mass": p.mass, "volume": p.volume, "thickness": size, "water_density": env.water_density,
+            "g": env.gravity, "up": env.up, "surface_level": env.surface_level}
+
+
+def _node_gravity(x, mass, volume, thickness, water_density, g, up, surface_level):
+    return node_gravity_energy(x[0], mass, volume, thickness, water_density, g, up, surface_level)
+
+
+def _node_activity(scene, dynamic):
+    n = scene.nodes
+    if scene.environment.gravity == 0 or not has_free_surface(scene) or not (any_nonzero(n.mass) or any_nonzero(n.volume)):
+        return None
+    return {}
+
+
+NETTING_GRAVITY_AT_SURFACE = register(Term(
+    name="netting_gravity_at_surface", family="netting", kind=ENERGY, element=netting_gravity_energy,
+    arguments=_netting_arguments, active=weight_activity("netting", at_surface=True), group=WEIGHT))
+BAR_GRAVITY_AT_SURFACE = register(Term(
+    name="bar_gravity_at_surface", family="bars", kind=ENERGY, element=bar_gravity_energy,
+    arguments=_bar_arguments, active=weight_activity("bars", at_surface=True), group=WEIGHT))
+NODE_GRAVITY_AT_SURFACE = register(Term(
+    name="node_gravity_at_surface", family="nodes", kind=ENERGY, element=_node_gravity, arguments=_node_arguments,
+    active=_node_activity, group=WEIGHT))

@@ -22,6 +22,7 @@ import jax
 import jax.numpy as jnp
 
 from jaxnet import geometry
+from jaxnet.terms.term import ENERGY, ClosedForm, Term, any_nonzero, register
 
 
 def elastic_energy(length, rest_length, ea_traction, ea_compression=None):
@@ -76,3 +77,27 @@ def netting_tensions(x, uv, l0, ea_traction, ea_compression=None):
         tension(geometry.safe_norm(U), l0, ea_traction, ea_compression),
         tension(geometry.safe_norm(V), l0, ea_traction, ea_compression),
     )
+
+
+def tension_activity(family):
+    """The activity rule of a family's twine or bar tension: present where any stiffness is not zero, with the
+    compressive branch traced only where some element has a compression stiffness (option ``compression``)."""
+
+    def active(scene, dynamic):
+        f = getattr(scene, family)
+        if f is None or not any_nonzero(f.ea_traction) and not any_nonzero(f.ea_compression):
+            return None
+        return {"compression": any_nonzero(f.ea_compression)}
+
+    return active
+
+
+def _arguments(p, env, compression):
+    return {"uv": p.uv, "l0": p.l0, "ea_traction": p.ea_traction,
+            "ea_compression": p.ea_compression if compression else None}
+
+
+NETTING_TENSION = register(Term(
+    name="netting_tension", family="netting", kind=ENERGY, element=netting_energy, arguments=_arguments,
+    active=tension_activity("netting"), elastic=True,
+    closed_form=ClosedForm("jaxnet.closed_form.tension:netting_stiffness")))
