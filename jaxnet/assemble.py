@@ -106,7 +106,7 @@ def build_pattern(scene, model) -> Pattern:
 
     It depends on the fixed coordinates and the connectivity of the families with a stiffness only, and is
     kept for them (by a digest of those arrays): a second solve of the same net (another load, another
-    start, a warm solve) takes it back instead of building it again (FEMNET's c2: 10 ms of 0.32 s)."""
+    start, a warm solve) takes it back instead of building it again."""
     fixed = np.asarray(scene.nodes.fixed, dtype=bool).ravel()
     families = stiff_families(model)
     digest = hashlib.blake2b(fixed.tobytes() + repr((scene.n_nodes, families)).encode(), digest_size=16)
@@ -155,7 +155,6 @@ def _build_pattern(scene, families, fixed) -> Pattern:
         slots[family] = np.where(keys >= 0, s, nnz).astype(np.int64)
     diagonal = np.searchsorted(unique, np.arange(n, dtype=np.int64) * (n + 1))
     # device_put, not jnp.asarray: jax 0.10 stages a numpy array through a program compiled per shape
-    # (6 arrays: 30 ms of a first solve)
     return Pattern(
         free=jax.device_put(free),
         slots={k: jax.device_put(v) for k, v in slots.items()},
@@ -401,12 +400,10 @@ def tangent_blocks(x, scene, model, state=None, elastic_scale=1.0, stiffness="au
     (N/m), every term of a family summed element by element. Same arguments as :func:`tangent` (no pattern).
 
     :func:`tangent` is :func:`scatter_stiffnesses` of these. Why they are also offered apart: compiled
-    into one program, XLA's CPU backend runs the pair far slower than as two programs, apparently because
-    it fuses the element computation into the scatter and computes it again entry by entry (an
-    ``optimization_barrier`` between them does not help). FEMNET's c2 (jaxnet's mesh): the netting's
-    tension and knot contact take 0.74 ms alone, 1.9 ms with their scatter in the same program, 0.89 ms
-    with the scatter in a program of its own. The static solver's host loop runs the two programs one
-    after the other (:func:`jaxnet.solve.statics._tangent_blocks`)."""
+    into one program, XLA's CPU backend runs the pair about twice slower than as two programs, apparently
+    because it fuses the element computation into the scatter and computes it again entry by entry (an
+    ``optimization_barrier`` between them does not help; ``validation/compile_options.py`` times the
+    tangent both ways). The static solver's host loop runs the two programs one after the other."""
     if stiffness not in STIFFNESS_PATHS:
         raise ValueError(f"stiffness must be one of {STIFFNESS_PATHS}, not {stiffness!r}")
     by_hand = tuple(t for t in model if stiffness == "closed_form" and t.has_closed_form(motion is not None))

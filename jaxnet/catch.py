@@ -107,8 +107,8 @@ def _solve_front(x, triangles, axis, volume, symmetry, sign, guess, rtol, max_it
 
     One loop, one pass over the elements per step: the first at s_min (does the net hold the volume at
     all?), the second at the start, then up to ``max_iter`` Newton or bisection steps while the net holds
-    it. So the program holds the element sums once, not three times (FEMNET's c2: the front's share of
-    its compilation fell from 0.36 to 0.22 s)."""
+    it. So the program holds the element sums once, not three times (the front is a large part of a catch
+    solve's compilation)."""
     abscissae = x[triangles] @ axis
     s_min, s_max = jnp.min(abscissae), jnp.max(abscissae)
 

@@ -16,7 +16,7 @@ from jaxnet.terms import cable, pressure, tension, term as term_lib
 
 # The figures are computed by compiled programs, each for a scene shape, kept by :mod:`jaxnet.solve.programs`
 # (on disk where the solver's are): evaluated op by op, jax 0.10 compiles a program for every operation,
-# and a first `jaxnet run` of FEMNET's c2 spent 2.1 s in this module against 2.5 s in the solve.
+# which made the figures of a first `jaxnet run` nearly as long as the solve.
 
 
 def _netting_tensions(x, vertices, uv, l0, ea_traction, ea_compression):

@@ -45,12 +45,11 @@ Row block i of K = -∂F/∂x then holds the same twine terms as above taken at 
 :meth:`jaxnet.waves.Airy.velocity_gradient`) and the damping of the vertex's own velocity
 (:func:`moving_netting_drag_stiffness`, :func:`moving_bar_drag_stiffness`, :func:`moving_node_drag_stiffness`).
 Why a closed form: the autodiff path differentiates the element's drag once per vertex (``jax.jacfwd`` of a
-k-fold ``vmap``), most of a time step's tangent (measured on the 339-unknown cage in waves: the netting
-drag's tangent 1.6-2.0 ms by autodiff, 0.8 ms closed; a step ~15 ms -> ~10.5 ms,
-``validation/dynamics_cost.py``). The helpers work on stacks (leading axes), so one call takes both twine
-families at the three vertices' velocities. The book's dynamic stiffness is the inertia's alone (4.271): without
-the drag's damping -(1/Δt) ∂F/∂c the same cage takes ~136 Newton iterations per step instead of 2.3, and
-retries most steps at half the step (measured; the book's 4.272-4.276 give the force only).
+k-fold ``vmap``), most of a time step's tangent; the closed form takes about half of it
+(``validation/dynamics_cost.py`` times both). The helpers work on stacks (leading axes), so one call takes both
+twine families at the three vertices' velocities. The book's dynamic stiffness is the inertia's alone (4.271),
+its 4.272-4.276 give the force only: without the drag's damping -(1/Δt) ∂F/∂c Newton needs tens of times more
+iterations per step on a net in waves, and most steps are retried at half the step.
 
 Singular points, all returned as the autodiff path's ``jax.jacfwd`` gives them (no NaN, no inf):
 
@@ -76,7 +75,7 @@ from jaxnet import geometry
 
 def _identity():
     """The 3x3 identity, made where it is used: a module-level jnp constant would start JAX's backend when
-    the package is imported (0.3-0.45 s, and before a user could choose the platform)."""
+    the package is imported (a delay, and before a user could choose the platform)."""
     return jnp.eye(3)
 
 # The helpers below work on stacks of vectors and matrices (leading axes "..."): one call computes the
@@ -362,7 +361,7 @@ def _relative_stiffness(coefficients, jacobians, j_velocity, water_gradient, tim
     k = coefficients[0].shape[0]
     # vertex i's own position moves c_i twice: the water's velocity there, and its velocity (x_i - x_i^n)/Δt
     own = j_velocity @ (water_gradient - _identity() / time_step)
-    # built in the layout of the result, (i, m, j, n) (measured: a transpose at the end costs as much as the rest)
+    # built in the layout of the result, (i, m, j, n): a transpose at the end would cost as much as the rest
     blocks = jnp.eye(k)[:, None, :, None] * own[:, :, None, :]
     for w, j in zip(coefficients, jacobians):
         blocks = blocks + j[:, :, None, :] * w[None, None, :, None]

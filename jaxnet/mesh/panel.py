@@ -411,7 +411,7 @@ def _interior_points(uv, area, h, seg, div, convex, bpts, segs):
         half = 0.5 * np.hypot(*(b - a).T)
         long = np.nonzero(half > _CLEARANCE * h * (1.0 - 1e-9))[0]
         if long.size:
-            # imported here: scipy.spatial takes 0.05 s to import, which a net read on FEMNET's mesh never needs
+            # imported here: scipy.spatial is slow to import, and a net read on FEMNET's mesh never needs it
             from scipy.spatial import cKDTree
 
             tree = cKDTree(pts)

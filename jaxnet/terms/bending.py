@@ -77,7 +77,7 @@ are closed forms (theta through atan2's derivatives; T_f a monomial: dT = T sum_
 comes from cross products, and the second derivatives of the z themselves from their forms in the Gram
 matrix of the edges (constants, or linear in the edges for tau). ``jax.custom_jvp`` attaches the gradient
 to the energy and the Hessian to the gradient, so ``jax.grad`` evaluates the first and ``jax.jacfwd`` of it
-the second (~10x faster to run and ~3x faster to compile than autodiff of the same formula). Nothing in
+the second (several times faster to run and to compile than autodiff of the same formula). Nothing in
 the value changes: same formula, same guards (where a guard holds a quantity at 0, so are its derivatives).
 Tangents in uv, never taken by the solver, fall back on autodiff of the same function; derivatives of
 higher order in x differentiate the closed forms. ``tests/test_bending.py`` checks energy, forces and

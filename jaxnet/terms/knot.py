@@ -98,7 +98,7 @@ _FEMNET_MIN_ANGLE = 1e-5  # FEMNET's "seuil": below this half angle it divides b
 
 def _namespace(*values):
     """numpy for plain numbers and numpy arrays (a ``.don`` reader's material constants: no JAX program
-    compiled for three scalar operations, 60 ms of a first run), jax.numpy for JAX arrays and tracers."""
+    compiled for three scalar operations), jax.numpy for JAX arrays and tracers."""
     return jnp if any(isinstance(v, jax.Array) for v in values) else np
 
 
