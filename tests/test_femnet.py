@@ -330,7 +330,7 @@ def test_links_make_one_node_and_sew_the_sides_between_them():
     scene = net.build()
     case = femnet.parse_don(DATA / "links_hub.don")
     # each panel alone: its nodes, and the division of its diagonals (all four have one length in (U, V))
-    meshes = [mesh_panel(femnet._twine_coordinates(p.corners[:, 3:5]), p.corners[:, :3], p.material["step"].value,
+    meshes = [mesh_panel(femnet.twine_coordinates(p.corners[:, 3:5]), p.corners[:, :3], p.material["step"].value,
                          p.material["l0"].value) for p in case.panels]
     d = {len(m.side_nodes[s]) - 1 for m in meshes for s in (1, 2)}
     assert len(d) == 1
@@ -391,7 +391,7 @@ def test_a_linked_cable_divides_the_side_and_seams_join_different_mesh_counts():
     assert np.min(np.linalg.norm(scene.nodes.position - start, axis=1)) < 1e-12
     # the seam joins 10 meshes to 8: both sides take one division (jaxnet: the larger default; FEMNET: that
     # of the panel meshed first) and each panel keeps its own twine coordinates on the shared nodes
-    div = [side_divisions(femnet._twine_coordinates(p.corners[:, 3:5]), p.material["step"].value,
+    div = [side_divisions(femnet.twine_coordinates(p.corners[:, 3:5]), p.material["step"].value,
                           p.material["l0"].value) for p in case.panels]
     seam = np.intersect1d(np.unique(tri[panel == 0]), lower_nodes)
     assert div[0][0] != div[1][2] and len(seam) == max(div[0][0], div[1][2]) + 1

@@ -1,0 +1,406 @@
+"""The mapping of a parsed ``.don`` file (:class:`~.grammar.DonFile`) onto jaxnet: its twines, ropes,
+surroundings and node types, built with the :class:`~jaxnet.net.Net` builder by :func:`read_don` (jaxnet meshes
+the panels), and the pieces :func:`~.mdg.read_mdg` shares on FEMNET's own mesh. The conventions are the
+package's docstring's.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import math
+import re
+
+import numpy as np
+
+from jaxnet import waves as waves_lib
+from jaxnet.io.femnet.grammar import DonCable, DonFile, DonPanel, twine_coordinates
+from jaxnet.io.femnet.links import MERGE_TOLERANCE, JoinPlan, all_panels, at_joined_positions, plan_joins
+from jaxnet.io.femnet.parse import parse_don
+from jaxnet.net import HexTwine, Net, Rope, Twine
+from jaxnet.scene import Environment, SceneError
+from jaxnet.solve.statics import Newton
+from jaxnet.terms import knot
+
+#: FEMNET's default water density (kg/m³, phobos ``chargement_don.c``: RHO = 1025)
+WATER_DENSITY = 1025.0
+#: the acceleration of gravity (m/s²), FEMNET's
+GRAVITY = 9.81
+
+
+def twine_of(p: DonPanel, case: DonFile, femnet_laws: bool) -> Twine:
+    """The panel's netting material; with ``femnet_laws``, with FEMNET's laws where they differ from the book
+    (``docs/errata.md``, "Where FEMNET differs"): its knot contact (``fermeture2``), and, in a case with a
+    catch, its netting drag (``trainee_fil``)."""
+    m = {k: v.value for k, v in p.material.items()}
+    twine = Twine(l0=m["l0"], ea=m["ea"], diameter=m["diameter"], ea_compression=m["eac"], density=m["density"],
+                  cd_normal=m["cd"], tangential_ratio=m["f"], opening_stiffness=m["opening"], knot_size=m["knot"])
+    if not femnet_laws:
+        return twine
+    return dataclasses.replace(
+        twine, knot_form="femnet", knot_stiffness=float(knot.femnet_knot_stiffness(m["l0"], m["knot"], m["ea"])),
+        drag_model="femnet-catch" if _femnet_catch_drag(case) else "twines")
+
+
+def _femnet_catch_drag(case: DonFile) -> bool:
+    """Whether FEMNET loads this case's netting with its drag of cases with a catch (``unix.c``: a catch
+    volume above its accuracy, in a current) rather than its twine drag (``filethydro4_sta``)."""
+    return (case.catch["catch_volume"].value > case.catch["catch_accuracy"].value
+            and case.ocean["current_speed"].value > 0)
+
+
+def _hextwine(p: DonPanel) -> HexTwine:
+    """A hexagonal panel's netting material: FEMNET's three twine families l, m, n (one diameter, see
+    :func:`_hexagonal_diameter`)."""
+    m = p.material
+    l0 = np.array([v.value for v in m["l0"]])
+    d = np.array([v.value for v in m["diameter"]])
+    return HexTwine(l0=tuple(l0.tolist()), ea=tuple(v.value for v in m["ea"]), diameter=_hexagonal_diameter(l0, d),
+                    ea_compression=tuple(v.value for v in m["eac"]), density=m["density"].value)
+
+
+def _hexagonal_diameter(l0, d):
+    """jaxnet's hexagonal netting has one twine diameter, used only for the twines' weight (it has no drag
+    model): the one with the weight of FEMNET's three families, pi/4 sum d_i² l0_i = pi/4 D² sum l0_i (m)."""
+    d, l0 = np.asarray(d, dtype=float), np.asarray(l0, dtype=float)
+    scale = d.max()  # scaled, so that no square overflows for any finite diameters
+    return float(scale * np.sqrt(np.sum((d / scale) ** 2 * l0) / np.sum(l0))) if scale > 0 else 0.0
+
+
+def rope_of(c: DonCable) -> Rope:
+    """A cable's rope material (its unstretched length l0 is the cable's rest length, given with the cable)."""
+    m = {k: v.value for k, v in c.material.items()}
+    return Rope(ea=m["ea"], diameter=m["diameter"], ea_compression=m["eac"], density=m["density"], cd_normal=m["cd"],
+                tangential_ratio=m["f"])
+
+
+def environment_of(case: DonFile) -> Environment:
+    """The surroundings: FEMNET's water and current, and its sea bed (``fond.c``): the limits' penalty stiffness,
+    its law exactly (no band), and the friction of the bottom only where FEMNET applies it, with ``input
+    moving_bottom`` (a still bottom exerts none)."""
+    angle = math.radians(case.ocean["current_direction"].value)
+    rho = case.inputs["water_density"].value if "water_density" in case.inputs else WATER_DENSITY
+    friction = case.ocean["bottom_friction"].value if "moving_bottom" in case.inputs else 0.0
+    waves = None
+    if case.ocean["wave_height"].value > 0:
+        # regular linear waves on FEMNET's surface z = 0 (felt in dynamics only); a depth of 0 is deep water
+        heading = math.radians(case.ocean["wave_direction"].value)
+        depth = case.ocean["depth"].value
+        waves = waves_lib.Airy(case.ocean["wave_height"].value, case.ocean["wave_period"].value,
+                               direction=(math.cos(heading), math.sin(heading), 0.0),
+                               depth=depth if depth > 0 else float("inf"), surface_level=0.0, gravity=GRAVITY)
+    return Environment(gravity=GRAVITY, water_density=float(rho), up=np.array([0.0, 0.0, 1.0]),
+                       current_speed=case.ocean["current_speed"].value,
+                       current_direction=np.array([math.cos(angle), math.sin(angle), 0.0]),
+                       bottom_stiffness=float(case.ocean["bottom_stiffness"].value), bottom_friction=float(friction),
+                       bottom_band=0.0, waves=waves)
+
+
+def node_type_fields(case: DonFile, position, node_type):
+    """The nodes' box bodies and limits from their types: {Nodes field: (N, 3) array}, a field pair absent when no
+    node has a body (or a limit), so that its term is not compiled. Checks that every body starts wholly under
+    FEMNET's water surface z = 0 when there is a current to drag it (see the package's docstring)."""
+    types = [case.types[t] for t in node_type]
+    fields = {}
+    if any(nt.has_body for nt in types):
+        length = np.array([[v.value for v in nt.length] if nt.has_body else [0.0] * 3 for nt in types])
+        cd = np.array([[v.value for v in nt.drag_coefficient] if nt.has_body else [0.0] * 3 for nt in types])
+        top = np.asarray(position)[:, 2] + np.maximum(length[:, 2], 0.0)
+        above = np.flatnonzero(top > 0.0) if case.ocean["current_speed"].value > 0 else np.zeros(0, int)
+        if above.size:
+            i = int(above[0])
+            nt = types[i]
+            raise SceneError(f"{case.path}:{nt.length[0].line}: node type {node_type[i]}: the box of length "
+                             f"{length[i].tolist()} m of the node at {np.round(position[i], 6).tolist()} reaches "
+                             f"z = {top[i]:.6g} m, above FEMNET's water surface z = 0: FEMNET then takes the drag of "
+                             "its immersed part only, jaxnet (no free surface here) of the whole box")
+        fields.update(drag_length=length, drag_coefficient=cd)
+    if any(nt.has_limit for nt in types):
+        fields["limit"] = np.array([[v.value if s.value else 0.0 for v, s in zip(nt.limit, nt.sense)] for nt in types])
+        fields["limit_sense"] = np.array([[s.value for s in nt.sense] for nt in types], dtype=np.int32)
+    return fields
+
+
+def _solver(case: DonFile) -> Newton:
+    """FEMNET's numerics as jaxnet's Newton options (the threshold as tol: see the package's docstring,
+    "Convergence")."""
+    n = case.numeric
+    return Newton(tol=n["threshold"].value, max_iter=int(n["max_iter"].value), max_step=n["max_step"].value)
+
+
+def check_types(case: DonFile):
+    """Every node type a part names (its corners, sides, internal nodes, cable ends) must be described."""
+    used = []
+    for kind, k, p, name in all_panels(case):
+        used += [(t, f"{name} corner {c + 1}") for c, t in enumerate(p.corner_type)]
+        used += [(t, f"{name} side {c + 1}") for c, t in enumerate(p.side_type)]
+        used += [(p.material["inner_type"], f"{name} internal nodes")]
+    used += [(t, f"cable {k + 1} end {e + 1}") for k, c in enumerate(case.cables) for e, t in enumerate(c.end_type)]
+    used += [(c.material["inner_type"], f"cable {k + 1} internal nodes") for k, c in enumerate(case.cables)]
+    for t, what in used:
+        if t.value not in case.types:
+            raise SceneError(f"{case.path}:{t.line}: {what}: node type {t.value} is not described (types: "
+                             f"{sorted(case.types)})")
+
+
+def _check_supported(case: DonFile):
+    """What a case may read but jaxnet cannot model: said with the line that asks for it."""
+    speed = case.ocean["current_speed"]
+    if case.hexagonal and speed.value > 0:
+        raise SceneError(f"{case.path}:{speed.line}: current speed {speed.value!r} m/s with hexagonal panels (hexagonal "
+                         f"panel 1 at line {case.hexagonal[0].line}): jaxnet has no drag model for hexagonal netting yet")
+
+
+def symmetry_planes(case: DonFile, position, node_type):
+    """Symmetry planes used by the nodes: {axis: plane coordinate}; a plane must be flat at the start."""
+    planes = {}
+    for axis in range(3):
+        on = [i for i, t in enumerate(node_type) if case.types[t].symmetry[axis].value]
+        if not on:
+            continue
+        coords = position[on, axis]
+        if np.ptp(coords) > 1e-6 * max(1.0, np.abs(coords).max()):
+            t = node_type[on[int(np.argmax(np.abs(coords - coords[0])))]]
+            raise SceneError(f"{case.path}:{case.types[t].line}: node type {t} puts nodes on a symmetry plane normal to "
+                             f"{'XYZ'[axis]}, but they start at different {'xyz'[axis]} ({coords.min():.6g} to "
+                             f"{coords.max():.6g} m)")
+        planes[axis] = float(coords.mean())
+    return planes
+
+
+def catch_of(case: DonFile, position, netting_nodes, planes, env: Environment):
+    """(volume of the whole cod-end, Cd, copies, center, axis) of the catch, or None without one."""
+    volume = case.catch["catch_volume"].value
+    if volume <= 0:
+        return None
+    if not env.current_speed > 0:
+        raise SceneError(f"{case.path}:{case.catch['catch_volume'].line}: a catch needs a current (its axis is the "
+                         "current's direction)")
+    copies = 2.0 ** len(planes)
+    axis = np.asarray(env.current_direction, dtype=float)
+    pts = position[netting_nodes]
+    center = pts.mean(axis=0)
+    for a, c in planes.items():
+        center[a] = c
+    # the opening: the most upstream netting node's abscissa along the axis
+    center = center + (pts @ axis).min() * axis - (center @ axis) * axis
+    return volume * copies, case.catch["catch_cd"].value, copies, center, axis
+
+
+def _describe(case: DonFile, env: Environment, plan: JoinPlan, femnet_laws: bool = True) -> Net:
+    """The panels and cables of the (joined) case on a new Net, sewn as ``plan`` says."""
+    net = Net(environment=env, merge_tolerance=MERGE_TOLERANCE)
+    for kind, k, p, name in all_panels(case):
+        if kind == "pa":
+            corners = np.concatenate([p.corners[:, :3], twine_coordinates(p.corners[:, 3:5])], axis=1)
+            net.panel(name, corners, twine_of(p, case, femnet_laws), p.material["step"].value)
+        else:
+            # hexagonal: FEMNET's (U, V) count base meshes, as jaxnet's (see the package's docstring)
+            net.panel(name, p.corners, _hextwine(p), p.material["step"].value)
+    for a, b in plan.seams:
+        net.seam(a, b)
+    for k, c in enumerate(case.cables):
+        name, length = f"cable {k + 1}", c.material["l0"].value
+        if k in plan.along:
+            side, n_bars = plan.along[k]
+            net.cable(name, along=side, rope=rope_of(c), length=length, n_bars=n_bars)
+        else:
+            net.cable(name, start=tuple(c.ends[0]), end=tuple(c.ends[1]), rope=rope_of(c), length=length,
+                      n_bars=plan.n_bars[k])
+    return net
+
+
+@contextlib.contextmanager
+def _located(case: DonFile, what: str):
+    """Name the file and the line of the part it names in a SceneError from jaxnet's Net (describing or
+    building the net)."""
+    try:
+        yield
+    except SceneError as err:
+        if str(err).startswith(f"{case.path}:"):
+            raise
+        raise SceneError(f"{case.path}:{_culprit_line(case, str(err))}: {what}: {err}") from None
+
+
+def _culprit_line(case: DonFile, message: str) -> int:
+    """The line of the panel or cable a message names; else of the first node type (fixings, loads)."""
+    m = re.search(r"(hexagonal panel|panel|cable) (\d+)", message)
+    if m:
+        parts = {"hexagonal panel": case.hexagonal, "panel": case.panels, "cable": case.cables}[m.group(1)]
+        k = int(m.group(2)) - 1
+        if 0 <= k < len(parts):
+            return parts[k].line
+    return min((t.line for t in case.types.values()), default=1)
+
+
+def read_don(path, femnet_laws=True):
+    """Read FEMNET's ``.don`` case ``path`` into jaxnet.
+
+    ``femnet_laws``: use FEMNET's own laws where they differ from the book (knot contact; netting drag in a
+    case with a catch; ``docs/errata.md``), so that jaxnet gives FEMNET's answers (the default); False for
+    jaxnet's own physics (the book's laws, corrected).
+
+    Returns:
+      (net, solver, info): a :class:`~jaxnet.net.Net` (jaxnet meshes it; ``net.build()`` gives the scene,
+      checked here to build), the :class:`~jaxnet.solve.statics.Newton` options (tol = FEMNET's threshold in
+      N, max_iter, max_step = FEMNET's displacement limit in m), and a dict ``info`` of what the reader
+      decided (symmetry planes and copies, FEMNET's solver settings, the inputs and outputs, the depth, the
+      joined points, seams and sewn cables, the added masses per node type, the sea bed and the node bodies read).
+    Raises:
+      SceneError naming the file and line (see the package's docstring).
+    """
+    case = parse_don(path)
+    check_types(case)
+    _check_supported(case)
+    env = environment_of(case)
+    plan = plan_joins(case)
+    case = at_joined_positions(case, plan)
+    # a first build, held at every corner and cable end, tells where jaxnet's mesher put the nodes: their
+    # FEMNET types (and so the fixings and loads of the real net) follow from where they were created
+    with _located(case, "meshing the case"):
+        probe = _describe(case, env, plan, femnet_laws)
+        for kind, k, p, name in all_panels(case):
+            for xyz in p.corners[:, :3]:
+                probe.fix(tuple(xyz))
+        for c in case.cables:
+            for xyz in c.ends:
+                probe.fix(tuple(xyz))
+        scene = probe.build()
+        net = _describe(case, env, plan, femnet_laws)
+    node_type = _node_types(case, scene)
+    position = np.asarray(scene.nodes.position)
+    planes = symmetry_planes(case, position, node_type)
+    for i, t in enumerate(node_type):
+        nt = case.types[t]
+        axes = "".join(a for j, a in enumerate("xyz") if nt.fixed[j].value or nt.symmetry[j].value)
+        if axes:
+            net.fix(tuple(position[i]), axes)
+        if nt.mass[0] > 0 or any(nt.force):
+            net.attach(tuple(position[i]), mass=nt.mass[0], force=nt.force)
+    fields = node_type_fields(case, position, node_type)
+    for i, t in enumerate(node_type):
+        if "drag_length" in fields and case.types[t].has_body:
+            net.body(tuple(position[i]), fields["drag_length"][i], fields["drag_coefficient"][i])
+        if "limit" in fields and case.types[t].has_limit:
+            net.limit(tuple(position[i]), fields["limit"][i], fields["limit_sense"][i])
+    netting_nodes = np.unique(np.asarray(scene.netting.vertices)) if scene.netting is not None else np.arange(len(position))
+    catch = catch_of(case, position, netting_nodes, planes, env)
+    with _located(case, "the net with its node types"):
+        if catch is not None:
+            volume, cd, copies, center, axis = catch
+            net.catch(volume, drag_coefficient=cd, symmetry=copies, center=tuple(center), axis=tuple(axis))
+        net.build()
+    return result(net, case, planes, catch, femnet_laws, plan)
+
+
+def result(model, case: DonFile, planes, catch, femnet_laws, plan: JoinPlan | None = None):
+    """What :func:`read_don` and :func:`~.mdg.read_mdg` return: (model, solver, info), ``model`` the net (or the
+    scene), ``solver`` the :class:`~jaxnet.solve.statics.Newton` options of the case's numerics, ``info`` what
+    the reader decided (:func:`_info`) and whether FEMNET's laws were used. ``planes``: the symmetry planes
+    {axis: coordinate}; ``catch``: :func:`catch_of`'s tuple or None; ``plan``: the joins (None on FEMNET's mesh,
+    which has its own)."""
+    return model, _solver(case), {**_info(case, planes, catch, plan), "femnet_laws": bool(femnet_laws)}
+
+
+def _info(case: DonFile, planes, catch, plan: JoinPlan | None = None):
+    """The dict ``info`` of :func:`read_don` (see there), JSON-compatible (the CLI writes it into result.json)."""
+    along = {} if plan is None else plan.along
+    differences = []
+    if any(p.material["opening"].value > 0 for p in case.panels):
+        differences.append("mesh opening stiffness: the book's law (FEMNET's flexion2 applies 4.218 as printed: its "
+                           "couple is 2 H cos(a) (a - a0)); docs/errata.md")
+    return {
+        "laws_differing_from_femnet": differences,
+        "source": case.path,
+        "symmetry_axes": ["xyz"[a] for a in sorted(planes)],
+        "symmetry_planes_m": {"xyz"[a]: c for a, c in planes.items()},
+        "copies": 2 ** len(planes),
+        "catch_volume_modelled_m3": case.catch["catch_volume"].value,
+        "catch_volume_whole_m3": None if catch is None else catch[0],
+        "femnet_threshold_N": case.numeric["threshold"].value,
+        "femnet_criterion": "mean nodal residual norm (jaxnet: largest nodal residual, same threshold)",
+        "femnet_max_iterations": int(case.numeric["max_iter"].value),
+        "displacement_limit_m": case.numeric["max_step"].value,
+        "depth_m": case.ocean["depth"].value,
+        "water_density": environment_of(case).water_density,
+        "inputs": {k: v.value for k, v in case.inputs.items()},
+        "outputs": list(case.outputs),
+        "cables_sewn_along_sides": {f"cable {k + 1}": f"{side.panel} side {side.index + 1}"
+                                    for k, (side, _) in sorted(along.items())},
+        "seams": [] if plan is None else [f"{a.panel} side {a.index + 1} = {b.panel} side {b.index + 1}"
+                                          for a, b in plan.seams],
+        "joined": [] if plan is None else plan.joined,
+        # FEMNET's added mass acts in dynamics only (lectureDo4.c): read, kept here, without effect in statics
+        "added_mass": {t: list(nt.added_mass) for t, nt in sorted(case.types.items())},
+        # FEMNET's dynamic settings (None for a static case): what `jaxnet run CASE.don --dynamic` uses
+        "dynamic": None if not case.numeric["record_end"].value > 0 else {
+            "time_step_s": case.numeric["dt"].value, "record_every_s": case.numeric["record_dt"].value,
+            "record_start_s": case.numeric["record_start"].value, "end_time_s": case.numeric["record_end"].value},
+        "sea_bed": {"stiffness_N_per_m": case.ocean["bottom_stiffness"].value,
+                    "moving_bottom": "moving_bottom" in case.inputs,
+                    "friction": environment_of(case).bottom_friction,
+                    "limits": {t: {"limit_m": [v.value for v in nt.limit], "sense": [v.value for v in nt.sense]}
+                               for t, nt in sorted(case.types.items()) if nt.has_limit}},
+        "node_bodies": {t: {"length_m": [v.value for v in nt.length],
+                            "drag_coefficient": [v.value for v in nt.drag_coefficient]}
+                        for t, nt in sorted(case.types.items()) if nt.has_body},
+        "hexagonal_twine_diameter_m": {f"hexagonal panel {k + 1}": _hexagonal_diameter(
+            [v.value for v in p.material["l0"]], [v.value for v in p.material["diameter"]])
+            for k, p in enumerate(case.hexagonal)},
+    }
+
+
+def _on_segment(points, a, b, tol):
+    """(N,) True where a point lies strictly inside segment a-b (m)."""
+    ab = b - a
+    t = (points - a) @ ab / max(ab @ ab, 1e-300)
+    d = np.linalg.norm(points - a - t[:, None] * ab, axis=1)
+    return (d <= tol) & (t > 1e-9) & (t < 1 - 1e-9)
+
+
+def _node_types(case: DonFile, scene):
+    """Node type of every scene node, from where it was created (see the package's docstring)."""
+    pos = np.asarray(scene.nodes.position)
+    n = len(pos)
+    tol = 1e-7 * max(1.0, float(np.abs(pos).max()))
+    # (priority, type, what): a corner's own type wins over a side's or an element's internal type
+    claims = [dict() for _ in range(n)]
+
+    def claim(nodes, priority, t, what):
+        for i in np.atleast_1d(nodes):
+            have = claims[i].get(priority)
+            if have is not None and have[0].value != t.value:
+                raise SceneError(f"{case.path}:{t.line}: node at {pos[i].round(6).tolist()} is given type {t.value} "
+                                 f"({what}) and type {have[0].value} ({have[1]}, line {have[0].line})")
+            claims[i][priority] = (t, what)
+
+    def at(point):
+        return np.flatnonzero(np.linalg.norm(pos - point, axis=1) <= tol)
+
+    nettings = [f for f in (scene.netting, scene.hexagonal) if f is not None]
+    panel_of = np.concatenate([np.asarray(f.panel) for f in nettings]) if nettings else np.zeros(0, int)
+    tri = np.concatenate([np.asarray(f.vertices) for f in nettings]) if nettings else np.zeros((0, 3), int)
+    for j, (kind, k, p, name) in enumerate(all_panels(case)):
+        nodes = np.unique(tri[panel_of == j])
+        claim(nodes, 0, p.material["inner_type"], f"{name} internal nodes")
+        C = len(p.corners)
+        for c in range(C):
+            a, b = p.corners[c, :3], p.corners[(c + 1) % C, :3]
+            claim(nodes[_on_segment(pos[nodes], a, b, tol)], 1, p.side_type[c], f"{name} side {c + 1}")
+            claim(at(a), 2, p.corner_type[c], f"{name} corner {c + 1}")
+    if scene.bars is not None:
+        ends, cable_of = np.asarray(scene.bars.ends), np.asarray(scene.bars.cable)
+        for k, c in enumerate(case.cables):
+            nodes = np.unique(ends[cable_of == k])
+            inner = nodes[[not (np.linalg.norm(pos[i] - c.ends[0]) <= tol or np.linalg.norm(pos[i] - c.ends[1]) <= tol)
+                           for i in nodes]]
+            claim(inner, 1, c.material["inner_type"], f"cable {k + 1} internal nodes")
+            for e in range(2):
+                claim(at(c.ends[e]), 2, c.end_type[e], f"cable {k + 1} end {e + 1}")
+    out = []
+    for i in range(n):
+        if not claims[i]:
+            raise SceneError(f"{case.path}:{_culprit_line(case, '')}: node {i} at {pos[i].tolist()} belongs to no "
+                             "panel or cable")
+        out.append(claims[i][max(claims[i])][0].value)
+    return out

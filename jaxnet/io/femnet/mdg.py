@@ -1,0 +1,138 @@
+"""FEMNET's own mesh (``.mdg``, written by its mesher) read into a :class:`~jaxnet.scene.Scene`, with the
+materials and node types of its ``.don`` case, so that the physics of FEMNET and jaxnet can be compared
+without mesh differences (see the package's docstring).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import pathlib
+
+import numpy as np
+
+from jaxnet.io.femnet.grammar import twine_coordinates
+from jaxnet.io.femnet.mapping import (catch_of, check_types, environment_of, node_type_fields, result, rope_of,
+                                      symmetry_planes, twine_of)
+from jaxnet.io.femnet.parse import parse_don
+from jaxnet.net import bar_rows, netting_rows, outward
+from jaxnet.scene import Bars, Catch, Netting, Nodes, Scene, SceneError, validate
+
+
+def read_mdg(path, don=None, femnet_laws=True):
+    """FEMNET's mesh ``path`` (.mdg) as a :class:`~jaxnet.scene.Scene`, with the materials and node types of
+    the ``.don`` case ``don`` (default: the same name with ``.don``).
+
+    The scene's nodes are the ``.mdg``'s, in its order (so the ``.sta``'s positions compare node by node);
+    its triangles carry the ``.mdg``'s corner (U, V) turned into twine coordinates (U + V, V - U), and the
+    material of the panel named in the triangle's line; its bars the rest length (pro2 - pro1) × L of
+    their cable. Returns (scene, solver, info) as :func:`read_don`.
+    """
+    path = pathlib.Path(path)
+    don = pathlib.Path(don) if don is not None else path.with_suffix(".don")
+    case = parse_don(don)
+    check_types(case)
+    if not path.exists():
+        raise SceneError(f"FEMNET mesh {path} does not exist")
+    lines = path.read_text(errors="replace").split("\n")
+    where = str(path)
+
+    def section(header, start=0):
+        for i in range(start, len(lines)):
+            if " ".join(lines[i].lower().split()).startswith(header):
+                return i
+        raise SceneError(f"{where}: no '{header}' section (truncated file?)")
+
+    def count_after(header):
+        i = section(header)
+        try:
+            return int(lines[i + 1].split()[0]), i + 1
+        except (IndexError, ValueError):
+            raise SceneError(f"{where}:{i + 2}: expected the count of '{header}'") from None
+
+    def rows(header, count, width, after):
+        i = section(header, after) + 1
+        out = []
+        while len(out) < count:
+            if i >= len(lines):
+                raise SceneError(f"{where}:{i}: the file ends inside '{header}' ({len(out)} of {count} rows; truncated?)")
+            words = lines[i].split()
+            if words:
+                try:
+                    values = [float(w) for w in words]
+                except ValueError:
+                    raise SceneError(f"{where}:{i + 1}: '{header}': expected numbers, found {lines[i].strip()!r}") from None
+                if len(values) < width or not all(math.isfinite(v) for v in values):
+                    raise SceneError(f"{where}:{i + 1}: '{header}': expected {width} finite numbers, found {lines[i].strip()!r}")
+                out.append(values + [i + 1])
+            i += 1
+        return out
+
+    n_nodes, at = count_after("nombre de noeuds")
+    node_rows = rows("description des noeuds", n_nodes, 7, at)
+    n_bars, at = count_after("nombre d'elements")
+    bar_lines = rows("description des elements", n_bars, 6, at)
+    n_tri, at = count_after("nombre de surfaces")
+    tri_rows = rows("description des surfaces", n_tri, 11, at)
+    for header in ("nombre de coulisses", "nombre de surfaces hexagonales"):
+        n, at = count_after(header)
+        if n:
+            raise SceneError(f"{where}:{at + 1}: '{header}' {n}: not supported")
+    position = np.array([r[1:4] for r in node_rows])
+    node_type = [int(r[5]) for r in node_rows]
+    for r in node_rows:
+        if int(r[5]) not in case.types:
+            raise SceneError(f"{where}:{r[-1]}: node {int(r[0])} has type {int(r[5])}, not described in {don}")
+    env = environment_of(case)
+    planes = symmetry_planes(case, position, node_type)
+    fixed = np.array([[case.types[t].fixed[a].value or case.types[t].symmetry[a].value for a in range(3)]
+                      for t in node_type], dtype=bool)
+    mass = np.array([case.types[t].mass[0] for t in node_type])
+    force = np.array([case.types[t].force for t in node_type], dtype=float)
+    nodes = Nodes(position=position, fixed=fixed, mass=mass, volume=np.zeros(n_nodes), force=force,
+                  drag_area=np.zeros(n_nodes), size=np.zeros(n_nodes), **node_type_fields(case, position, node_type))
+
+    def node_index(value, line):
+        i = int(value) - 1
+        if value != int(value) or not 0 <= i < n_nodes:
+            raise SceneError(f"{where}:{line}: node number {value!r} outside 1..{n_nodes}")
+        return i
+
+    netting = None
+    if n_tri:
+        vertices = np.array([[node_index(v, r[-1]) for v in r[1:4]] for r in tri_rows])
+        uv = twine_coordinates(np.array([r[4:10] for r in tri_rows]).reshape(-1, 3, 2))
+        panel = np.array([int(r[10]) - 1 for r in tri_rows])
+        for r, p in zip(tri_rows, panel):
+            if not 0 <= p < len(case.panels):
+                raise SceneError(f"{where}:{r[-1]}: triangle {int(r[0])} belongs to panel {p + 1}, not in {don}")
+        twines = [twine_of(p, case, femnet_laws) for p in case.panels]
+        netting = Netting(vertices=vertices, uv=uv, panel=panel, **netting_rows(twines, panel))
+    bars = None
+    if n_bars:
+        ends = np.array([[node_index(v, r[-1]) for v in r[1:3]] for r in bar_lines])
+        cable = np.array([int(r[5]) - 1 for r in bar_lines])
+        for r, c in zip(bar_lines, cable):
+            if not 0 <= c < len(case.cables):
+                raise SceneError(f"{where}:{r[-1]}: bar {int(r[0])} belongs to cable {c + 1}, not in {don}")
+        share = np.array([r[4] - r[3] for r in bar_lines])
+        bad = np.flatnonzero(~(share > 0))
+        if bad.size:
+            r = bar_lines[int(bad[0])]
+            raise SceneError(f"{where}:{r[-1]}: bar {int(r[0])}: its share of the cable (pro2 - pro1 = {share[bad[0]]!r}) "
+                             "must be > 0")
+        ropes = [rope_of(c) for c in case.cables]
+        rest = share * np.array([case.cables[c].material["l0"].value for c in cable])
+        bars = Bars(ends=ends, rest_length=rest, cable=cable, **bar_rows(ropes, cable))
+    netting_nodes = np.unique(netting.vertices) if netting is not None else np.arange(n_nodes)
+    catch_spec = catch_of(case, position, netting_nodes, planes, env)
+    catch = None
+    if catch_spec is not None:
+        volume, cd, copies, center, axis = catch_spec
+        catch = Catch(volume=volume, drag_coefficient=cd, axis=axis, center=center, symmetry=copies)
+        netting = dataclasses.replace(netting, outward=outward(position, np.asarray(netting.vertices), center))
+    scene = Scene(nodes=nodes, netting=netting, bars=bars, environment=env, catch=catch,
+                  panel_names=tuple(f"panel {k + 1}" for k in range(len(case.panels))),
+                  cable_names=tuple(f"cable {k + 1}" for k in range(len(case.cables))))
+    validate(scene)
+    return result(scene, case, planes, catch_spec, femnet_laws)

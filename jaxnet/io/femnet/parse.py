@@ -1,0 +1,312 @@
+"""Reading a ``.don`` file into a :class:`~.grammar.DonFile` (phobos ``chargement_don.c``'s order), with the
+tables of :mod:`.grammar`, and the checks that concern several fields of a part or a section.
+
+Every error is a :class:`~jaxnet.scene.SceneError` ``file:LINE: message`` (see the package's docstring,
+"Strictness").
+"""
+
+from __future__ import annotations
+
+import math
+import pathlib
+import re
+
+import numpy as np
+
+from jaxnet.io.femnet.grammar import (
+    CABLE_MATERIAL, CABLES_NUMBER, CATCH, DESIGN_PLANE, DISPLAYS, HEADINGS, HEXAGONAL_PANEL_MATERIAL,
+    HEXAGONAL_PANELS_NUMBER, INPUTS, LINKS_NUMBER, MAX_PANEL_NODES, NODE_TYPE, NODE_TYPES_NUMBER, NUMERICS, OCEAN,
+    OUTPUTS, PANEL_CORNERS, PANEL_MATERIAL, PANELS_NUMBER, PART_NAMES, SEA_BED, SLIDING_CABLES_NUMBER, TEXT_OUTPUTS,
+    DonCable, DonFile, DonLink, DonNodeType, DonPanel, read, read_all, twine_coordinates)
+from jaxnet.io.femnet.reader import MAX_COORDINATE, Reader, Value
+from jaxnet.scene import SceneError
+
+
+def parse_don(path) -> DonFile:
+    """Read a ``.don`` file into a :class:`~.grammar.DonFile` (values with their line numbers), checking every
+    label."""
+    path = pathlib.Path(path)
+    if not path.exists():
+        raise SceneError(f"FEMNET case {path} does not exist")
+    r = Reader(path.read_text(errors="replace"), str(path))
+    first = r.text.lstrip().split(None, 1)[0] if r.text.strip() else ""
+    if first.lower().startswith("version"):
+        raise r.error(f"FEMNET file format {first!r} is not supported (only the original format)")
+    read(r, DESIGN_PLANE)
+    n_panels = read(r, PANELS_NUMBER)
+    panels = [_parse_panel(r, k, hexagonal=False) for k in range(n_panels.value)]
+    n_hexa = read(r, HEXAGONAL_PANELS_NUMBER)
+    hexagonal = [_parse_panel(r, k, hexagonal=True) for k in range(n_hexa.value)]
+    n_cables = read(r, CABLES_NUMBER)
+    cables = [_parse_cable(r, k) for k in range(n_cables.value)]
+    read(r, SLIDING_CABLES_NUMBER)
+    counts = {"pa": [len(p.corners) for p in panels], "ha": [len(p.corners) for p in hexagonal],
+              "el": [2] * len(cables)}
+    n_links = read(r, LINKS_NUMBER)
+    links = [_parse_link(r, k, counts) for k in range(n_links.value)]
+    order = _parse_order(r, counts)
+    n_types = read(r, NODE_TYPES_NUMBER)
+    types = {}
+    for t in range(n_types.value):
+        number, node_type = _parse_node_type(r, t)
+        if number.value in types:
+            raise r.error(f"node type {number.value} is described twice", number.line)
+        types[number.value] = node_type
+    numeric = read_all(r, NUMERICS)
+    if numeric["record_end"].value > 0:
+        for key, what in (("dt", "dynamic time step"), ("record_dt", "dynamic record time step")):
+            if not numeric[key].value > 0:
+                raise r.error(f"{what} {numeric[key].value!r} s: a dynamic case (end time "
+                              f"{numeric['record_end'].value!r} s) needs it > 0", numeric[key].line)
+    ocean = read_all(r, OCEAN)
+    if ocean["wave_height"].value > 0 and not ocean["wave_period"].value > 0:
+        raise r.error(f"wave period {ocean['wave_period'].value!r} s: waves of height {ocean['wave_height'].value!r} m "
+                      "need a period > 0", ocean["wave_period"].line)
+    catch = read_all(r, CATCH)
+    ocean.update(read_all(r, SEA_BED))
+    stiffness = ocean["bottom_stiffness"]
+    limited = [(t, nt) for t, nt in types.items() if nt.has_limit]
+    if limited and not stiffness.value > 0:
+        # FEMNET's fond.c pushes a node back by (limit - x) times this stiffness: with 0 its floor does nothing
+        t, nt = limited[0]
+        raise r.error(f"stiffness of the insertion in the sea bottom is {stiffness.value!r} N/m, but node type {t} has "
+                      f"limits (sense {[v.value for v in nt.sense]}, line {nt.sense[0].line}): FEMNET's floor or "
+                      "ceiling pushes with this stiffness, so with 0 it does nothing; give a stiffness > 0 N/m (or the "
+                      "senses 0)", stiffness.line)
+    read_all(r, TEXT_OUTPUTS)
+    read_all(r, DISPLAYS)
+    inputs, outputs = _commands(r)
+    return DonFile(str(path), panels, cables, order, types, numeric, ocean, catch, inputs, outputs, hexagonal, links)
+
+
+def _parse_panel(r, k, hexagonal):
+    """One diamond or hexagonal panel (phobos ``chargement_don.c``): corners, then the material fields
+    (:data:`~.grammar.PANEL_MATERIAL`, :data:`~.grammar.HEXAGONAL_PANEL_MATERIAL`)."""
+    name = f"{'hexagonal ' if hexagonal else ''}panel {k + 1}"
+    r.label(HEADINGS["panel"], name)
+    r.integer(f"{name} number")
+    nc = read(r, PANEL_CORNERS, f"{name}: ")
+    r.label(HEADINGS["contour"], f"{name}: nodes of the contour")
+    rows, ctype, stype, lines = [], [], [], []
+    for c in range(nc.value):
+        what = f"{name} corner {c + 1}"
+        number = r.integer(f"{what} number")
+        vals = [r.number(f"{what} {coord}", "position" if coord in "xyz" else "meshes")
+                for coord in ("x", "y", "z", "U", "V")]
+        rows.append([v.value for v in vals])
+        lines.append(vals[0].line)
+        ctype.append(r.integer(f"{what} node type", 1))
+        stype.append(r.integer(f"{what} following side type", 1))
+        r.one_line([number, *vals, ctype[-1], stype[-1]], number.line, what, "no x y z U V type following-type",
+                   (f"{name} corner {c}", lines[-2]) if c else None)
+    if hexagonal:
+        # FEMNET reads the rest of the last corner's line, then skips one whole line (two fgets) before the
+        # fields: a field written on that line would be lost to FEMNET, so it must hold none
+        skipped = stype[-1].line + 1
+        if skipped <= len(r.starts):
+            text = r.line_text(skipped)
+            if ":" in text:
+                raise r.error(f"{name}: FEMNET skips the line after the last corner of a hexagonal panel, but it holds "
+                              f"a field ({text.strip()!r}); leave a line (blank or a comment without ':') there",
+                              skipped)
+    mat = read_all(r, HEXAGONAL_PANEL_MATERIAL if hexagonal else PANEL_MATERIAL, f"{name}: ")
+    t = mat["mesh_type"]
+    # FEMNET meshes netting into triangles with types 1 and 2; higher types model the twines as bars
+    # (maillage.c: 3 and 4 for diamond panels, 3 for hexagonal ones), another model
+    bars = (3,) if hexagonal else (3, 4)
+    if t.value in bars:
+        raise r.error(f"{name}: meshing type {t.value} (twines as bar elements) is not supported (only 1 or 2: "
+                      "triangular netting elements)", t.line)
+    if t.value not in (1, 2):
+        raise r.error(f"{name}: meshing type must be 1 or 2, got {t.value}", t.line)
+    corners = np.array(rows)
+    _check_contour(r, corners, lines, name)
+    # jaxnet meshes with a step of h twines (base meshes for hexagonal netting): refuse a mesh too large to be
+    # meant (FEMNET's own limit is 20000 nodes in all, phobos.h NBMAXNOEUD) before trying to make it
+    if hexagonal:
+        uv, h = corners[:, 3:5], mat["step"].value / (3.0 * np.mean([v.value for v in mat["l0"]]))
+    else:
+        uv, h = twine_coordinates(corners[:, 3:5]), mat["step"].value / mat["l0"].value
+    nxt = np.roll(uv, -1, axis=0)
+    area = 0.5 * abs(np.sum(uv[:, 0] * nxt[:, 1] - nxt[:, 0] * uv[:, 1]))
+    with np.errstate(all="ignore"):  # a step that underflows h to 0 estimates inf nodes, refused below
+        estimate = area / (h * h * math.sqrt(3.0) / 2.0) + np.hypot(*(nxt - uv).T).sum() / h
+    if not estimate <= MAX_PANEL_NODES:
+        raise r.error(f"{name}: meshing step {mat['step'].value!r} m gives about {estimate:.3g} nodes (limit "
+                      f"{MAX_PANEL_NODES}); use a larger step", mat["step"].line)
+    return DonPanel(corners, ctype, stype, mat, nc.line, hexagonal)
+
+
+def _check_contour(r, corners, lines, name):
+    """The panel's contour in twine coordinates must enclose an area (no repeated corner, not collinear)."""
+    uv = twine_coordinates(corners[:, 3:5])
+    nxt = np.roll(uv, -1, axis=0)
+    for c in range(len(uv)):
+        if np.allclose(uv[c], nxt[c], rtol=0, atol=1e-12):
+            raise r.error(f"{name}: corners {c + 1} and {(c + 1) % len(uv) + 1} have the same (U, V)", lines[c])
+    area = 0.5 * np.sum(uv[:, 0] * nxt[:, 1] - nxt[:, 0] * uv[:, 1])
+    scale = np.ptp(uv, axis=0).max() ** 2
+    if not abs(area) > 1e-9 * max(scale, 1e-300):
+        raise r.error(f"{name}: the (U, V) contour of its corners is collinear (no area): "
+                      f"{corners[:, 3:5].tolist()}", lines[0])
+
+
+def _parse_cable(r, k):
+    """One cable (``chargement_don.c``): its two ends (no x y z type on one line each), then its material
+    (:data:`~.grammar.CABLE_MATERIAL`)."""
+    r.label(HEADINGS["cable"], f"cable {k + 1}")
+    r.integer(f"cable {k + 1} number")
+    r.label(HEADINGS["cable ends"], f"cable {k + 1}: extremities")
+    ends, etype = [], []
+    previous = None
+    for e in range(2):
+        what = f"cable {k + 1} end {e + 1}"
+        number = r.integer(f"{what} number")
+        row = [r.number(f"{what} {name}", "position") for name in "xyz"]
+        etype.append(r.integer(f"{what} node type", 1))
+        r.one_line([number, *row, etype[-1]], number.line, what, "no x y z type", previous)
+        ends.append([v.value for v in row])
+        previous = (what, number.line)
+    mat = read_all(r, CABLE_MATERIAL, f"cable {k + 1}: ")
+    return DonCable(np.array(ends), etype, mat, etype[0].line)
+
+
+def _parse_node_type(r, t):
+    """The ``t``-th node type (0-based): (its number, :class:`~.grammar.DonNodeType`), its fields
+    :data:`~.grammar.NODE_TYPE` checked together."""
+    r.label(HEADINGS["node type"], f"node type {t + 1}")
+    number = r.integer(f"node type {t + 1} number", 1)
+    f = read_all(r, NODE_TYPE, f"node type {number.value}: ")
+    # added mass only acts in dynamics (FEMNET's lectureDo4.c): kept in the info, no effect in statics
+    _check_body(r, number.value, f["length"])
+    for v in f["sense"]:
+        if v.value not in (-1, 0, 1):
+            raise r.error(f"node type {number.value}: limits sense must be -1 (ceiling), 0 (none) or 1 (floor), "
+                          f"got {v.value}", v.line)
+    for a, (v, s) in enumerate(zip(f["limit"], f["sense"])):
+        # a limit without a sense is never read (FEMNET's fond.c tests the sense first): any number will do
+        if s.value and not abs(v.value) <= MAX_COORDINATE:
+            raise r.error(f"node type {number.value}: limits {'XYZ'[a]} {v.value!r} m is out of range (at most "
+                          f"{MAX_COORDINATE:g} m from the origin)", v.line)
+    mass = f["mass"]
+    if len({m.value for m in mass}) > 1:
+        raise r.error(f"node type {number.value}: anisotropic mass {[m.value for m in mass]} is not supported "
+                      "(give the same mass along X, Y and Z)", mass[0].line)
+    return number, DonNodeType([m.value for m in mass], [v.value for v in f["force"]], f["fixed"], f["symmetry"],
+                               number.line, [v.value for v in f["added_mass"]], f["length"], f["drag_coefficient"],
+                               f["limit"], f["sense"])
+
+
+def _check_body(r, t, length):
+    """A node type's box (FEMNET's "Length X,Y,Z"): widths X, Y >= 0 (FEMNET's drag takes them signed, a negative
+    one would be a drag against the current), a height Z of either sign (< 0: the box hangs below its node, a
+    sinker), sizes in range, and no volume: FEMNET floats a box (``flotteur2.c``: rho g L_x L_y times its
+    immersed height, along z), a buoyancy jaxnet's node box does not have (see the package's docstring)."""
+    for a, v in enumerate(length):
+        if a < 2 and v.value < 0:
+            raise r.error(f"node type {t}: length {'XYZ'[a]} must be >= 0 m (a width of its box), got {v.value!r}",
+                          v.line)
+        if not abs(v.value) <= MAX_COORDINATE:
+            raise r.error(f"node type {t}: length {'XYZ'[a]} {v.value!r} m is out of range (at most "
+                          f"{MAX_COORDINATE:g} m)", v.line)
+    lx, ly, lz = (v.value for v in length)
+    if lx != 0 and ly != 0 and lz != 0:
+        raise r.error(f"node type {t}: length {[lx, ly, lz]} m is not supported: FEMNET's box of "
+                      f"{abs(lx * ly * lz):.6g} m³ floats (flotteur2.c: buoyancy rho g L_x L_y times its immersed "
+                      "height), which jaxnet's node box does not model; only boxes without volume (one length 0: "
+                      "drag without buoyancy)", length[0].line)
+
+
+def _parse_link(r, k, counts):
+    """One link (``chargement_don.c``): its number of points, then per point the structure (pa: diamond panel,
+    ha: hexagonal panel, el: cable; FEMNET goes by the first letter) and its corner or end (nd:). ``counts``:
+    {kind: [number of corners (ends) per part]}."""
+    r.label(HEADINGS["link"], f"link {k + 1}")
+    n = r.integer(f"link {k + 1}: number of points", 1)
+    members, seen = [], set()
+    for i in range(n.value):
+        what = f"link {k + 1} point {i + 1}"
+        label = r.label(HEADINGS["link structure"], f"{what}: structure (pa:, ha: or el:)")
+        if label[0] in "cw":
+            raise r.error(f"{what}: '{label}:' links a {'sliding cable' if label[0] == 'c' else 'winch'}, not supported",
+                          r.line(r.pos - 1))
+        kind = {"p": "pa", "h": "ha", "e": "el"}[label[0]]
+        name = PART_NAMES[kind]
+        idx = r.integer(f"{what}: {name} number", 1)
+        if idx.value > len(counts[kind]):
+            raise r.error(f"{what}: there is no {name} {idx.value} (the case has {len(counts[kind])})", idx.line)
+        r.label(HEADINGS["link corner"], f"{what}: corner (nd:)")
+        corner = r.integer(f"{what}: corner of {name} {idx.value}", 1)
+        if corner.value > counts[kind][idx.value - 1]:
+            raise r.error(f"{what}: {name} {idx.value} has no {'end' if kind == 'el' else 'corner'} {corner.value} "
+                          f"(it has {counts[kind][idx.value - 1]})", corner.line)
+        key = (kind, idx.value - 1, corner.value - 1)
+        if key in seen:
+            raise r.error(f"{what}: {name} {idx.value} corner {corner.value} is listed twice in link {k + 1}",
+                          corner.line)
+        seen.add(key)
+        members.append((*key, corner.line))
+    return DonLink(members, n.line)
+
+
+def _parse_order(r, counts):
+    """The meshing order: ``el: k``, ``pa: k``, ``ha: k`` entries, every cable and panel once; or FEMNET's
+    shorthand, a word beginning with 'a' (cables, then panels, then hexagonal panels, each in number order)
+    or 'b' (panels, hexagonal panels, then cables)."""
+    r.label(HEADINGS["meshing order"], "meshing order")
+    words = re.compile(r"\s*(\S+)").match(r.text, r.pos)
+    if words and words.group(1)[0].lower() in "ab" and ":" not in words.group(1):
+        r.pos = words.end()
+        entries = {kind: [(kind, j + 1) for j in range(len(counts[kind]))] for kind in counts}
+        first = words.group(1)[0].lower() == "a"
+        return entries["el"] + entries["pa"] + entries["ha"] if first else entries["pa"] + entries["ha"] + entries["el"]
+    order, seen = [], set()
+    for _ in range(sum(len(v) for v in counts.values())):
+        kind = r.label(HEADINGS["meshing order entry"], "meshing order entry (el:, pa: or ha:)")
+        kind = "ha" if kind == "he" else kind
+        idx = r.integer(f"meshing order {kind}", 1)
+        if idx.value > len(counts[kind]) or (kind, idx.value) in seen:
+            raise r.error(f"meshing order: '{kind}: {idx.value}' is not a {PART_NAMES[kind]} of the case, or is "
+                          "listed twice", idx.line)
+        seen.add((kind, idx.value))
+        order.append((kind, idx.value))
+    return order
+
+
+def _commands(r):
+    """The free-order tail: ``input NAME values`` and ``output NAME`` lines (:data:`~.grammar.COMMANDS`),
+    comments (# or //). Returns ({input name: Value}, [output names as written])."""
+    inputs, outputs = {}, []
+    start = r.line(r.pos)
+    rest = r.text[r.pos:].split("\n")
+    for i, raw in enumerate(rest):
+        line_no = start + i
+        words = raw.split()
+        if i == 0 and words:  # the remainder of the last field's line: the display flag was read already
+            raise r.error(f"unexpected text {raw.strip()!r} after the last field", line_no)
+        if not words or words[0].startswith("#") or words[0].startswith("//"):
+            continue
+        kind = words[0].lower()
+        if kind not in ("input", "output") or len(words) < 2:
+            raise r.error(f"expected 'input NAME ...' or 'output NAME', found {raw.strip()!r}", line_no)
+        name = words[1]
+        if kind == "output":
+            if name.lower() not in OUTPUTS:
+                raise r.error(f"'output {name}': not known to be a print-only output; not supported", line_no)
+            outputs.append(name)
+            continue
+        if name.lower() not in INPUTS:
+            raise r.error(f"'input {name}': unknown input command, not supported (known: {sorted(INPUTS)})", line_no)
+        command = INPUTS[name.lower()]
+        n = command.n_values
+        try:
+            values = [float(w) for w in words[2:2 + n]]
+        except ValueError:
+            raise r.error(f"'input {name}': expected {n} number(s), found {' '.join(words[2:])!r}", line_no) from None
+        if len(values) != n or len(words) > 2 + n or not all(math.isfinite(v) for v in values):
+            raise r.error(f"'input {name}': expected {n} finite number(s), found {' '.join(words[2:])!r}", line_no)
+        refused = command.check(values) if command.check is not None else None
+        if refused is not None:
+            raise r.error(refused, line_no)
+        inputs[name.lower()] = Value(values[0] if n == 1 else tuple(values), line_no) if n else Value(1.0, line_no)
+    return inputs, outputs
