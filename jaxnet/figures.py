@@ -28,7 +28,7 @@ FORCE_GROUPS = {
 
 # The figures are computed by compiled programs, each for a scene shape, kept by :mod:`jaxnet.solve.programs`
 # (on disk where the solver's are): evaluated op by op, jax 0.10 compiles a program for every operation,
-# and a first `jaxnet run` of FEMNET's c2 spent 2.1 s in this module against 2.5 s in the solve.
+# and a first `jaxnet run` would spend about as long on its figures as on its solve.
 
 
 def _netting_tensions(x, vertices, uv, l0, ea_traction, ea_compression):
@@ -64,8 +64,7 @@ def bar_tensions(scene, x):
 
 def total_load(scene):
     """(3,) sum of all constant loads (weight, buoyancy, external forces) in N."""
-    model = model_lib.active_terms(scene)  # the solver's own program, which a solve of this scene has compiled
-    return np.asarray(programs.obtain("loads", statics._loads_jit, (scene,), {"model": model})(scene)).sum(axis=0)
+    return statics.constant_loads(scene, model_lib.active_terms(scene)).sum(axis=0)
 
 
 def forces_by_term(scene, x, names=None):
@@ -130,8 +129,9 @@ def enclosed_volume(scene, x):
     return float(catch_lib.enclosed_volume(np.asarray(x), scene.netting.vertices, front, e.axis, sign=scene.netting.outward))
 
 
-def summary(scene, eq, timing=None):
-    """The figures of ``result.json`` (see the README for their meaning and units)."""
+def summary(scene, eq):
+    """The figures of ``result.json`` (see the README for their meaning and units); the solve's wall and
+    compile times where the equilibrium holds them (``eq.timing``)."""
     reaction = eq.reaction(scene)
     tw = twine_tensions(scene, eq.x)
     bt = bar_tensions(scene, eq.x)
@@ -162,7 +162,7 @@ def summary(scene, eq, timing=None):
     report = catch_report(scene, eq.x)
     if report is not None:
         out["catch"] = report
-    if timing is not None:
-        out["wall_s"] = float(timing.wall_s)
-        out["compile_s"] = float(timing.compile_s)
+    if eq.timing is not None:
+        out["wall_s"] = float(eq.timing.wall_s)
+        out["compile_s"] = float(eq.timing.compile_s)
     return out

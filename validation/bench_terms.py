@@ -177,9 +177,10 @@ def one_size(step, repeats):
     timed = _TimedHostSolve(linalg.host_solve)
     linalg.host_solve = timed
     try:
-        eq, timing = jn.solve(scene, raise_on_failure=False)
+        eq = jn.solve(scene, throw=False)
     finally:
         linalg.host_solve = timed.host_solve
+    timing = eq.timing
     m = model.active_terms(scene)
     pattern = assemble.build_pattern(scene, m)
     load = assemble.loads(scene, m)
@@ -249,7 +250,7 @@ def terms(step, repeats, compile_repeats):
     from jaxnet import model
 
     scene = _cage(step)
-    eq, _ = jn.solve(scene, raise_on_failure=False)
+    eq = jn.solve(scene, throw=False)
     full = model.active_terms(scene)
     rows = [{"label": "all active terms", "term": None}]
     cases = [_prepare(eq.x, scene, full)]
