@@ -21,8 +21,8 @@ Compiled programs are kept on disk (in ``--cache DIR``, default ``$XDG_CACHE_HOM
 ``~/.cache/jaxnet``: the static solver's programs whole, :mod:`jaxnet.solve.programs`, the others in JAX's
 persistent compilation cache; ``--no-cache`` to switch both off; a ``JAX_COMPILATION_CACHE_DIR`` set by the
 user wins): a second run of a case of the same shape and terms — another current speed, another catch, the
-same case again — loads them instead of tracing and compiling (FEMNET's c2: about 10 s of compilation
-becomes about half a second).
+same case again — loads them instead of tracing and compiling, most of a first run's time
+(``validation/femnet_cases.py`` times cold runs with and without them).
 """
 
 from __future__ import annotations
@@ -52,7 +52,8 @@ def _run(args):
     from jaxnet import figures
     from jaxnet.io import plot, scene_file, vtk
     from jaxnet.scenes import BUILT_IN
-    from jaxnet.solve.statics import Newton, SolveError, solve
+    from jaxnet.solve.options import STATIC
+    from jaxnet.solve.statics import SolveError, solve
 
     from jaxnet.io import femnet
     from jaxnet.scene import SceneError
@@ -66,7 +67,7 @@ def _run(args):
         raise SceneError("--mesh (FEMNET's .mdg mesh) goes with a FEMNET case CASE.don")
     if args.scene is None:
         make, description = BUILT_IN[args.builtin]
-        net, solver = make(), Newton()
+        net, solver = make(), STATIC
         label = f"built-in scene '{args.builtin}': {description}"
         scene = net.build()
     elif str(args.scene).endswith(".don"):
@@ -89,10 +90,10 @@ def _run(args):
     out.mkdir(parents=True, exist_ok=True)
     failed = None
     try:
-        eq, timing = solve(scene, solver, verbose=not args.quiet, **overrides)
+        eq = solve(scene, solver, verbose=not args.quiet, **overrides)
     except SolveError as err:
-        failed, eq, timing = err, err.equilibrium, None
-    result = figures.summary(scene, eq, timing)
+        failed, eq = err, err.equilibrium
+    result = figures.summary(scene, eq)
     if femnet_info is not None:
         result["femnet"] = femnet.femnet_figures(scene, eq, femnet_info["symmetry_axes"])
         result["femnet_case"] = femnet_info
@@ -102,8 +103,8 @@ def _run(args):
     r = result["reaction_N"]
     print(f"  {'converged' if result['converged'] else 'NOT converged: ' + result['reason']} in {result['iterations']} "
           f"iterations, residual {result['residual_N']:.3g} N")
-    if timing is not None:
-        print(f"  wall {timing.wall_s:.2f} s (compile {timing.compile_s:.2f} s)")
+    if eq.timing is not None:
+        print(f"  wall {eq.timing.wall_s:.2f} s (compile {eq.timing.compile_s:.2f} s)")
     print(f"  reaction at fixed nodes [{r[0]:.4g}, {r[1]:.4g}, {r[2]:.4g}] N, max twine tension "
           f"{result['max_twine_tension_N']:.4g} N, max bar tension {result['max_bar_tension_N']:.4g} N")
     print(f"  wrote {out / 'result.json'}, {out / 'net.vtu'}, {out / 'net.png'}")
@@ -149,7 +150,7 @@ def _run_dynamic(args):
             settings[key] = value
     if "end_time" not in settings:
         raise SceneError("--dynamic: give the end time (--end, s); the scene has none")
-    time_step = settings.get("time_step", 0.01)
+    time_step = settings.get("time_step", dynamics.Implicit.time_step)
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     print(f"jaxnet: {label}")
@@ -157,7 +158,7 @@ def _run_dynamic(args):
           f"{settings['end_time']:g} s, step {time_step:g} s")
     x0 = None
     if not args.resume:
-        eq, _ = solve(dynamics.scene_at(scene, loading, 0.0), verbose=False, raise_on_failure=False)
+        eq = solve(dynamics.scene_at(scene, loading, 0.0), verbose=False, throw=False)
         print(f"  start: static equilibrium {'converged' if eq.converged else 'NOT converged (' + eq.reason + ')'}"
               f" in {int(eq.iterations)} iterations")
         x0 = np.asarray(eq.x)
@@ -169,13 +170,14 @@ def _run_dynamic(args):
         print(f"jaxnet: {err}", file=sys.stderr)
         return 1
     print(f"  {run.steps} steps, {run.mean_iterations:.2f} Newton iterations per step, {int(run.state.retries)} "
-          f"retried; wall {run.wall_s:.2f} s (first interval with compilation {run.compile_s:.2f} s)")
+          f"retried; wall {run.timing.wall_s:.2f} s (first interval with compilation {run.timing.compile_s:.2f} s)")
     print(f"  wrote {out / 'series.npz'}, {out / 'series.pvd'}")
     return 0
 
 
 def main(argv=None):
     from jaxnet.scenes import BUILT_IN, DEFAULT, DYNAMIC
+    from jaxnet.solve.options import Implicit
 
     parser = argparse.ArgumentParser(prog="jaxnet", description="Static equilibrium of nets (Priour's netting element) on JAX.")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -200,7 +202,8 @@ def main(argv=None):
     run.add_argument("--dynamic", action="store_true",
                      help="run in time (implicit dynamics) from the static equilibrium; built-in default: cage_waves")
     run.add_argument("--end", type=float, help="with --dynamic: end time (s)")
-    run.add_argument("--dt", type=float, help="with --dynamic: time step (s), default 0.01 or the case's")
+    run.add_argument("--dt", type=float,
+                     help=f"with --dynamic: time step (s), default {Implicit.time_step:g} or the case's")
     run.add_argument("--record", type=float, help="with --dynamic: time between records (s), default every step")
     run.add_argument("--resume", action="store_true", help="with --dynamic: continue the run in --out from its last record")
     default_cache = pathlib.Path(os.environ.get("XDG_CACHE_HOME") or pathlib.Path.home() / ".cache") / "jaxnet"

@@ -52,8 +52,7 @@ def bar_tensions(scene, x):
 
 def total_load(scene):
     """(3,) sum of all constant loads (weight, buoyancy, external forces) in N."""
-    model = model_lib.active_terms(scene)  # the solver's own program, which a solve of this scene has compiled
-    return np.asarray(programs.obtain("loads", statics._loads_jit, (scene,), {"model": model})(scene)).sum(axis=0)
+    return statics.constant_loads(scene, model_lib.active_terms(scene)).sum(axis=0)
 
 
 def forces_by_term(scene, x, names=None):
@@ -120,8 +119,9 @@ def enclosed_volume(scene, x):
     return float(catch_lib.enclosed_volume(np.asarray(x), scene.netting.vertices, front, e.axis, sign=scene.netting.outward))
 
 
-def summary(scene, eq, timing=None):
-    """The figures of ``result.json`` (see the README for their meaning and units)."""
+def summary(scene, eq):
+    """The figures of ``result.json`` (see the README for their meaning and units); the solve's wall and
+    compile times where the equilibrium holds them (``eq.timing``)."""
     reaction = eq.reaction(scene)
     tw = twine_tensions(scene, eq.x)
     bt = bar_tensions(scene, eq.x)
@@ -152,7 +152,7 @@ def summary(scene, eq, timing=None):
     report = catch_report(scene, eq.x)
     if report is not None:
         out["catch"] = report
-    if timing is not None:
-        out["wall_s"] = float(timing.wall_s)
-        out["compile_s"] = float(timing.compile_s)
+    if eq.timing is not None:
+        out["wall_s"] = float(eq.timing.wall_s)
+        out["compile_s"] = float(eq.timing.compile_s)
     return out

@@ -4,7 +4,7 @@ The tangent of a net is sparse, often nearly singular (slack twines, a flat memb
 stiffness) and badly conditioned (EA/l0 against small geometric stiffness): Krylov methods with cheap
 preconditioners do not converge on it (measured: ../shared/notes/solvers.md), so it is factorised by
 SuperLU (scipy), called from inside jitted code through ``jax.pure_callback`` and run on a Python thread
-of this module's (:func:`_on_solver_thread`: SuperLU's memory is freed only there). The structure (indptr,
+of this module's (:func:`on_solver_thread`: SuperLU's memory is freed only there). The structure (indptr,
 indices) is passed as arguments, so one compiled program serves every scene of the same shape. The
 minimum-degree ordering on A^T + A suits the structurally symmetric pattern of finite elements (about
 half the fill of COLAMD on these matrices).
@@ -13,8 +13,8 @@ Pivoting. The tangents are structurally symmetric and their values nearly so (dr
 nonsymmetric), but their diagonal can be tiny or zero at slack twines and closed meshes. A threshold of 0.1
 (SuperLU's "take the diagonal unless it is below 0.1 x its column's largest entry") pivots off the
 diagonal in hundreds of columns of the later Newton tangents, and each such pivot breaks the symmetric
-ordering: the factor grows 2-4x beyond the ordering's prediction (84k -> 308k entries at n = 1332) and the
-factorisation 2-5x slower. So the regular factorisation prefers the diagonal much more strongly
+ordering: the factor grows several times beyond the ordering's prediction, and the factorisation slows
+as much. So the regular factorisation prefers the diagonal much more strongly
 (:data:`PIVOT_THRESHOLD` = 1e-3: no off-diagonal pivot in any tangent of the FEMNET cases, so the fill
 stays the ordering's; as fast as 0, which would also accept pivots that are tiny but not zero). Its
 multipliers are bounded by 1/threshold instead of partial pivoting's 1, so entries can grow more during
@@ -23,7 +23,8 @@ the elimination. What makes that safe is a check of every solution's normwise ba
 the conditioning): above :data:`TOLERANCE` the solution is refined (x += A^-1 r with the same factor, up
 to :data:`REFINEMENTS` times), and if it still fails, or the factorisation breaks down, the matrix is
 refactorised with partial pivoting (threshold 1, COLAMD column ordering, which bounds the fill whatever
-the row interchanges; the symmetric ordering with partial pivoting fills 3-10x more and is 3-13x slower)
+the row interchanges; the symmetric ordering with partial pivoting fills several times more and is as
+much slower)
 and counted in :attr:`HostSolver.fallbacks`. A zero diagonal entry alone causes no fallback: SuperLU never
 takes a zero pivot, it takes the column's largest entry instead.
 """
@@ -43,6 +44,8 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from jaxnet.memo import Memo
+
 #: A diagonal entry is the pivot of its column when it is at least this fraction of the column's largest
 #: entry (after the updates of the earlier columns); otherwise that largest entry is. Dimensionless.
 PIVOT_THRESHOLD = 1e-3
@@ -51,36 +54,38 @@ PIVOT_THRESHOLD = 1e-3
 TOLERANCE = 1e-12
 #: Steps of iterative refinement tried before refactorising with partial pivoting.
 REFINEMENTS = 2
-#: SuperLU's panel size (columns updated together): 1 is 15-20 % faster than scipy's default on the
-#: FEMNET tangents (their supernodes are small); it changes neither the pivots nor the fill.
+#: SuperLU's panel size (columns updated together): 1 is faster than scipy's default on the FEMNET
+#: tangents (their supernodes are small; ``validation/superlu_options.py``); it changes neither the pivots
+#: nor the fill.
 PANEL_SIZE = 1
 #: SuperLU's relaxed-supernode size (subtrees of the elimination tree of at most this many columns are
-#: merged into one supernode). SuperLU's default, 10, costs 10-17 % on the FEMNET tangents and the cage of
-#: 339 unknowns, and 3.4x at 8451 unknowns (the cage meshed at 0.3 m: 98 against 29 ms per factorisation,
-#: the same fill); 1, 2 and 3 are within 5 % of each other on all of them (``validation/superlu_options.py``).
+#: merged into one supernode). SuperLU's default, 10, is slower on the FEMNET tangents and on the cage,
+#: and several times slower on the cage meshed finely, at the same fill; 1, 2 and 3 are alike on all of
+#: them (``validation/superlu_options.py``).
 RELAX = 2
 
 
-#: bytes of the block :func:`_keep_factor_memory` allocates and frees once per process
-_MALLOC_PRIMER = 16 << 20
+#: bytes of the block :func:`keep_factor_memory` allocates and frees once per process (0: none, the heap
+#: left as glibc starts; ``validation/superlu_memory.py`` compares the two)
+MALLOC_PRIMER = 16 << 20
 _PRIMED = []
 
 
-def _keep_factor_memory():
+def keep_factor_memory():
     """Let the C heap keep the memory of SuperLU's factors between factorisations (once per process).
 
     Why. Each factorisation allocates its L and U afresh (a few MB on the FEMNET cases) and frees them at
     the next. glibc's malloc serves blocks above its mmap threshold (128 kB at start) by mmap, returns them
     to the system on free, and every page of the next factor is then faulted in again. glibc raises that
     threshold (and the trim threshold, to twice it) to the size of any mmapped block freed, up to 32 MB:
-    freeing one 16 MB block makes the later factors come from the heap and stay there. Measured
-    (``validation/superlu_memory.py``, FEMNET's c2 on its mesh): 2.16 ms and 26 page faults per
-    factorisation, against 2.89 ms and 405. Elsewhere than glibc this is one allocation and its release,
-    nothing more. The process may keep up to 32 MB more heap.
+    freeing one 16 MB block makes the later factors come from the heap and stay there: a factorisation
+    then takes fewer page faults and less time (``validation/superlu_memory.py`` measures both). Elsewhere
+    than glibc this is one allocation and its release, nothing more. The process may keep up to 32 MB more
+    heap. Called by every :class:`HostSolver`.
     """
     if not _PRIMED:
         _PRIMED.append(True)
-        np.empty(_MALLOC_PRIMER, dtype=np.uint8)  # from malloc (numpy's large arrays), freed at once
+        np.empty(MALLOC_PRIMER, dtype=np.uint8)  # from malloc (numpy's large arrays), freed at once
 
 
 def matvec(data, rows, indices, v):
@@ -88,15 +93,14 @@ def matvec(data, rows, indices, v):
     return jax.ops.segment_sum(data * v[indices], rows, num_segments=v.shape[0], indices_are_sorted=True)
 
 
-#: solvers of the structures seen by :func:`solve`'s callback ((structure digest, thread) -> HostSolver): a jitted loop
-#: of Newton solves (dynamics: thousands of time steps) then computes each structure's ordering once.
-_SOLVERS: dict = {}
-_SOLVERS_LOCK = threading.Lock()
-_MAX_SOLVERS = 64  # structures x threads
+#: solvers of the structures seen by :func:`solve`'s callback ((structure digest, thread) -> HostSolver; at
+#: most 64 structures x threads): a jitted loop of Newton solves (dynamics: thousands of time steps) then
+#: computes each structure's ordering once.
+_SOLVERS = Memo(64)
 
 
 #: the solver each thread used last: a Newton loop solves on one structure over and over, and comparing it
-#: (a memcmp, ~10 us) is far cheaper than digesting it (about 0.1 ms per solve on the cage in waves)
+#: (a memcmp) is far cheaper than digesting it, a cost on every solve of a time step
 _LAST = threading.local()
 
 
@@ -107,12 +111,11 @@ def _structure_digest(indptr, indices):
 
 
 #: the fill-reducing ordering of each structure factorised so far, with the permuted structure it gives
-#: (structure digest -> :class:`_Ordering`): the ordering depends on the structure only, so a second solve of
-#: a scene of the same shape (another load, another start: a warm solve) skips SuperLU's ordering step
-#: and the permutation's set-up (FEMNET's c2: its first factorisation 7.4 ms, the later ones 3.2 ms)
-_ORDERINGS: dict = {}
-_ORDERINGS_LOCK = threading.Lock()
-_MAX_ORDERINGS = 64
+#: (structure digest -> :class:`_Ordering`, at most 64): the ordering depends on the structure only, so a
+#: second solve of a scene of the same shape (another load, another start: a warm solve) skips SuperLU's
+#: ordering step and the permutation's set-up, the larger part of a first factorisation
+#: (``validation/femnet_cases.py`` times cold and warm solves)
+_ORDERINGS = Memo(64)
 
 
 def _host_solver(indptr, indices):
@@ -129,26 +132,22 @@ def _lookup_solver(indptr, indices):
     # one solver per structure and thread: the callbacks of a program sharded over several devices run in
     # several of XLA's threads at once, and a solver holds its last factor (not to be shared mid-solve)
     key = (_structure_digest(indptr, indices), threading.get_ident())
-    with _SOLVERS_LOCK:
-        solver = _SOLVERS.get(key)
-        if solver is None:
-            if len(_SOLVERS) >= _MAX_SOLVERS:
-                _SOLVERS.pop(next(iter(_SOLVERS)))
-            solver = _SOLVERS[key] = HostSolver(indptr, indices)
-    return solver
+    return _SOLVERS.get_or_make(key, lambda: HostSolver(indptr, indices))
 
 
-def _host_solve(data, rhs, indptr, indices, transpose=False, reuse=False):
+def host_solve(data, rhs, indptr, indices, transpose=False, reuse=False):
+    """What :func:`solve`'s host callback computes, on the host (numpy): x solving A x = rhs (A^T x = rhs if
+    ``transpose``) for the CSR matrix (data, indices, indptr), and ok (a numpy bool), by this thread's
+    :class:`HostSolver` of the structure (its ordering kept between calls)."""
     x, ok = _host_solver(indptr, indices).solve(data, rhs, transpose, reuse)
     return x, np.asarray(ok)
 
 
 #: the Python threads that run the callbacks' host solves: (process, calling thread) -> a one-thread executor
-_WORKERS: dict = {}
-_WORKERS_LOCK = threading.Lock()
+_WORKERS = Memo(None)
 
 
-def _on_solver_thread(function, *args, **kwargs):
+def on_solver_thread(function, *args, **kwargs):
     """``function(*args, **kwargs)`` run on a thread that Python made (one per calling thread, the same for
     every call from it); its result, or its exception raised here.
 
@@ -157,33 +156,31 @@ def _on_solver_thread(function, *args, **kwargs):
     that allocates it, and frees memory only if the thread state of the call that frees it recorded it
     (scipy's ``_superlu_utils.c``, a record per thread). A :class:`HostSolver` keeps its last factor until
     the next factorisation, so the factor made in one callback was dropped in the next, under another thread
-    state, and never freed: the size of L and U lost per factorisation (measured: the jitted Newton loop on
-    the 339-unknown cage grew by 183 kB per factorisation; the cage in waves by 86 MB per 200 time steps; the
-    diffrax reference on it by 50 MB/s, 22 GB in 7 minutes). A thread Python made keeps one thread state,
+    state, and never freed: the size of L and U lost per factorisation, so that a dynamic run or a diffrax
+    reference grew without bound (``tests/test_linalg.py`` checks that the memory does not grow with the
+    calls). A thread Python made keeps one thread state,
     so every factor is freed where it was made. One such thread per calling thread: the callbacks of
     several devices (``jaxnet.design.batch``) still solve at the same time, and the per-thread solvers
     (:data:`_SOLVERS`, :data:`_LAST`) stay apart.
     """
     # by process too: a forked child inherits the table but not the threads (it would wait forever)
     caller = (os.getpid(), threading.get_ident())
-    with _WORKERS_LOCK:
-        worker = _WORKERS.get(caller)
-        if worker is None:
-            worker = _WORKERS[caller] = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="jaxnet-superlu")
+    worker = _WORKERS.get_or_make(
+        caller, lambda: concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="jaxnet-superlu"))
     return worker.submit(function, *args, **kwargs).result()
 
 
 def _host_solve_packed(packed, nnz, rhs_shape, transpose=False, reuse=False):
-    """:func:`_host_solve` of the arguments :func:`solve` packed into one array, on the calling thread's
-    solver thread (:func:`_on_solver_thread`)."""
-    return _on_solver_thread(_unpack_and_solve, np.asarray(packed), nnz, rhs_shape, transpose, reuse)
+    """:func:`host_solve` of the arguments :func:`solve` packed into one array, on the calling thread's
+    solver thread (:func:`on_solver_thread`)."""
+    return on_solver_thread(_unpack_and_solve, np.asarray(packed), nnz, rhs_shape, transpose, reuse)
 
 
 def _unpack_and_solve(packed, nnz, rhs_shape, transpose=False, reuse=False):
     m = int(np.prod(rhs_shape))
     n = rhs_shape[0]
     structure = packed[nnz + m:].astype(np.int64)
-    return _host_solve(packed[:nnz], packed[nnz:nnz + m].reshape(rhs_shape), structure[:n + 1], structure[n + 1:],
+    return host_solve(packed[:nnz], packed[nnz:nnz + m].reshape(rhs_shape), structure[:n + 1], structure[n + 1:],
                        transpose, reuse)
 
 
@@ -194,9 +191,9 @@ def solve(data, rhs, indptr, indices, transpose=False, reuse=False):
     out = (jax.ShapeDtypeStruct(rhs.shape, rhs.dtype), jax.ShapeDtypeStruct((), jnp.bool_))
     host = functools.partial(_host_solve_packed, nnz=data.shape[0], rhs_shape=tuple(rhs.shape), transpose=transpose,
                              reuse=reuse)
-    # One argument, not four: the callback hands each argument to the host through its own device_put, about
-    # 60-120 us apiece on CPU (measured: 4 arguments 370 us per call, 1 argument 150-210 us). The structure
-    # travels as float64 values, exact below 2**53.
+    # One argument, not four: the callback hands each argument to the host through its own device_put, a
+    # large part of a small solve's cost (``validation/dynamics_cost.py --breakdown`` times the solve through
+    # the callback). The structure travels as float64 values, exact below 2**53.
     packed = jnp.concatenate([data.astype(jnp.float64), rhs.astype(jnp.float64).ravel(),
                               indptr.astype(jnp.float64), indices.astype(jnp.float64)])
     return jax.pure_callback(host, out, packed, vmap_method="sequential")
@@ -226,7 +223,7 @@ class HostSolver:
     tangents). The fill-reducing ordering (minimum degree on A^T + A) is computed once per structure, at the
     first factorisation (and kept for later solvers of the same structure, :data:`_ORDERINGS`), and every
     later matrix is permuted symmetrically by it and factorised in that order (SuperLU without its own
-    ordering step: 20-50 % of a factorisation on the FEMNET cases). Pivots are
+    ordering step, a large part of a factorisation). Pivots are
     taken on the diagonal where they are not too small and every solution is checked; see the module
     docstring for why and for the fallback to partial pivoting.
 
@@ -248,7 +245,7 @@ class HostSolver:
 
     def __init__(self, indptr, indices, pivot_threshold=PIVOT_THRESHOLD, tolerance=TOLERANCE,
                  refinements=REFINEMENTS):
-        _keep_factor_memory()
+        keep_factor_memory()
         self.indptr, self.indices = np.asarray(indptr), np.asarray(indices)
         self.n = self.indptr.shape[0] - 1
         self.pivot_threshold, self.tolerance, self.max_refinements = pivot_threshold, tolerance, refinements
@@ -291,8 +288,7 @@ class HostSolver:
         options = {"SymmetricMode": True}  # rows eliminated in the columns' order: diagonal pivots
         if self.order is None:
             key = _structure_digest(self.indptr, self.indices)
-            with _ORDERINGS_LOCK:
-                known = _ORDERINGS.get(key)
+            known = _ORDERINGS.get(key)
             if known is None:
                 # CSR of A read as CSC is A^T: factorise A^T and solve with trans="T" (no conversion).
                 at = sp.csc_matrix((data, self.indices, self.indptr), shape=(n, n))
@@ -302,11 +298,7 @@ class HostSolver:
                 # perm_c maps a column to its place (after SuperLU's postorder of the elimination tree): the
                 # symmetric permutation that reproduces the ordering takes rows and columns in its inverse's
                 # order.
-                known = self._ordering(np.argsort(self._lu.perm_c))
-                with _ORDERINGS_LOCK:
-                    if len(_ORDERINGS) >= _MAX_ORDERINGS:
-                        _ORDERINGS.pop(next(iter(_ORDERINGS)))
-                    _ORDERINGS[key] = known
+                known = _ORDERINGS.put(key, self._ordering(np.argsort(self._lu.perm_c)))
                 self._use(known)
                 return
             self._use(known)

@@ -88,7 +88,7 @@ def mean_pull_closed_form(m, ea, h, n):
 
 def spring_figure(p, n, segment=None):
     """The mean pull on the support along x over n steps of h, as a function of p = (m, EA, h)."""
-    return ad.integrate(PULL_X, spring(p[0], p[1]), spring_structure(), time_step=p[2], n_steps=n, newton=NEWTON,
+    return ad.integrate(PULL_X, spring(p[0], p[1]), spring_structure(), time_step=p[2], n_steps=n, solver=NEWTON,
                         segment=segment)
 
 
@@ -114,7 +114,7 @@ def test_trajectories_of_a_batch_of_designs_and_their_forward_derivatives_are_th
     n = 18  # ⌈√18⌉ = 5 a segment, 4 segments: the last two steps of the last segment are skipped
 
     def run(p):
-        xs, vs = ad.trajectory(spring(p[0], p[1]), spring_structure(), None, p[2], n, newton=NEWTON)
+        xs, vs = ad.trajectory(spring(p[0], p[1]), spring_structure(), None, p[2], n, solver=NEWTON)
         return xs[:, 1, 0], (xs, vs)
 
     designs = np.array([[M, EA, H], [1.5 * M, 0.8 * EA, 1.2 * H]])
@@ -258,7 +258,7 @@ def panel_run(theta):
     record = ad.series(lambda now: dict(x=now.x, v=now.v, reactions=ad.reactions(now),
                                         pull=ad.mooring_force(now, direction=[0.0, 1.0, 0.0]),
                                         magnitude=ad.mooring_force(now)),
-                       scene, panel()[2], loading, STEP, STEPS, newton=NEWTON)
+                       scene, panel()[2], loading, STEP, STEPS, solver=NEWTON)
     return jnp.stack([ad.mean(record["pull"]), ad.smooth_peak(record["magnitude"], PEAK_WIDTH)]), record
 
 

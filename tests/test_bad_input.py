@@ -8,7 +8,7 @@ import pytest
 import jaxnet as jn
 from jaxnet.io import scene_file
 from jaxnet.net import Net, Rope, Twine
-from jaxnet.solve import statics
+from jaxnet.solve import newton, statics
 
 TWINE = Twine(l0=0.02, ea=1000.0, diameter=1e-3)
 SQUARE = [(0, 0, 0, 0, 0), (1, 0, 0, 20, -20), (1, 0, 1, 40, 0), (0, 0, 1, 20, 20)]
@@ -25,8 +25,8 @@ def no_compilation(monkeypatch):
     def forbidden(*a, **k):
         raise AssertionError("the solver was compiled before the bad input was caught")
 
-    monkeypatch.setattr(statics, "_newton_jit", Forbidden())
-    monkeypatch.setattr(statics, "_compile_pieces", forbidden)
+    monkeypatch.setattr(newton, "newton_loop_jit", Forbidden())
+    monkeypatch.setattr(statics, "compile_pieces", forbidden)
 
 
 def solve_net(net):

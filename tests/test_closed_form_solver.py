@@ -24,7 +24,7 @@ from jaxnet import assemble, model
 from jaxnet.net import Twine
 from jaxnet.scenes.codend import codend
 from jaxnet.scenes.panel import hanging_panel
-from jaxnet.solve import statics
+from jaxnet.solve import newton, statics
 
 CLOSED_FORM = pathlib.Path(jn.__file__).parent / "closed_form"
 #: the tangent, compiled (op by op, its vmaps would compile dozens of small programs)
@@ -160,7 +160,7 @@ def test_both_paths_reach_the_same_equilibrium(name):
         scene = hanging_panel(meshes=6, step=0.05).build()
     else:
         scene = codend(meshes_around=8, meshes_along=6, step=0.12).build()
-    eq = {path: statics.solve(scene, jn.Newton(stiffness=path))[0] for path in assemble.STIFFNESS_PATHS}
+    eq = {path: statics.solve(scene, jn.Newton(stiffness=path)) for path in assemble.STIFFNESS_PATHS}
     a, c = eq["autodiff"], eq["closed_form"]
     assert a.converged and c.converged
     size = np.ptp(np.asarray(a.x), axis=0).max()
@@ -169,15 +169,15 @@ def test_both_paths_reach_the_same_equilibrium(name):
 
 
 def test_jitted_newton_loop_runs_on_the_closed_form():
-    """The one-program Newton (``statics.newton_loop``, for traced callers) takes the switch too, and is the
+    """The one-program Newton (``newton.newton_loop``, for traced callers) takes the switch too, and is the
     same iteration as the host loop."""
     scene = hanging_panel(meshes=6, step=0.05).build()
     solver = jn.Newton(stiffness="closed_form", stall_window=None)
-    host, _ = statics.solve(scene, solver)
+    host = statics.solve(scene, solver)
     m = model.active_terms(scene)
     pattern = assemble.build_pattern(scene, m)
     x0 = jnp.asarray(np.asarray(scene.nodes.position).ravel()[np.asarray(pattern.free)])
-    jitted = statics._newton_jit(x0, scene, pattern, model=m, opts=solver)
+    jitted = newton.newton_loop_jit(x0, scene, pattern, model=m, solver=solver)
     assert int(jitted.status) == statics.CONVERGED
     assert int(jitted.iterations) == int(host.iterations)
     np.testing.assert_allclose(np.asarray(jitted.x), np.asarray(host.x), atol=1e-9)
@@ -191,11 +191,11 @@ def test_jitted_newton_loop_threads_the_catch_front_as_the_host_loop():
 
     scene = codend(meshes_around=8, meshes_along=6, catch_m3=0.01).build()
     solver = jn.Newton(stall_window=None)
-    host, _ = statics.solve(scene, solver)
+    host = statics.solve(scene, solver)
     m = model.active_terms(scene)
     pattern = assemble.build_pattern(scene, m)
     x0 = jnp.asarray(np.asarray(scene.nodes.position).ravel()[np.asarray(pattern.free)])
-    jitted = statics._newton_jit(x0, scene, pattern, model=m, opts=solver)
+    jitted = newton.newton_loop_jit(x0, scene, pattern, model=m, solver=solver)
     assert host.converged and int(jitted.status) == statics.CONVERGED
     assert int(jitted.iterations) == int(host.iterations)
     np.testing.assert_allclose(np.asarray(jitted.x), np.asarray(host.x), atol=1e-9)

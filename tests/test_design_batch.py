@@ -32,7 +32,7 @@ from jaxnet.design.space import DesignSpace
 from jaxnet.scenes.panel import hanging_panel
 from jaxnet.solve import implicit, statics
 
-#: converged far below DEFAULT_NEWTON's 1e-8 N, for the differences of the figure
+#: converged far below options.DIFFERENTIABLE's 1e-8 N, for the differences of the figure
 NEWTON = statics.Newton(tol=1e-10, max_iter=100, damping=1e-6, stall_window=None, line_search=30)
 B = 16  # four designs a device when sharded: their host callbacks then overlap (a race once found there)
 
@@ -71,7 +71,7 @@ def panel():
 @pytest.fixture(scope="module")
 def vmapped(panel):
     space, structure, x0 = panel
-    return batch.solve_batch(space, designs(space), structure, starts(space), newton=NEWTON, figure=depth)
+    return batch.solve_batch(space, designs(space), structure, starts(space), solver=NEWTON, figure=depth)
 
 
 def test_vmapped_batch_equals_the_loop(panel, vmapped):
@@ -83,7 +83,7 @@ def test_vmapped_batch_equals_the_loop(panel, vmapped):
 
     def figure(theta, x0):
         scene = space.scene(theta)
-        eq = implicit.equilibrium(scene, structure, x0=x0, newton=NEWTON)
+        eq = implicit.equilibrium(scene, structure, x0=x0, solver=NEWTON)
         return depth(objectives.Outcome(eq.x, scene, structure.model)), eq.x
 
     one = jax.jit(jax.value_and_grad(figure, has_aux=True))
@@ -114,7 +114,7 @@ def test_batched_gradient_is_that_of_the_batched_figure(panel, vmapped):
 
     def values(shift):
         moved = dict(thetas, mesh_side={"netting": thetas["mesh_side"]["netting"] + shift})
-        return np.asarray(batch.solve_batch(space, moved, structure, starts(space), newton=NEWTON, figure=depth).value)
+        return np.asarray(batch.solve_batch(space, moved, structure, starts(space), solver=NEWTON, figure=depth).value)
 
     fd = (8 * (values(h) - values(-h)) - (values(2 * h) - values(-2 * h))) / (12 * h)
     grad = np.asarray(vmapped.gradient["mesh_side"]["netting"])
@@ -139,7 +139,7 @@ SHARDED = textwrap.dedent("""
     structure = implicit.structure_of(space.reference)
     results, layouts = {}, {}
     for method in ("vmap", "map"):
-        out = batch.solve_sharded(space, designs(space), structure, starts(space), newton=NEWTON, figure=depth,
+        out = batch.solve_sharded(space, designs(space), structure, starts(space), solver=NEWTON, figure=depth,
                                   gradient=False, method=method, mesh=batch.design_mesh(jax.devices()[1:]))
         assert out.gradient is None
         results.update({f"x {method}": np.asarray(out.x), f"value {method}": np.asarray(out.value)})
@@ -160,10 +160,13 @@ def test_sharded_batch_equals_the_vmapped_one(vmapped, tmp_path):
     replicated. The subprocess has 5 devices and leaves device 0 out of the mesh: XLA's CPU client runs the
     devices' programs on max(cores, devices) threads, and a mesh of all of them can deadlock (see
     jaxnet.design.batch)."""
-    env = dict(os.environ, XLA_FLAGS="--xla_force_host_platform_device_count=5", JAX_PLATFORMS="cpu")
+    # the jaxnet this process tests (a checkout's, where the installed one is another's), not from the cwd
+    root = os.path.dirname(os.path.dirname(os.path.abspath(jaxnet.__file__)))
+    env = dict(os.environ, XLA_FLAGS="--xla_force_host_platform_device_count=5", JAX_PLATFORMS="cpu",
+               PYTHONPATH=os.pathsep.join([root] + [p for p in [os.environ.get("PYTHONPATH")] if p]))
     result = tmp_path / "sharded.npz"
     run = subprocess.run([sys.executable, "-c", SHARDED, str(result), __file__], env=env, capture_output=True,
-                         text=True, timeout=300, cwd=tmp_path)  # jaxnet as installed, not from the cwd
+                         text=True, timeout=300, cwd=tmp_path)
     assert run.returncode == 0, run.stderr[-4000:]
     layouts = json.loads(run.stdout.strip().splitlines()[-1])
     sharded = np.load(result)

@@ -31,7 +31,7 @@ def setup():
     space = DesignSpace(rig(Twine(l0=L0, ea=1000.0, diameter=2e-3, ea_compression=100.0)))
     structure = implicit.structure_of(space.reference)
     theta0 = space.initial()
-    x0 = np.asarray(implicit.solve(space.reference, newton=NEWTON, structure=structure).x)
+    x0 = np.asarray(implicit.solve(space.reference, solver=NEWTON, structure=structure).x)
     rng = np.random.default_rng(7)
     families = [f for f in sorted(theta0) if theta0[f]]
     directions = {}
@@ -50,7 +50,7 @@ def setup():
     @jax.jit
     def figures(t):
         scene = space.scene(theta(t))
-        eq = implicit.equilibrium(scene, structure, x0=x0, newton=NEWTON)
+        eq = implicit.equilibrium(scene, structure, x0=x0, solver=NEWTON)
         return jnp.stack([drag(objectives.Outcome(eq.x, scene, structure.model)), jnp.mean(eq.x[:, 2])])
 
     return families, figures, space, x0
@@ -75,5 +75,5 @@ def test_every_family_forward_reverse_and_finite_differences():
             assert abs(forward[i, k] - fd[i]) <= 1e-6 * abs(fd[i]), (family, figure, forward[i, k], fd[i])
     from jaxnet import figures as figures_lib
 
-    tensions = figures_lib.twine_tensions(space.reference, implicit.equilibrium(space.reference, newton=NEWTON, x0=x0).x)
+    tensions = figures_lib.twine_tensions(space.reference, implicit.equilibrium(space.reference, solver=NEWTON, x0=x0).x)
     assert (tensions <= 0).any()  # slack twines at this design

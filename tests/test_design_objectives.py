@@ -40,7 +40,7 @@ def panel():
     net = hanging_panel(meshes=PANEL_MESHES, l0=PANEL_L0, step=0.05)
     net.environment = Environment(current_speed=1.0, current_direction=np.array([1.0, 1.0, 0.0]))
     scene = net.build()
-    eq, _ = statics.solve(scene, tol=1e-9)
+    eq = statics.solve(scene, tol=1e-9)
     return scene, eq, ob.outcome(eq, scene)
 
 
@@ -57,7 +57,7 @@ def cod_end():
     the net holds ~0.01 m³ at equilibrium: a catch of 0.004 m³ puts the catch front inside it."""
     twine = Twine(l0=0.06, ea=1e5, diameter=4e-3, density=1025.0)
     scene = codend(meshes_around=8, meshes_along=6, step=0.12, catch_m3=0.004, twine=twine).build()
-    eq, _ = statics.solve(scene, tol=1e-9)
+    eq = statics.solve(scene, tol=1e-9)
     return scene, eq, ob.outcome(eq, scene)
 
 

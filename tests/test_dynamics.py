@@ -9,7 +9,7 @@ import pytest
 import jaxnet  # noqa: F401  (float64)
 from jaxnet import assemble, model as model_lib
 from jaxnet.scene import Bars, Environment, Nodes, Scene
-from jaxnet.solve import dynamics, statics
+from jaxnet.solve import dynamics, kernel, statics
 
 TIGHT = statics.Newton(tol=1e-9, max_iter=30, damping=1e-12, stall_window=None)
 
@@ -110,7 +110,7 @@ def test_current_settles_to_the_static_equilibrium():
     """A body held by a spring in a current, starting at rest: the dynamic run settles on the statics
     solver's equilibrium (drag on the relative velocity is what damps it)."""
     scene = spring_mass(m=3.0, ea=500.0, delta=0.0, drag_area=0.2, current=1.0)
-    eq, _ = statics.solve(scene, tol=1e-9)
+    eq = statics.solve(scene, tol=1e-9)
     tr = dynamics.simulate(scene, 20.0, dynamics.Implicit(time_step=0.05, newton=TIGHT), record_every=1.0,
                            progress=False)
     drag = 0.5 * 1025.0 * 0.2 * 1.0**2
@@ -156,6 +156,21 @@ def test_failed_steps_are_retried_smaller_and_reported():
                           progress=False)
 
 
+def test_a_failed_run_returns_its_records_when_asked_not_to_throw():
+    """``throw=False``: the run stops where a step fails below the smallest step and returns what it
+    recorded, its status saying why (as the error would have)."""
+    scene = spring_mass(m=1.0, ea=1e4, delta=0.0, gravity=9.81, free_axes="xz")
+    solver = dynamics.Implicit(time_step=0.05, min_time_step=0.05,
+                               newton=statics.Newton(tol=1e-9, max_iter=1, damping=1e-12, stall_window=None))
+    with pytest.raises(dynamics.DynamicsError) as raised:
+        dynamics.simulate(scene, 0.4, solver, record_every=0.05, progress=False)
+    run = dynamics.simulate(scene, 0.4, solver, record_every=0.05, progress=False, throw=False)
+    assert run.status == dynamics.STEP_FAILED and run.reason == dynamics.REASONS[dynamics.STEP_FAILED]
+    assert float(run.state.t) == float(raised.value.state.t) < 0.4
+    assert run.times[-1] <= float(run.state.t) and np.all(np.isfinite(run.positions))
+    assert run.timing.wall_s >= run.timing.compile_s > 0.0
+
+
 @pytest.mark.parametrize("h", [1e-4, 1e-2, 1.0])
 def test_stiff_twines_stay_stable_at_any_step(h):
     """EA = 1e9 N on 1 kg (ω = 3e4 rad/s: ωΔt from 3 to 3e4): the scheme is L-stable, the amplitude never
@@ -198,9 +213,9 @@ def test_the_steps_tangent_is_the_derivative_of_its_residual():
 
     @jax.jit
     def residual(y):
-        return statics._evaluate(y, jnp.zeros_like(load), load, 1.0, scene, pattern, model, step)[1].ravel()[free]
+        return kernel.evaluate(y, jnp.zeros_like(load), load, 1.0, scene, pattern, model, step)[1].ravel()[free]
 
-    data = statics._tangent(jnp.asarray(x), state, 1.0, scene, pattern, model, "autodiff", step)
+    data = kernel.tangent(jnp.asarray(x), state, 1.0, scene, pattern, model, "autodiff", step)
     import scipy.sparse as sp
 
     K = sp.csr_matrix((np.asarray(data), np.asarray(pattern.indices), np.asarray(pattern.indptr))).toarray()
@@ -261,13 +276,13 @@ def test_towing_through_still_water_is_the_current_seen_from_the_net():
     net = hanging_panel(meshes=4, step=0.1)
     net.environment = Environment(current_speed=speed, current_direction=np.array([1.0, 0.0, 0.0]))
     in_current = net.build()
-    eq, _ = statics.solve(in_current, tol=1e-8)
+    eq = statics.solve(in_current, tol=1e-8)
     net.environment = Environment()
     still = net.build()
     held = np.flatnonzero(np.asarray(still.nodes.fixed).all(axis=1))
     towing = forcing.Towing(velocity=(-speed, 0.0, 0.0), ramp=2.0)
     loading = dynamics.Loading(motions=(forcing.PrescribedMotion(held, towing),))
-    start, _ = statics.solve(still, tol=1e-8)
+    start = statics.solve(still, tol=1e-8)
     end = 40.0
     newton = statics.Newton(tol=1e-6, max_iter=30, damping=1e-12, stall_window=None)
     tr = dynamics.simulate(still, end, dynamics.Implicit(time_step=0.05, newton=newton), loading, record_every=5.0,

@@ -44,7 +44,7 @@ def panel_in_current(ea_compression=2000.0):
     net = hanging_panel(meshes=4, step=0.05, twine=twine)
     net.environment = Environment(current_speed=0.4, current_direction=np.array([0.0, 1.0, 0.0]))
     scene = net.build()
-    first, _ = statics.solve(scene, tol=1e-9)
+    first = statics.solve(scene, tol=1e-9)
     return scene, implicit.structure_of(scene), np.asarray(first.x)
 
 
@@ -72,7 +72,7 @@ def solver(ea_compression=2000.0):
 
     @jax.jit
     def positions(theta):
-        return implicit.equilibrium(scaled(scene, theta), structure, x0=x0, newton=NEWTON).x
+        return implicit.equilibrium(scaled(scene, theta), structure, x0=x0, solver=NEWTON).x
 
     return positions
 
@@ -138,19 +138,19 @@ def test_vmap_of_gradients_over_designs_equals_the_loop():
 
 def test_equilibrium_is_the_static_solvers_and_failures_are_reported():
     scene, structure, x0 = panel_in_current()
-    eq = implicit.equilibrium(scene, structure, x0=x0, newton=NEWTON)
+    eq = implicit.equilibrium(scene, structure, x0=x0, solver=NEWTON)
     assert float(eq.residual_N) <= NEWTON.tol and int(eq.status) == statics.CONVERGED
     np.testing.assert_allclose(np.asarray(eq.x), np.asarray(solver()(np.zeros(len(FIELDS)))), rtol=0, atol=1e-12)
-    reference, _ = statics.solve(scene, tol=1e-10)
+    reference = statics.solve(scene, tol=1e-10)
     np.testing.assert_allclose(np.asarray(eq.x), np.asarray(reference.x), rtol=0, atol=1e-9)
     # from the flat start, two iterations are not enough: the reason, the residual and the node are named
     few = dataclasses.replace(NEWTON, max_iter=2)
     with pytest.raises(implicit.ImplicitError, match=r"maximum number of iterations reached after 2 iterations; "
                                                      r"largest residual .* N at node \d+"):
-        implicit.equilibrium(scene, structure, newton=few)
-    eq = implicit.equilibrium(scene, structure, newton=few, check=False)
+        implicit.equilibrium(scene, structure, solver=few)
+    eq = implicit.equilibrium(scene, structure, solver=few, throw=False)
     assert int(eq.status) == statics.MAX_ITERATIONS and float(eq.residual_N) > 1e-3
     # under a transformation the error is raised when the program runs
     with pytest.raises(Exception, match="did not converge"):
-        jax.block_until_ready(jax.vmap(lambda x: implicit.equilibrium(scene, structure, x0=x, newton=few).x)(
+        jax.block_until_ready(jax.vmap(lambda x: implicit.equilibrium(scene, structure, x0=x, solver=few).x)(
             np.asarray(scene.nodes.position)[None]))

@@ -19,7 +19,7 @@ def test_flat_start_of_a_2000_node_panel_with_slack_twines_converges_in_20_itera
     # stress-free start has no out-of-plane stiffness at all, and the twines have EA_c = 0.
     scene = framed_panel(meshes=80, step=0.06, sinker_kg=20.0).build()
     assert scene.n_nodes >= 2000 and not np.any(np.asarray(scene.netting.ea_compression))
-    eq, _ = jn.solve(scene, tol=1e-3, max_iter=20)
+    eq = jn.solve(scene, tol=1e-3, max_iter=20)
     assert eq.converged and float(eq.residual_N) <= 1e-3
     assert float(np.asarray(eq.x)[:, 2].min()) < -0.1  # it really sagged (about 0.23 m)
     np.testing.assert_allclose(balance(scene, eq), 0.0, atol=scene.n_nodes * 1e-3)
@@ -28,7 +28,7 @@ def test_flat_start_of_a_2000_node_panel_with_slack_twines_converges_in_20_itera
 def test_flat_start_of_the_2000_node_default_scene_converges_in_20_iterations():
     scene = hanging_panel(meshes=80, step=0.06).build()
     assert scene.n_nodes >= 2000
-    eq, _ = jn.solve(scene, tol=1e-3, max_iter=20)
+    eq = jn.solve(scene, tol=1e-3, max_iter=20)
     assert eq.converged
     np.testing.assert_allclose(balance(scene, eq), 0.0, atol=scene.n_nodes * 1e-3)
 
@@ -38,10 +38,10 @@ def test_badly_crumpled_start_reaches_the_same_equilibrium():
     # unique: from a crumpled start (every free node moved at random by up to three twine lengths,
     # many triangles turned inside out) Newton must find the flat start's answer.
     scene = framed_panel(meshes=20, step=0.08, sinker_kg=2.0).build()
-    flat, _ = jn.solve(scene, tol=1e-8)
+    flat = jn.solve(scene, tol=1e-8)
     rng = np.random.default_rng(0)
     x0 = np.asarray(scene.nodes.position) + rng.uniform(-0.075, 0.075, (scene.n_nodes, 3))
-    crumpled, _ = jn.solve(scene, x0=x0, tol=1e-8)
+    crumpled = jn.solve(scene, x0=x0, tol=1e-8)
     np.testing.assert_allclose(np.asarray(crumpled.x), np.asarray(flat.x), atol=1e-7)
 
 
@@ -50,14 +50,14 @@ def test_slack_curtain_converges_even_though_slowly():
     # converges linearly there, but it must converge, and balance the weight.
     slack = Twine(l0=0.025, ea=2000.0, diameter=1.5e-3, ea_compression=0.0)
     scene = hanging_panel(meshes=40, step=0.1, twine=slack).build()
-    eq, _ = jn.solve(scene, tol=1e-3, max_iter=500)
+    eq = jn.solve(scene, tol=1e-3, max_iter=500)
     assert eq.converged
     np.testing.assert_allclose(balance(scene, eq), 0.0, atol=scene.n_nodes * 1e-3)
 
 
 def test_quadratic_convergence_near_the_solution():
     scene = framed_panel(meshes=20, step=0.08, sinker_kg=2.0).build()
-    eq, _ = jn.solve(scene, tol=1e-9, max_iter=60)
+    eq = jn.solve(scene, tol=1e-9, max_iter=60)
     hist = np.asarray(eq.history)
     hist = hist[np.isfinite(hist)]
     r1, r2 = hist[-2:]
@@ -71,7 +71,7 @@ def test_failed_solve_names_the_reason_and_the_node():
     scene = hanging_panel(meshes=20, step=0.08).build()
     with pytest.raises(jn.SolveError, match=r"after 2 iterations: maximum number of iterations reached; largest residual .* N at node \d+"):
         jn.solve(scene, max_iter=2)
-    eq, _ = jn.solve(scene, max_iter=2, raise_on_failure=False)
+    eq = jn.solve(scene, max_iter=2, throw=False)
     assert not eq.converged and eq.reason == "maximum number of iterations reached"
     assert np.all(np.isfinite(np.asarray(eq.x)))
     worst = int(eq.worst_node)
@@ -109,14 +109,14 @@ def test_host_loop_and_jitted_loop_are_the_same_iteration():
     # solve() drives the Newton from the host; newton_loop is the same iteration as one jitted program.
     # Same rules, same arithmetic: same iterates up to roundoff.
     from jaxnet import assemble, model as model_lib
-    from jaxnet.solve import statics
+    from jaxnet.solve import newton
 
     scene = framed_panel(meshes=12, step=0.1, sinker_kg=2.0).build()
-    host, _ = jn.solve(scene, tol=1e-8)
+    host = jn.solve(scene, tol=1e-8)
     model = model_lib.active_terms(scene)
     pattern = assemble.build_pattern(scene, model)
     start = np.asarray(scene.nodes.position).ravel()[np.asarray(pattern.free)]
-    jitted = statics._newton_jit(start, scene, pattern, model=model, opts=statics.Newton(tol=1e-8))
+    jitted = newton.newton_loop_jit(start, scene, pattern, model=model, solver=jn.Newton(tol=1e-8))
     assert int(jitted.iterations) == int(host.iterations) and bool(jitted.converged)
     np.testing.assert_allclose(np.asarray(jitted.x), np.asarray(host.x), atol=1e-9)
     np.testing.assert_allclose(np.asarray(jitted.force), np.asarray(host.force), atol=1e-6)
@@ -149,30 +149,30 @@ def test_the_pattern_is_kept_for_the_same_net_and_rebuilt_for_another():
                for a, b in zip(jax.tree.leaves(other), jax.tree.leaves(fresh)))
 
 def test_stiffness_continuation_stages_rise_geometrically_to_the_net_as_it_is():
-    from jaxnet.solve import statics
+    from jaxnet.solve import newton
 
-    stages = statics.stiffness_stages(statics.Newton(soft_start=1e-2, stiffening=10**0.5))
+    stages = newton.stiffness_stages(jn.Newton(soft_start=1e-2, stiffening=10**0.5))
     np.testing.assert_allclose(stages, [1e-2, 10**-1.5, 1e-1, 10**-0.5, 1.0], rtol=1e-12)
-    assert statics.stiffness_stages(statics.Newton(stall_window=None)) == [1.0]
+    assert newton.stiffness_stages(jn.Newton(stall_window=None)) == [1.0]
 
 
 def test_stall_is_a_residual_that_stopped_halving():
-    from jaxnet.solve import statics
+    from jaxnet.solve import newton
 
     steady = 100.0 * 0.3 ** np.arange(12)  # converging: never stalled
     bouncing = np.array([300.0, 900, 250, 700, 400, 800, 600, 500, 900, 300])  # best of the last 5 = 300
-    assert not any(statics._stalled(steady[:k], 5) for k in range(1, 13))
-    assert statics._stalled(bouncing, 5)
-    assert not statics._stalled(bouncing[:9], 5)  # too short to judge
-    assert statics._stalled(bouncing[:1], 0) and not statics._stalled(bouncing, None)
+    assert not any(newton.stalled(steady[:k], 5) for k in range(1, 13))
+    assert newton.stalled(bouncing, 5)
+    assert not newton.stalled(bouncing[:9], 5)  # too short to judge
+    assert newton.stalled(bouncing[:1], 0) and not newton.stalled(bouncing, None)
 
 
 def test_stiffness_continuation_changes_the_path_not_the_equilibrium(capsys):
     # The continuation solves softer nets first; its last stage is the net as it is, so it must land on
     # plain Newton's equilibrium (unique here: EA_c = 0 makes the energy convex, all twines taut).
     scene = framed_panel(meshes=16, step=0.08, sinker_kg=2.0).build()
-    plain, _ = jn.solve(scene, tol=1e-8, stall_window=None)
-    softened, _ = jn.solve(scene, tol=1e-8, stall_window=0, verbose=True)
+    plain = jn.solve(scene, tol=1e-8, stall_window=None)
+    softened = jn.solve(scene, tol=1e-8, stall_window=0, verbose=True)
     printed = capsys.readouterr().out
     assert [line.split()[-1] for line in printed.splitlines() if "stiffness x" in line] == ["0.01", "0.0316", "0.1", "0.316", "1"]
     assert softened.converged and int(softened.iterations) > int(plain.iterations)
@@ -194,18 +194,18 @@ def test_a_solve_with_a_catch_compiles_its_evaluation_and_tangent_once(caplog):
     jax.config.update("jax_log_compiles", True)  # globally: the pieces compile in worker threads
     try:
         with caplog.at_level("WARNING"):
-            eq, _ = jn.solve(scene)
+            eq = jn.solve(scene)
     finally:
         jax.config.update("jax_log_compiles", False)
     compiled = [r.getMessage().split(" with ")[0] for r in caplog.records if r.getMessage().startswith("Compiling jit(")]
     assert eq.converged
     # the evaluation (from the last states: _evaluate_from), the tangent: its element matrices, their sum
-    once = ("_evaluate_from", "_tangent_blocks", "scatter_stiffnesses")
+    once = ("_evaluate_from", "tangent_blocks", "scatter_stiffnesses")
     assert all(compiled.count(f"Compiling jit({name})") == 1 for name in once), sorted(set(compiled))
     # and nothing else but the spring network and the loads: no JAX operation run one by one on the way (jax
     # 0.10 compiles a program for each: jnp.asarray of a numpy array, a comparison, a placeholder's zeros;
     # 0.2-1 s of a first solve of FEMNET's c2, one of them stalled behind the big compilations)
-    assert set(compiled) == {f"Compiling jit({name})" for name in once + ("_springs", "loads")}, sorted(set(compiled))
+    assert set(compiled) == {f"Compiling jit({name})" for name in once + ("springs", "loads")}, sorted(set(compiled))
     # the result's figures likewise: one program each (tensions, the forces of the external terms, the catch;
     # the loads are the solver's), not an operation at a time (c2: 2.1 s of a first `jaxnet run`, now 0.9 s)
     caplog.clear()
@@ -245,9 +245,9 @@ def test_a_continuation_that_cannot_finish_gives_way_to_plain_newton(capsys):
     # as it is by then (or a softened net stalls), plain Newton resumes from where the continuation began,
     # so a misjudged start of the continuation costs iterations, never the solve.
     scene = framed_panel(meshes=16, step=0.08, sinker_kg=2.0).build()
-    plain, _ = jn.solve(scene, tol=1e-8, stall_window=None)
+    plain = jn.solve(scene, tol=1e-8, stall_window=None)
     n = int(plain.iterations)
-    rescued, _ = jn.solve(scene, tol=1e-8, stall_window=0, max_iter=2 * n + 2, verbose=True)
+    rescued = jn.solve(scene, tol=1e-8, stall_window=0, max_iter=2 * n + 2, verbose=True)
     assert "stiffness continuation abandoned" in capsys.readouterr().out
     assert rescued.converged and int(rescued.iterations) == (2 * n + 2) // 2 + n
     np.testing.assert_allclose(np.asarray(rescued.x), np.asarray(plain.x), atol=1e-7)
@@ -255,13 +255,13 @@ def test_a_continuation_that_cannot_finish_gives_way_to_plain_newton(capsys):
 
 def test_the_continuation_starts_only_on_over_stretched_iterates():
     # stalled AND the twines pulling far harder than the loads (balancing scale << 1)
-    from jaxnet.solve import statics
+    from jaxnet.solve import newton
 
     applied = np.array([1.0, -2.0, 0.5])
-    assert statics._balancing_scale(applied, 0.0 * applied) == pytest.approx(1.0)  # balanced by the net
-    assert statics._balancing_scale(applied, applied - 1e4 * applied) == pytest.approx(1e-4)
+    assert newton.balancing_scale(applied, 0.0 * applied) == pytest.approx(1.0)  # balanced by the net
+    assert newton.balancing_scale(applied, applied - 1e4 * applied) == pytest.approx(1e-4)
     bouncing = np.array([300.0, 900, 250, 700, 400, 800, 600, 500, 900, 300])
-    opts = statics.Newton(stall_window=5, soften_below=1e-3)
-    assert statics._overstretched(bouncing, [1e-4] * 10, opts)
-    assert not statics._overstretched(bouncing, [1e-4] * 5 + [0.05] * 5, opts)  # stalls, carrying its loads
-    assert not statics._overstretched(100.0 * 0.3 ** np.arange(10), [1e-4] * 10, opts)  # converging
+    opts = jn.Newton(stall_window=5, soften_below=1e-3)
+    assert newton.overstretched(bouncing, [1e-4] * 10, opts)
+    assert not newton.overstretched(bouncing, [1e-4] * 5 + [0.05] * 5, opts)  # stalls, carrying its loads
+    assert not newton.overstretched(100.0 * 0.3 ** np.arange(10), [1e-4] * 10, opts)  # converging

@@ -191,7 +191,7 @@ def test_isotropic_drag_area_still_acts_beside_the_box():
 def test_sinker_with_a_box_body_trails_at_the_angle_of_drag_to_weight():
     sinker = 2.0
     scene = pendulum(sinker=sinker)
-    eq, _ = jn.solve(scene, tol=1e-10)
+    eq = jn.solve(scene, tol=1e-10)
     weight = sinker * (1.0 - RHO / 11340.0) * G
     drag_x = 0.5 * RHO * CD[0] * LENGTH[1] * LENGTH[2] * U**2
     np.testing.assert_allclose(eq.reaction(scene)[0], [-drag_x, 0.0, weight], rtol=1e-9, atol=1e-9)

@@ -154,7 +154,7 @@ def _net_in_a_current(meshes=4):
 
     net = hanging_panel(meshes=meshes, step=0.05)
     net.environment = Environment(current_speed=0.0, current_direction=np.array([1.0, 0.2, 0.0]))
-    rest, _ = statics.solve(net.build(), tol=1e-10)
+    rest = statics.solve(net.build(), tol=1e-10)
     net.environment = Environment(current_speed=0.7, current_direction=np.array([1.0, 0.2, 0.0]))
     scene = eqx.tree_at(lambda s: s.nodes.position, net.build(), np.asarray(rest.x))
     return scene, dynamics.Loading(current_speed=forcing.Ramp(0.0, 0.7, 0.0, 0.1))

@@ -205,7 +205,7 @@ def solved_sea_bed():
     scene, node, chain = sea_bed()
     assert {t.name for t in model.active_terms(scene)} == {"netting_tension", "bar_tension", "netting_weight", "node_weight",
                                                            "bar_weight", "node_force", "bottom_contact", "bottom_friction"}
-    eq, _ = jn.solve(scene, tol=1e-9)
+    eq = jn.solve(scene, tol=1e-9)
     return scene, node, chain, eq, term_forces(scene, eq.x)
 
 

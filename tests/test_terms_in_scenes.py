@@ -1,7 +1,7 @@
 """Every registered term, in whole scenes: traced exactly when the scene asks for it, and doing its job.
 
 Part 1 (tracing). For each registered term (:func:`jaxnet.terms.term.registered`) a small scene is lowered twice through the
-Newton program (``statics._newton_jit.lower``, no compilation): once with the term's parameters present
+Newton program (``newton.newton_loop_jit.lower``, no compilation): once with the term's parameters present
 and non-zero, once with them absent or zero. The term's ``jax.named_scope`` must be in the first program
 and not in the second, and the two programs must differ by that term only. Names are read from the
 *name stacks* of the lowered program's locations (``jit(newton_loop)/vmap(netting_drag)/twine_drag/mul``),
@@ -294,7 +294,7 @@ def curtains():
     net.attach(refs["twines"].corner(0), drag_area=BODY_DRAG_AREA)
     net.attach(refs["twines"].corner(1), force=PULL)
     scene = net.build()
-    eq, _ = jn.solve(scene, tol=1e-8)
+    eq = jn.solve(scene, tol=1e-8)
     return scene, eq
 
 
@@ -445,7 +445,7 @@ def still():
     x0 = np.array(scene.nodes.position)
     inner = panel_nodes(scene, "S")
     x0[inner] += rng.uniform(-0.5 * L0, 0.5 * L0, (inner.size, 3))
-    eq, _ = jn.solve(scene, x0=x0, tol=1e-9)
+    eq = jn.solve(scene, x0=x0, tol=1e-9)
     return scene, eq
 
 

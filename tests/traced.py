@@ -8,8 +8,8 @@ import numpy as np
 
 import jaxnet as jn
 from jaxnet import assemble, model
+from jaxnet.solve import newton
 from jaxnet.terms import term as term_lib
-from jaxnet.solve import statics
 
 #: a location of the lowered program with its name stack, e.g. jit(newton_loop)/vmap(netting_drag)/...
 NAMED_LOCATION = re.compile(r'loc\("([^"]+)"\(')
@@ -20,7 +20,7 @@ def lowered_text(scene):
     m = model.active_terms(scene)
     p = assemble.build_pattern(scene, m)
     x0 = np.asarray(scene.nodes.position).ravel()[np.asarray(p.free)]
-    return statics._newton_jit.lower(x0, scene, p, model=m, opts=jn.Newton()).as_text(debug_info=True)
+    return newton.newton_loop_jit.lower(x0, scene, p, model=m, solver=jn.Newton()).as_text(debug_info=True)
 
 
 def traced_terms(scene):

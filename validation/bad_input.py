@@ -94,10 +94,10 @@ class SolverCompiled(AssertionError):
 
 
 #: (module, attribute) of every entry point that compiles a solver program
-_ENTRY_POINTS = (("jaxnet.solve.statics", "_compile_pieces"), ("jaxnet.solve.statics", "_newton_jit"),
-                 ("jaxnet.solve.statics", "_evaluate_jit"), ("jaxnet.solve.statics", "_tangent_blocks_jit"),
-                 ("jaxnet.solve.dynamics", "_out_of_balance_jit"), ("jaxnet.solve.dynamics", "_advance_jit"),
-                 ("jaxnet.solve.implicit", "_solve"))
+#: (the static solve compiles its evaluation and tangent inside ``compile_pieces`` only)
+_ENTRY_POINTS = (("jaxnet.solve.statics", "compile_pieces"), ("jaxnet.solve.newton", "newton_loop_jit"),
+                 ("jaxnet.solve.dynamics", "out_of_balance_jit"), ("jaxnet.solve.dynamics", "advance_jit"),
+                 ("jaxnet.solve.implicit", "root_jit"))
 
 
 class _Tripwire:

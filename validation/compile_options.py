@@ -25,7 +25,7 @@ import numpy as np
 
 import jaxnet  # noqa: F401  (float64)
 from jaxnet import assemble, model as model_lib
-from jaxnet.solve import programs, statics
+from jaxnet.solve import kernel, programs
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 DATA = ROOT / "tests" / "data" / "femnet"
@@ -51,13 +51,13 @@ def programs_of(scene):
     x = jnp.asarray(np.asarray(scene.nodes.position).ravel()[np.asarray(pattern.free)])
     zero = jnp.zeros(scene.nodes.position.shape)
     evaluate_args = (x, zero, zero, 1.0, scene, pattern)
-    evaluate = jax.jit(statics._evaluate, static_argnames=("model",)).trace(*evaluate_args, model=model)
+    evaluate = jax.jit(kernel.evaluate, static_argnames=("model",)).trace(*evaluate_args, model=model)
     # placeholders for the catch's state (not computed: that would compile the evaluation once more)
     state = jax.tree.map(lambda s: jnp.zeros(s.shape, s.dtype), evaluate.out_info[4])
     tangent_args = (x, state, 1.0, scene, pattern)
-    blocks = jax.jit(statics._tangent_blocks, static_argnames=("model", "stiffness")).trace(
+    blocks = jax.jit(kernel.tangent_blocks, static_argnames=("model", "stiffness")).trace(
         *tangent_args, model=model, stiffness="closed_form")
-    tangent = jax.jit(statics._tangent, static_argnames=("model", "stiffness")).trace(
+    tangent = jax.jit(kernel.tangent, static_argnames=("model", "stiffness")).trace(
         *tangent_args, model=model, stiffness="closed_form")
     return {"evaluate": (evaluate, evaluate_args), "blocks": (blocks, tangent_args),
             "tangent": (tangent, tangent_args)}

@@ -33,9 +33,10 @@ def _solve(scene, warm=False, **options):
     import jaxnet as jn
 
     if warm:
-        jn.solve(scene, raise_on_failure=False, **options)
+        jn.solve(scene, throw=False, **options)
     t0 = time.perf_counter()
-    eq, timing = jn.solve(scene, raise_on_failure=False, **options)
+    eq = jn.solve(scene, throw=False, **options)
+    timing = eq.timing
     wall = time.perf_counter() - t0
     return eq, {"iterations": int(eq.iterations), "converged": eq.converged, "residual N": float(eq.residual_N),
                 "compile s": timing.compile_s, "run s": wall - timing.compile_s}

@@ -42,7 +42,7 @@ import numpy as np
 
 import jaxnet  # noqa: F401
 from jaxnet.scene import Bars, Environment, Nodes, Scene
-from jaxnet.solve import dynamics, reference, statics
+from jaxnet.solve import dynamics, kernel, reference, statics
 
 NEWTON = statics.Newton(tol=1e-9, max_iter=30, damping=1e-12, stall_window=None)
 
@@ -118,7 +118,7 @@ def cage_table(end):
     from jaxnet.scenes import cage_in_waves
 
     scene, loading = cage_in_waves(step=1.6)
-    eq, _ = statics.solve(scene)
+    eq = statics.solve(scene)
     x0 = np.asarray(eq.x)
     print(f"\n## Cage in waves ({scene.n_nodes} nodes, {scene.n_dof} unknowns): 0 to {end} s from the static "
           "equilibrium; against the book scheme at Δt = 2.5 ms\n")
@@ -203,7 +203,7 @@ def cage_reference_table(end, reference_rtol=1e-6):
     from jaxnet.scenes import cage_in_waves
 
     scene, loading = cage_in_waves(step=1.6)
-    x0 = np.asarray(statics.solve(scene)[0].x)
+    x0 = np.asarray(statics.solve(scene).x)
     record = 0.05
     saveat = np.linspace(0.0, end, int(round(end / record)) + 1)
 
@@ -236,7 +236,7 @@ def cage_reference_table(end, reference_rtol=1e-6):
               f"{tr.mean_iterations:.2f} |")
     for rtol in (1e-3, 1e-4, 1e-5):
         ref = run_reference(rtol)
-        wall = ref.wall_s - ref.compile_s
+        wall = ref.timing.wall_s - ref.timing.compile_s
         reaction, volume = reference_figures(scene, loading, ref)
         err = abs(peak(reaction) - peak_exact) / abs(peak_exact)
         rows.append(("Kvaerno5 (diffrax)", wall, err))
@@ -257,7 +257,7 @@ def size_table(steps):
     for step in steps:
         scene, loading = cage_in_waves(step=step)
         t0 = time.perf_counter()
-        eq, _ = statics.solve(scene)
+        eq = statics.solve(scene)
         static_s = time.perf_counter() - t0
         x0 = np.asarray(eq.x)
         opts = dynamics.Implicit(time_step=0.01)
@@ -298,7 +298,7 @@ def time_step_problem(mesh_step, run_time, time_step=0.01):
     from jaxnet.scenes import cage_in_waves
 
     scene, loading = cage_in_waves(step=mesh_step)
-    x_eq = np.asarray(statics.solve(scene)[0].x)
+    x_eq = np.asarray(statics.solve(scene).x)
     model = model_lib.active_terms(scene, dynamic=True)
     pattern = assemble.build_pattern(scene, model)
     masses = tuple(jnp.asarray(m) for m in dynamics.lumped_masses(scene))
@@ -321,12 +321,12 @@ def breakdown():
 
     scene, loading, model, pattern, scene_t, step, x, load = time_step_problem(1.6, 0.5)
     h = float(step.time_step)
-    evaluate = jax.jit(statics._evaluate, static_argnames=("model",))
+    evaluate = jax.jit(kernel.evaluate, static_argnames=("model",))
     zero = jnp.zeros_like(step.x_previous)
     _, force, _, _, forces_state = evaluate(x, zero, load, 1.0, scene_t, pattern, model=model, step=step)
     rows = [("evaluation (energy, its gradient, drag forces)", _median_ms(
         lambda: evaluate(x, zero, load, 1.0, scene_t, pattern, model=model, step=step)))]
-    tangent = jax.jit(statics._tangent, static_argnames=("model", "stiffness"))
+    tangent = jax.jit(kernel.tangent, static_argnames=("model", "stiffness"))
     for path in assemble.STIFFNESS_PATHS:
         rows.append((f"tangent, {path}", _median_ms(
             lambda: tangent(x, forces_state, 1.0, scene_t, pattern, model=model, stiffness=path, step=step))))
@@ -346,7 +346,7 @@ def breakdown():
     rows.append(("    of which on the host (SuperLU, checks)", _median_ms(lambda: host.solve(data_np, f_np)[0])))
     # the fixed cost of a step: the cage at its equilibrium in calm water, Newton converging at its start
     calm = eqx.tree_at(lambda s: s.environment.waves.height, scene, jnp.asarray(0.0))
-    x_calm = np.asarray(statics.solve(calm, tol=1e-7)[0].x)
+    x_calm = np.asarray(statics.solve(calm, tol=1e-7).x)
     opts = dynamics.Implicit(time_step=h)
     _, wall = timed(lambda: dynamics.simulate(calm, 1.0, opts, None, record_every=0.05, x0=x_calm, progress=False))
     rows.append(("a step without Newton iterations (1 evaluation, records every 5 steps)", wall / 100 * 1e3))

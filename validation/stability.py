@@ -15,7 +15,7 @@ inside out, that the flat one never is.
 
 A case's *expected* outcome is "converged" unless it genuinely has no equilibrium or is refused as input;
 then the named stop is the right answer and the case says which (its note says why). Every statics run
-uses ``jaxnet.solve`` with ``raise_on_failure=False`` (its ``Equilibrium.reason``), every dynamics run
+uses ``jaxnet.solve`` with ``throw=False`` (its ``Equilibrium.reason``), every dynamics run
 ``jaxnet.solve.dynamics.simulate`` (its ``DynamicsError`` message when a step fails below the smallest
 step); a scene refused by validation records its ``SceneError``.
 
@@ -556,11 +556,11 @@ def _solve_static(problem: Problem, x0):
     import jaxnet as jn
 
     newton = newton_options(problem)
-    eq, timing = jn.solve(problem.scene, newton, x0=x0, raise_on_failure=False)
+    eq = jn.solve(problem.scene, newton, x0=x0, throw=False)
     it = int(eq.iterations)
     history = np.asarray(eq.history)[: it + 1]
     return dict(converged=eq.converged, reason=eq.reason, iterations=it, residual_N=float(eq.residual_N),
-                tol=newton.tol, worst_node=int(eq.worst_node), compile_s=timing.compile_s,
+                tol=newton.tol, worst_node=int(eq.worst_node), compile_s=eq.timing.compile_s,
                 history=history.tolist(), nan=not _finite(eq.x, eq.force, history, eq.energy)), np.asarray(eq.x)
 
 
@@ -571,7 +571,7 @@ def _solve_dynamic(problem: Problem, x0):
     try:
         run = dynamics.simulate(problem.scene, d.end_time, d.solver, d.loading, record_every=d.end_time, x0=x0,
                                 progress=False, vtk=False)
-        state, reason, compile_s = run.state, DONE, run.compile_s
+        state, reason, compile_s = run.state, DONE, run.timing.compile_s
         arrays = [run.positions, run.velocities] + [np.asarray(v, dtype=float) for v in run.figures.values()]
     except dynamics.DynamicsError as error:
         state, reason, compile_s, arrays = error.state, f"DynamicsError: {error}", None, []
@@ -715,7 +715,7 @@ def run(report, quick: bool) -> None:
         f"perturbed one (every free coordinate displaced by a normal random amount of standard deviation "
         f"σ = {PERTURBATION} × the elements' size at the start, the median of their shortest sides; seed "
         f"{SEED}). Statics: `jaxnet.solve` with its default options (FEMNET's cases: their own numerics) but "
-        f"up to {MAX_ITERATIONS} Newton iterations, `raise_on_failure=False`; dynamics: "
+        f"up to {MAX_ITERATIONS} Newton iterations, `throw=False`; dynamics: "
         "`dynamics.simulate` with `Implicit(time_step=...)`. Per run: converged (statics: the largest nodal "
         "residual at most the tolerance; dynamics: the end time reached), Newton iterations (dynamics: over "
         "all steps, failed ones included; the reason then says how many steps were retried with half the "

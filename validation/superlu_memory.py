@@ -5,14 +5,14 @@
 Each factorisation of :class:`jaxnet.linalg.HostSolver` allocates SuperLU's L and U afresh (a few MB on the
 FEMNET cases) and frees them at the next. glibc's malloc serves such blocks by mmap until it has seen one
 that large freed, so each new factor is faulted into memory again page by page;
-:func:`jaxnet.linalg._keep_factor_memory` frees one 16 MB block once per process, after which glibc keeps
+:func:`jaxnet.linalg.keep_factor_memory` frees one 16 MB block once per process, after which glibc keeps
 them on its heap. The matrices: the tangent of the middle Newton iteration of each FEMNET case's static
 solve (FEMNET's mesh, what the solver factorises). Each setting runs in fresh processes (the setting is
 once per process), alternately, ``--rounds`` times: a child builds a solver on the matrix (its ordering
 computed at the first factorisation) and times ``--factorisations`` more factorisations, counting the
 process's minor page faults. The table prints the medians over the rounds of the per-factorisation time
 (ms) and faults, side by side, with their ratio. Nothing is asserted: it is the measurement behind
-``_keep_factor_memory``.
+``keep_factor_memory``.
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ def child(case, setting, factorisations, matrix_file):
     from jaxnet import linalg
 
     if setting != SETTINGS[0]:
-        linalg._PRIMED.append(True)  # as if primed: the heap is left as glibc starts
+        linalg.MALLOC_PRIMER = 0  # no primer: the heap is left as glibc starts
     data = np.load(matrix_file)
     solver = linalg.HostSolver(data["indptr"], data["indices"])
     assert solver.factorize(data["data"])  # the ordering, computed once

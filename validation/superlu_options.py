@@ -48,7 +48,7 @@ def femnet_tangent(case):
     scene, solver, _ = femnet.read_mdg(DATA / f"{case}.mdg", DATA / f"{case}.don")
     linalg.HostSolver.factorize = keep
     try:
-        solve(scene, solver, raise_on_failure=False, stiffness="closed_form")
+        solve(scene, solver, throw=False, stiffness="closed_form")
     finally:
         linalg.HostSolver.factorize = factorize
     return seen[len(seen) // 2]
@@ -58,13 +58,13 @@ def cage_tangent(step):
     """(data, indptr, indices): the tangent of a time step of the cage in waves meshed at ``step`` (m)."""
     import jax.numpy as jnp
 
-    from jaxnet.solve import statics
+    from jaxnet.solve import kernel
     from validation.dynamics_cost import time_step_problem
 
     scene, _, model, pattern, scene_t, step_, x, load = time_step_problem(step, 0.1)
-    forces_state = statics._evaluate(x, jnp.zeros_like(step_.x_previous), load, 1.0, scene_t, pattern, model,
-                                     step_)[4]
-    data = statics._tangent(x, forces_state, 1.0, scene_t, pattern, model, "closed_form", step_)
+    forces_state = kernel.evaluate(x, jnp.zeros_like(step_.x_previous), load, 1.0, scene_t, pattern, model,
+                                   step_)[4]
+    data = kernel.tangent(x, forces_state, 1.0, scene_t, pattern, model, "closed_form", step_)
     return np.asarray(data), np.asarray(pattern.indptr), np.asarray(pattern.indices)
 
 

@@ -2,7 +2,7 @@
 
 The other tangent is autodiff (:mod:`jaxnet.assemble`: ``jax.jacfwd`` of the element energies and forces
 of :mod:`jaxnet.terms`), the reference. This package is the solvers' default path (``Newton(stiffness=
-"closed_form")``, cheaper: :class:`jaxnet.solve.statics.Newton`): for every term where the chapter
+"closed_form")``, cheaper: :class:`jaxnet.solve.options.Newton`): for every term where the chapter
 derives a stiffness, the same matrix K = -dF/dx (4.46) written out by hand, in the book's structure
 (twine-vector derivatives, then the chain rule to the vertices) but with its errata corrected
 (``docs/errata.md``). No module here calls JAX's automatic differentiation: the two paths are

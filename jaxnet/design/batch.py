@@ -20,7 +20,7 @@ figure and its gradient with respect to its θ (reverse mode: one adjoint solve 
 function theorem) come with the positions.
 
 **What runs where.** A differentiable equilibrium is a damped Newton iteration (one ``lax.while_loop``,
-:func:`jaxnet.solve.statics.newton_loop`) whose linear solves leave the device. The element assembly
+:func:`jaxnet.solve.newton.newton_loop`) whose linear solves leave the device. The element assembly
 (forces, the sparse tangent's entries), the residual norms, the line search and the step logic are XLA code
 and run on the device(s) holding the designs. Each factorisation of the tangent K, and each sensitivity
 solve with K or K^T, is a ``jax.pure_callback``: XLA calls Python from one of its CPU client's threads
@@ -30,23 +30,19 @@ SuperLU (scipy) on the host (:mod:`jaxnet.linalg`), then the solution goes back 
 * *vmap on one device.* The batched while loop runs until the batch's slowest design has converged, and
   under vmap the loop's ``lax.cond`` (factorise only when a line search ends) becomes a select that takes
   both branches: every pass of the loop assembles and factorises the tangent of every design, converged
-  ones included, one callback after the other (``vmap_method="sequential"``). On a 362-node panel, 4
-  designs of 4 to 13 Newton iterations: 148 factorisations (4 designs x 37 passes of the slowest) where
-  the designs need 32, and 0.7-2.0 s (with the machine's load) where ``method="map"``, which factorises
-  exactly what each design needs, takes 0.2 s, as does a Python loop of single solves; 16 designs: 3.3 s
-  against 0.7 s. On a 15-node panel, where the callbacks are a small part, vmap is 1.5-2x slower than map.
-  Until the Newton loop tells the host which designs need a factorisation (a flag to the callback), prefer
-  ``method="map"``.
+  ones included, one callback after the other (``vmap_method="sequential"``): designs of 4 to 13 Newton
+  iterations make the batch factorise several times what they need, where ``method="map"`` factorises
+  exactly what each design needs and is as fast as a Python loop of single solves; even where the
+  callbacks are a small part (a small panel), vmap is the slower (``validation/design_batch.py`` times
+  both). Until the Newton loop tells the host which designs need a factorisation (a flag to the
+  callback), prefer ``method="map"``.
 * *sharded over several devices.* Each device runs its own loop over its own designs (it stops at its own
   slowest) and makes its own callbacks, from its own thread, so the callbacks of different devices run on
-  the host at the same time. Measured on this 2-core machine with 4 emulated CPU devices and 4 designs of
-  the 362-node panel (``validation/design_batch.py`` and a run timing each callback): with ``method="map"``
-  the 32 factorisations overlap (0.78 s of callbacks within 0.33 s of wall time) but each takes several
-  times longer than alone, the two cores and Python's GIL being shared: 0.30-0.40 s sharded against 0.2 s
-  on one device (16 designs: 1.0 s against 0.7 s). With ``method="vmap"`` sharding helps because it cuts
-  the batched waste (60 factorisations instead of 148): 0.30-0.35 s against 0.7-2.0 s. Emulated devices add
-  no cores: sharding can only pay where the host has cores to spare for the concurrent callbacks (not
-  measured: this machine has 2).
+  the host at the same time. On a 2-core machine with emulated CPU devices (``validation/design_batch.py``)
+  the factorisations of ``method="map"`` overlap, but each takes several times longer than alone, the two
+  cores and Python's GIL being shared: sharded is slower than one device. With ``method="vmap"`` sharding
+  helps because it cuts the batched waste (each device stops at its own slowest design). Emulated devices
+  add no cores: sharding can only pay where the host has cores to spare for the concurrent callbacks.
 * *a deadlock to avoid.* XLA's CPU client runs the programs of all CPU devices, and their callbacks, on
   max(cores, CPU devices) threads (:func:`xla_cpu_threads`). On this 2-core machine a mesh of all 2, 3 or
   4 emulated devices hung on the 362-node panel, every time; each XLA thread was inside a callback,
@@ -67,10 +63,10 @@ SuperLU (scipy) on the host (:mod:`jaxnet.linalg`), then the solution goes back 
   overlaps their host solves as above, within the host's cores and GIL.
 
 **Convergence.** Every design starts from ``x0`` (one (N, 3) start for all, or one per design) and must
-converge within ``newton.max_iter`` pure Newton steps (:data:`jaxnet.solve.implicit.DEFAULT_NEWTON`): a
-design far from its start may not. With ``check=True`` the designs that did not converge are named (index,
+converge within ``solver.max_iter`` pure Newton steps (:data:`jaxnet.solve.options.DIFFERENTIABLE`): a
+design far from its start may not. With ``throw=True`` the designs that did not converge are named (index,
 reason, residual, worst node) in an :class:`~jaxnet.solve.implicit.ImplicitError` once the batch is back;
-with ``check=False`` the batch is returned and its ``status`` says which designs to trust.
+with ``throw=False`` the batch is returned and its ``status`` says which designs to trust.
 
 Bad input (leaves with different batch sizes, a scalar leaf, a start of the wrong shape, an invalid
 design of a :class:`~jaxnet.design.space.DesignSpace`, an unknown method, a mesh without the design axis)
@@ -94,7 +90,9 @@ from jax.sharding import Mesh, NamedSharding, PartitionSpec
 
 from jaxnet.design import objectives
 from jaxnet.design.space import DesignSpace
-from jaxnet.solve import implicit, statics
+from jaxnet.solve import implicit
+from jaxnet.solve.options import DIFFERENTIABLE, Newton
+from jaxnet.solve.results import CONVERGED, REASONS
 
 __all__ = ["AXIS", "METHODS", "Batch", "batch_size", "design_mesh", "solve_batch", "solve_sharded",
            "xla_cpu_threads"]
@@ -111,7 +109,7 @@ class Batch(eqx.Module):
     """The equilibria of a batch of B designs (leading axis B on every field).
 
     x: (B, N, 3) equilibrium node positions (m).
-    status: (B,) the solve's stop reason (:data:`jaxnet.solve.statics.REASONS`; CONVERGED is the only
+    status: (B,) the solve's stop reason (:data:`jaxnet.solve.results.REASONS`; CONVERGED is the only
       trustworthy one). residual_N: (B,) largest out-of-balance force (N). iterations: (B,) Newton
       iterations. worst_node: (B,) node of the largest residual.
     value: (B,) the figure of each design (its unit), or None without a figure.
@@ -130,7 +128,7 @@ class Batch(eqx.Module):
     @property
     def converged(self) -> np.ndarray:
         """(B,) bool, on the host: the designs whose solve converged."""
-        return np.asarray(self.status) == statics.CONVERGED
+        return np.asarray(self.status) == CONVERGED
 
 
 # -- checks, before anything is compiled -------------------------------------------------------------------
@@ -211,12 +209,12 @@ def _resolve(space_or_scene_fn, thetas, structure, x0):
 
 # -- one design, then many ------------------------------------------------------------------------------
 
-def _one_design(scene_fn, structure, newton, figure, gradient, theta, x0) -> Batch:
+def _one_design(scene_fn, structure, solver, figure, gradient, theta, x0) -> Batch:
     """The equilibrium of one design θ (and its figure, and the figure's gradient in θ), as a Batch of
     unbatched fields: what vmap or lax.map runs over the designs."""
     def solved(theta):
         scene = scene_fn(theta)
-        eq = implicit.equilibrium(scene, structure, x0=x0, newton=newton, check=False)
+        eq = implicit.equilibrium(scene, structure, x0=x0, solver=solver, throw=False)
         return eq, scene
 
     def figure_of(theta):
@@ -234,9 +232,9 @@ def _one_design(scene_fn, structure, newton, figure, gradient, theta, x0) -> Bat
                  worst_node=eq.worst_node, value=value, gradient=grad)
 
 
-def _batched(scene_fn, structure, newton, figure, gradient, method, x0_batched, thetas, x0) -> Batch:
+def _batched(scene_fn, structure, solver, figure, gradient, method, x0_batched, thetas, x0) -> Batch:
     """Every design of the batch, by ``jax.vmap`` or ``jax.lax.map`` (see :data:`METHODS`)."""
-    one = functools.partial(_one_design, scene_fn, structure, newton, figure, gradient)
+    one = functools.partial(_one_design, scene_fn, structure, solver, figure, gradient)
     if method == "vmap":
         return jax.vmap(one, in_axes=(0, 0 if x0_batched else None))(thetas, x0)
     if x0_batched:
@@ -250,13 +248,13 @@ _batched_jit = eqx.filter_jit(_batched)
 
 
 @eqx.filter_jit
-def _sharded_jit(scene_fn, structure, newton, figure, gradient, method, x0_batched, mesh, thetas, x0) -> Batch:
+def _sharded_jit(scene_fn, structure, solver, figure, gradient, method, x0_batched, mesh, thetas, x0) -> Batch:
     # the arrays of the structure and the figure go in as replicated arguments, their static parts by closure
     structure_arrays, structure_static = eqx.partition(structure, eqx.is_array)
     figure_arrays, figure_static = eqx.partition(figure, eqx.is_array)
 
     def shard(thetas, x0, structure_arrays, figure_arrays):
-        return _batched(scene_fn, eqx.combine(structure_arrays, structure_static), newton,
+        return _batched(scene_fn, eqx.combine(structure_arrays, structure_static), solver,
                         eqx.combine(figure_arrays, figure_static), gradient, method, x0_batched, thetas, x0)
 
     designs, everywhere = PartitionSpec(AXIS), PartitionSpec()
@@ -273,27 +271,27 @@ def _method(method):
     return method
 
 
-def _checked(batch: Batch, size: int, newton, check: bool) -> Batch:
-    """The batch, or an ImplicitError naming every design whose solve did not converge."""
-    if not check:
+def _checked(batch: Batch, size: int, solver: Newton, throw: bool) -> Batch:
+    """The batch, or (``throw``) an ImplicitError naming every design whose solve did not converge."""
+    if not throw:
         return batch
     status = np.asarray(batch.status)
-    failed = np.flatnonzero(status != statics.CONVERGED)
+    failed = np.flatnonzero(status != CONVERGED)
     if failed.size:
         residual, iterations, worst = (np.asarray(a) for a in (batch.residual_N, batch.iterations, batch.worst_node))
-        lines = [f"design {b}: {statics.REASONS[int(status[b])]} after {int(iterations[b])} iterations, largest "
+        lines = [f"design {b}: {REASONS[int(status[b])]} after {int(iterations[b])} iterations, largest "
                  f"residual {float(residual[b]):.4g} N at node {int(worst[b])}" for b in failed[:10]]
         more = f"; and {failed.size - 10} more" if failed.size > 10 else ""
         raise implicit.ImplicitError(
-            f"design batch: {failed.size} of {size} designs did not converge (tolerance {newton.tol:g} N): "
+            f"design batch: {failed.size} of {size} designs did not converge (tolerance {solver.tol:g} N): "
             + "; ".join(lines) + more + ". Start them nearer their answers (x0, one per design) or run with "
-            "check=False and read status")
+            "throw=False and read status")
     return batch
 
 
 def solve_batch(space_or_scene_fn: DesignSpace | Callable, thetas, structure: implicit.Structure | None, x0,
-                newton: statics.Newton | None = None, figure: Callable | None = None, gradient: bool = True,
-                check: bool = True, method: str = "vmap") -> Batch:
+                solver: Newton | None = None, figure: Callable | None = None, gradient: bool = True,
+                throw: bool = True, method: str = "vmap") -> Batch:
     """The equilibria of a batch of designs in one program on one device (the default device).
 
     Args:
@@ -304,11 +302,11 @@ def solve_batch(space_or_scene_fn: DesignSpace | Callable, thetas, structure: im
       structure: the :class:`~jaxnet.solve.implicit.Structure` of the reference scene; None for a DesignSpace
         (computed from ``space.reference``: pass it when calling repeatedly, it is a host computation).
       x0: (N, 3) start positions of every design, or (B, N, 3) one per design (m); not differentiated.
-      newton: the forward solve's options (default :data:`jaxnet.solve.implicit.DEFAULT_NEWTON`).
+      solver: the forward solve's options (default :data:`jaxnet.solve.options.DIFFERENTIABLE`).
       figure: None, or a scalar figure of an :class:`jaxnet.design.objectives.Outcome` (positions, scene,
         terms), e.g. ``objectives.drag()``.
       gradient: with a figure, also its gradient with respect to each design's θ (reverse mode).
-      check: raise :class:`~jaxnet.solve.implicit.ImplicitError` naming the designs that did not converge.
+      throw: raise :class:`~jaxnet.solve.implicit.ImplicitError` naming the designs that did not converge.
       method: ``"vmap"``, the designs batched (one batched Newton loop), or ``"map"``, one after the other
         (``jax.lax.map``); the same results to rounding. ``"map"`` is the faster wherever the host
         factorisations matter (the module docstring says why).
@@ -316,9 +314,9 @@ def solve_batch(space_or_scene_fn: DesignSpace | Callable, thetas, structure: im
       a :class:`Batch` (positions, solve status, figure values and gradients, leading axis B).
     """
     scene_fn, structure, thetas, x0, x0_batched, size = _resolve(space_or_scene_fn, thetas, structure, x0)
-    newton = newton or implicit.DEFAULT_NEWTON
-    batch = _batched_jit(scene_fn, structure, newton, figure, gradient, _method(method), x0_batched, thetas, x0)
-    return _checked(batch, size, newton, check)
+    solver = solver or DIFFERENTIABLE
+    batch = _batched_jit(scene_fn, structure, solver, figure, gradient, _method(method), x0_batched, thetas, x0)
+    return _checked(batch, size, solver, throw)
 
 
 def xla_cpu_threads() -> int:
@@ -366,8 +364,8 @@ def _padded(tree, size, total):
 
 
 def solve_sharded(space_or_scene_fn: DesignSpace | Callable, thetas, structure: implicit.Structure | None, x0,
-                  newton: statics.Newton | None = None, figure: Callable | None = None, gradient: bool = True,
-                  check: bool = True, method: str = "vmap", mesh: Mesh | None = None) -> Batch:
+                  solver: Newton | None = None, figure: Callable | None = None, gradient: bool = True,
+                  throw: bool = True, method: str = "vmap", mesh: Mesh | None = None) -> Batch:
     """:func:`solve_batch` with the batch split over the devices of ``mesh`` (default :func:`design_mesh`):
     each device solves its B / D designs (batched or mapped, by ``method``), at the same time as the
     others. The results are sharded along the batch axis the same way (``NamedSharding(mesh,
@@ -381,7 +379,7 @@ def solve_sharded(space_or_scene_fn: DesignSpace | Callable, thetas, structure: 
     mesh = mesh or design_mesh()
     _check_mesh(mesh)
     scene_fn, structure, thetas, x0, x0_batched, size = _resolve(space_or_scene_fn, thetas, structure, x0)
-    newton = newton or implicit.DEFAULT_NEWTON
+    solver = solver or DIFFERENTIABLE
     devices = mesh.shape[AXIS]
     total = -(-size // devices) * devices
     thetas = _padded(thetas, size, total)
@@ -391,7 +389,7 @@ def solve_sharded(space_or_scene_fn: DesignSpace | Callable, thetas, structure: 
     thetas = jax.device_put(thetas, designs)
     x0 = jax.device_put(x0, designs if x0_batched else everywhere)
     structure = jax.device_put(structure, everywhere)
-    batch = _sharded_jit(scene_fn, structure, newton, figure, gradient, _method(method), x0_batched, mesh, thetas, x0)
+    batch = _sharded_jit(scene_fn, structure, solver, figure, gradient, _method(method), x0_batched, mesh, thetas, x0)
     if total != size:
         batch = jax.tree_util.tree_map(lambda a: a[:size], batch)
-    return _checked(batch, size, newton, check)
+    return _checked(batch, size, solver, throw)

@@ -60,7 +60,7 @@ class Outcome(eqx.Module):
 
 def outcome(x, scene, model=None) -> Outcome:
     """An :class:`Outcome` of positions ``x`` ((N, 3) m, or anything with an ``.x``, e.g. a
-    :class:`jaxnet.solve.statics.Equilibrium`) of ``scene``. ``model``: the active terms; None to read them
+    :class:`jaxnet.solve.results.Equilibrium`) of ``scene``. ``model``: the active terms; None to read them
     from ``scene``, which must then be concrete (pass the model when the scene's leaves are traced)."""
     x = jnp.asarray(getattr(x, "x", x))
     if x.ndim != 2 or x.shape[-1] != 3:

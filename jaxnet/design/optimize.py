@@ -38,7 +38,8 @@ import numpy as np
 import optax
 
 from jaxnet.design import objectives as objectives_lib
-from jaxnet.solve import implicit, programs
+from jaxnet.solve import implicit, programs, results, statics
+from jaxnet.solve.options import DIFFERENTIABLE, Newton
 
 #: stop reasons
 CONVERGED, MAX_STEPS, SOLVE_FAILED = "gradient below tolerance", "maximum number of steps", "equilibrium failed"
@@ -92,7 +93,7 @@ def _json(tree):
     return jax.tree.map(lambda a: np.asarray(a).tolist(), tree)
 
 
-def optimize(space, objective, theta, optimizer=None, steps=50, bounds=None, scale=None, newton=None,
+def optimize(space, objective, theta, optimizer=None, steps=50, bounds=None, scale=None, solver: Newton | None = None,
              gtol=1e-6, backtracks=6, out=None, progress=True, x0=None, round_cut=True) -> DesignResult:
     """Minimise ``objective`` over the design parameters ``theta`` of ``space``.
 
@@ -107,7 +108,7 @@ def optimize(space, objective, theta, optimizer=None, steps=50, bounds=None, sca
       steps: the most iterations. gtol: stop when the largest gradient component (scaled) is below it.
       bounds: :class:`jaxnet.design.objectives.Bounds` on θ (its units), enforced by projection.
       scale: the optimiser's unit per leaf of θ (default :func:`default_scale`).
-      newton: the equilibrium solves' options (default :data:`jaxnet.solve.implicit.DEFAULT_NEWTON`).
+      solver: the equilibrium solves' options (default :data:`jaxnet.solve.options.DIFFERENTIABLE`).
       backtracks: halvings of a step whose equilibrium does not converge before the loop stops.
       out: a directory for ``history.jsonl`` and ``design.json`` (written as the run goes); None for none.
       progress: a tqdm bar with the objective and the gradient norm.
@@ -122,7 +123,7 @@ def optimize(space, objective, theta, optimizer=None, steps=50, bounds=None, sca
     structure = implicit.structure_of(space.reference)
     model = structure.model
     optimizer = optimizer or optax.adam(0.05)
-    newton = newton or implicit.DEFAULT_NEWTON
+    solver = solver or DIFFERENTIABLE
     bounds = bounds or objectives_lib.Bounds()
     out = None if out is None else pathlib.Path(out)
     if out is not None:
@@ -134,7 +135,7 @@ def optimize(space, objective, theta, optimizer=None, steps=50, bounds=None, sca
 
     def loss(z, start):
         scene = space.scene(design(z))
-        eq = implicit.equilibrium(scene, structure, x0=start, newton=newton, check=False)
+        eq = implicit.equilibrium(scene, structure, x0=start, solver=solver, throw=False)
         o = objectives_lib.Outcome(eq.x, scene, model)
         return objective(o), (eq.x, eq.status, eq.iterations, _violation(objective, o))
 
@@ -147,12 +148,12 @@ def optimize(space, objective, theta, optimizer=None, steps=50, bounds=None, sca
 
     def evaluate(z, start):
         (value, (x, status, iterations, violation)), g = value_and_grad(z, start)
-        ok = int(status) == implicit.statics.CONVERGED and bool(jnp.isfinite(value))
+        ok = int(status) == results.CONVERGED and bool(jnp.isfinite(value))
         return ok, float(value), g, np.asarray(x), int(iterations), float(violation)
 
     t_start = time.perf_counter()
     if x0 is None:
-        first = implicit.solve(space.scene(theta0), structure=structure, newton=newton)
+        first = implicit.solve(space.scene(theta0), solver=solver, structure=structure)
         x0 = np.asarray(first.x)
     z = jax.tree.map(jnp.zeros_like, theta0)
     ok, value, g, x, iterations, violation = evaluate(z, x0)
@@ -211,10 +212,10 @@ def optimize(space, objective, theta, optimizer=None, steps=50, bounds=None, sca
     if round_cut and "cut" in theta0:
         rounded, report = space.rounded(best)
         scene = space.scene(rounded)
-        eq = implicit.equilibrium(scene, structure, x0=x, newton=newton, check=False)
-        if int(eq.status) != implicit.statics.CONVERGED:
-            first, _ = implicit.statics.solve(scene)
-            eq = implicit.equilibrium(scene, structure, x0=first.x, newton=newton)
+        eq = implicit.equilibrium(scene, structure, x0=x, solver=solver, throw=False)
+        if int(eq.status) != results.CONVERGED:
+            first = statics.solve(scene)
+            eq = implicit.equilibrium(scene, structure, x0=first.x, solver=solver)
         o = objectives_lib.Outcome(eq.x, scene, model)
         result.rounded = jax.tree.map(np.asarray, rounded)
         result.rounded_value = float(objective(o))

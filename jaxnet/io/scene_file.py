@@ -41,7 +41,7 @@ import numpy as np
 
 from jaxnet.net import CableEnd, CableNodes, Corner, Net, PanelRef, Rope, Side, Twine
 from jaxnet.scene import Environment, SceneError
-from jaxnet.solve.statics import Newton
+from jaxnet.solve.options import Newton
 
 _TOP = {"environment", "twines", "ropes", "panels", "cables", "seams", "fix", "attach", "sinkers", "floats", "catch",
         "bodies", "limits", "solver", "description"}

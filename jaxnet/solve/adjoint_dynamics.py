@@ -9,19 +9,19 @@ v_{n+1} = (x_{n+1} - x_n)/h. Each step is :func:`jaxnet.solve.implicit.equilibri
 :class:`~jaxnet.solve.dynamics.TimeStep`, so its derivative is that of the root by the implicit function
 theorem: one sparse solve with the step's tangent K_n per direction in forward mode, one with K_n^T per
 step in reverse mode (the adjoint recurrence runs backwards over the steps), never an unrolled Newton
-iteration. The masses M + M_a and M_a + ρV are :func:`lumped_masses` (jnp: differentiable in the twine
+iteration. The masses M + M_a and M_a + ρV are :func:`lumped_masses` (in JAX: differentiable in the twine
 diameter, the mesh side, a sinker's mass, ...).
 
 Why a fixed step, and no retries. :func:`jaxnet.solve.dynamics.simulate` halves a step whose Newton fails
 and grows it back; the accepted steps then depend on the design discontinuously (a design a hair away can
 take another sequence of steps), and the figure with them: no derivative. Here every design takes the same
 n steps, the figure is a smooth function of the design, and a step whose Newton does not converge *raises*
-(``implicit.equilibrium``'s check: :class:`~jaxnet.solve.implicit.ImplicitError` outside a trace, an
+(``implicit.equilibrium``'s ``throw``: :class:`~jaxnet.solve.implicit.ImplicitError` outside a trace, an
 equinox runtime error inside one) instead of being retried: choose h where :func:`~jaxnet.solve.dynamics.simulate`
-takes no retries (its ``Trajectory.state.retries``), and a ``newton`` with enough iterations. The forward
+takes no retries (its ``Trajectory.state.retries``), and a ``solver`` with enough iterations. The forward
 run equals ``simulate`` at the same step (tested, 1e-8 m), apart from the Newton tolerance: the derivative
-is only as good as each root, so the default is :data:`jaxnet.solve.implicit.DEFAULT_NEWTON` (1e-8 N), not
-the dynamics' 1e-3 N.
+is only as good as each root, so the default is :data:`jaxnet.solve.options.DIFFERENTIABLE`, not the
+dynamics' :data:`jaxnet.solve.options.TIME_STEP`.
 
 Memory: checkpointing. Reverse mode needs, for step n, what its adjoint solve and the transposed
 linearisation of its residual need (x_n, v_n, the tangent's entries, the elements' intermediate values):
@@ -30,11 +30,10 @@ kept for every step, that grows as n. The steps run as a ``lax.scan`` over *segm
 the state (x, v) at each segment's start, and the reverse pass re-runs one segment at a time (its Newton
 solves again) to rebuild that segment's per-step values. Memory is then ⌈n/segment⌉ states plus one
 segment's per-step values, O(√n) at the default (plus the figure's own (n, ...) series, a scalar per
-step for :func:`integrate`), for two Newton solves per step instead of one. Measured (XLA's memory
-analysis of the compiled ``jax.grad`` of the mean mooring force, temporary bytes, 16 / 64 / 256 steps):
-on a 15-node hanging panel 0.36 / 0.57 / 0.99 MB checkpointed (each 4× the steps: 2.0× the growth)
-against 0.96 / 3.44 / 13.3 MB for the plain scan (52 kB a step: linear); on a two-node spring 13.8 /
-15.9 / 20.9 kB against 17.9 / 43.6 / 147 kB. ``segment=n_steps`` gives the plain scan (one Newton solve
+step for :func:`integrate`), for two Newton solves per step instead of one. XLA's memory analysis of the
+compiled ``jax.grad`` of the mean mooring force (temporary bytes, on a small hanging panel and on a
+two-node spring) shows it: each 4× the steps doubles the checkpointed run's growth, and quadruples the
+plain scan's. ``segment=n_steps`` gives the plain scan (one Newton solve
 per step; memory O(n)). Each step's adjoint solve factorises that step's K_n^T once (on the host).
 
 Figures. A per-step figure is a function of an :class:`Instant` (the net at the end of one step: time,
@@ -74,9 +73,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxnet import assemble, catch as catch_lib, geometry, model as model_lib
-from jaxnet.solve import dynamics, implicit, statics
-from jaxnet.terms import inertia, term as term_lib
+from jaxnet import assemble, catch as catch_lib, model as model_lib
+from jaxnet.solve import dynamics, implicit, kernel, masses as masses_lib
+from jaxnet.solve.options import Implicit, Newton
+from jaxnet.terms import term as term_lib
 
 __all__ = ["Instant", "lumped_masses", "step_force", "implicit_step", "series", "trajectory", "integrate", "mean",
            "smooth_peak", "reactions", "mooring_force", "drag", "enclosed_volume"]
@@ -86,41 +86,10 @@ __all__ = ["Instant", "lumped_masses", "step_force", "implicit_step", "series", 
 
 
 def lumped_masses(scene):
-    """Per node and axis, (M + M_a, M_a + ρV) in kg, (N, 3) each: :func:`jaxnet.solve.dynamics.lumped_masses`
-    in jnp, so that the inertia follows a design (twine diameter, mesh side, twine coordinates, a sinker's
-    mass and volume, the water density): a third of each triangle's netting per vertex, half of each bar
-    per end, the nodes' own masses, displaced volumes and added masses; M_a = Ca ρ × the twines' and bars'
-    volume."""
-    env = scene.environment
-    n = scene.n_nodes
-    rho, ca = jnp.asarray(env.water_density, dtype=float), jnp.asarray(env.added_mass_coefficient, dtype=float)
-    mass, volume = jnp.zeros(n), jnp.zeros(n)
-
-    def spread(total, ends, per_element):
-        ends = jnp.asarray(ends)
-        return total.at[ends.ravel()].add(jnp.repeat(per_element, ends.shape[1]))
-
-    net = scene.netting
-    if net is not None:
-        m, v = jax.vmap(inertia.netting_vertex_mass)(jnp.asarray(net.uv), jnp.asarray(net.l0),
-                                                     jnp.asarray(net.diameter), jnp.asarray(net.density))
-        mass, volume = spread(mass, net.vertices, m), spread(volume, net.vertices, v)
-    hexa = scene.hexagonal
-    if hexa is not None:
-        d = jnp.abs(jax.vmap(geometry.twine_determinant)(jnp.asarray(hexa.uv)))
-        v = d * jnp.pi * jnp.asarray(hexa.diameter) ** 2 / 4.0 * jnp.sum(jnp.asarray(hexa.l0), axis=1) / 3.0
-        mass, volume = spread(mass, hexa.vertices, jnp.asarray(hexa.density) * v), spread(volume, hexa.vertices, v)
-    bars = scene.bars
-    if bars is not None:
-        v = jnp.pi * jnp.asarray(bars.diameter) ** 2 / 4.0 * jnp.asarray(bars.rest_length) / 2.0
-        mass, volume = spread(mass, bars.ends, jnp.asarray(bars.density) * v), spread(volume, bars.ends, v)
-    nodes = scene.nodes
-    added = jnp.broadcast_to((ca * rho * volume)[:, None], (n, 3))
-    if nodes.added_mass is not None:
-        added = added + jnp.asarray(nodes.added_mass, dtype=float)
-    mass = mass + jnp.asarray(nodes.mass, dtype=float)
-    volume = volume + jnp.asarray(nodes.volume, dtype=float)
-    return mass[:, None] + added, added + (rho * volume)[:, None]
+    """Per node and axis, (M + M_a, M_a + ρV) in kg, (N, 3) each: :func:`jaxnet.solve.masses.lumped_masses`
+    in JAX, so that the inertia follows a design (twine diameter, mesh side, twine coordinates, a sinker's
+    mass and volume, the water density)."""
+    return masses_lib.lumped_masses(scene, jnp)
 
 
 # -- one step ------------------------------------------------------------------------------------------
@@ -152,24 +121,24 @@ def step_force(x, scene_t, structure, step):
     the Newton iteration's own evaluation (``dynamics.State.force``): the loads, the water's inertia, minus
     the gradient of the stored and inertia energies, plus the drag on the velocities relative to the water.
     At fixed coordinates it is minus the reactions, the inertia of the held nodes included."""
-    pattern, model = structure.pattern, structure.model
-    load = assemble.loads(scene_t, model) + step.water_load
-    x_free = x.ravel()[pattern.free]
-    return statics._evaluate(x_free, jnp.zeros_like(load), load, 1.0, scene_t, pattern, model, step)[1]
+    pattern = structure.pattern
+    return kernel.force(x.ravel()[pattern.free], scene_t, pattern, structure.model, step)
 
 
 def _moving_water(scene, loading):
     return scene.environment.waves is not None or loading.current_speed is not None
 
 
-def implicit_step(x, v, t_new, time_step, scene, structure, loading, masses, newton=None) -> Instant:
+def implicit_step(x, v, t_new, time_step, scene, structure, loading, masses,
+                  solver: Newton | None = None) -> Instant:
     """One step of the book's scheme from (x, v) (N, 3) (m, m/s) to time ``t_new`` (s) with step
     ``time_step`` h (s), differentiable in everything (the root by the implicit function theorem).
 
     The same step as :func:`jaxnet.solve.dynamics.advance`'s: Newton from the constant-velocity prediction
     x + h v, the water's acceleration at x and t_new. ``masses``: :func:`lumped_masses` of ``scene``;
     ``structure``: dynamic (``implicit.structure_of(scene, dynamic=True)``). Raises (or, traced, errors at
-    run time) when Newton does not converge: no retry. Returns the :class:`Instant` at t_new."""
+    run time) when Newton does not converge: no retry. ``solver``: the step's Newton options (default
+    :data:`jaxnet.solve.options.DIFFERENTIABLE`). Returns the :class:`Instant` at t_new."""
     loading = loading or dynamics.Loading()
     mass, water_mass = masses
     scene_t = dynamics.scene_at(scene, loading, t_new)
@@ -179,7 +148,7 @@ def implicit_step(x, v, t_new, time_step, scene, structure, loading, masses, new
     else:
         load = jnp.zeros_like(x)
     step = dynamics.TimeStep(x, v, time_step, mass, load)
-    x_new = implicit.equilibrium(scene_t, structure, x0=x + time_step * v, newton=newton, step=step).x
+    x_new = implicit.equilibrium(scene_t, structure, x0=x + time_step * v, solver=solver, step=step).x
     return Instant(t=t_new, x=x_new, v=(x_new - x) / time_step, force=step_force(x_new, scene_t, structure, step),
                    scene=scene_t, step=step, structure=structure)
 
@@ -213,7 +182,7 @@ def _check(scene, structure, loading, time_step, n_steps, segment, x0, v0, start
         if value is not None and tuple(np.shape(value)) != shape:
             raise ValueError(f"{name} must have the shape of the scene's positions {shape}, got {np.shape(value)}")
     if _is_concrete((scene.nodes.fixed, [motion.nodes for motion in loading.motions])):
-        dynamics._check_loading(scene, loading)
+        dynamics.check_loading(scene, loading)
     if _is_concrete(scene):
         # a structure may hold more terms than this design needs (a family's reference), never fewer
         missing = [t.name for t in model_lib.active_terms(scene, dynamic=True) if t not in structure.model]
@@ -222,7 +191,7 @@ def _check(scene, structure, loading, time_step, n_steps, segment, x0, v0, start
                              "implicit.structure_of(reference, dynamic=True)")
 
 
-def _run(figure, scene, structure, loading, time_step, n_steps, x0, v0, start_time, newton, segment):
+def _run(figure, scene, structure, loading, time_step, n_steps, x0, v0, start_time, solver, segment):
     """(x, v) at the end and the figure at every step (n_steps, ...), by checkpointed segments."""
     loading = loading or dynamics.Loading()
     _check(scene, structure, loading, time_step, n_steps, segment, x0, v0, start_time)
@@ -237,7 +206,7 @@ def _run(figure, scene, structure, loading, time_step, n_steps, x0, v0, start_ti
     def advance(carry, k):
         x, v = carry
         # t_k from the step's index, not accumulated: the same times as simulate's records k h
-        now = implicit_step(x, v, t0 + (k + 1) * h, h, scene, structure, loading, masses, newton)
+        now = implicit_step(x, v, t0 + (k + 1) * h, h, scene, structure, loading, masses, solver)
         return (now.x, now.v), figure(now)
 
     if segments * segment != n_steps:
@@ -259,8 +228,8 @@ def _run(figure, scene, structure, loading, time_step, n_steps, x0, v0, start_ti
     return x, v, values
 
 
-def series(figure: Callable, scene, structure, loading=None, time_step=0.01, n_steps=100, x0=None, v0=None,
-           start_time=0.0, newton: statics.Newton | None = None, segment: int | None = None):
+def series(figure: Callable, scene, structure, loading=None, time_step=Implicit.time_step, n_steps=100, x0=None,
+           v0=None, start_time=0.0, solver: Newton | None = None, segment: int | None = None):
     """The per-step figure over a run of ``n_steps`` fixed steps, differentiable (jax.grad, jacfwd, jit, vmap)
     with respect to every float leaf of ``scene``, ``loading``, ``x0``, ``v0`` and ``time_step``.
 
@@ -272,23 +241,23 @@ def series(figure: Callable, scene, structure, loading=None, time_step=0.01, n_s
       time_step: h (s), fixed (no retries: see the module docstring). n_steps: the number of steps (static).
       x0, v0: (N, 3) positions (m) and velocities (m/s) at ``start_time`` (s); default the scene's
         positions there (prescribed nodes moved), at rest.
-      newton: each step's Newton options; default :data:`jaxnet.solve.implicit.DEFAULT_NEWTON`.
+      solver: each step's Newton options; default :data:`jaxnet.solve.options.DIFFERENTIABLE`.
       segment: steps per checkpointed segment (default ⌈√n_steps⌉; ``n_steps``: no checkpointing).
     Returns:
       the figure's pytree, each leaf stacked over the steps (n_steps, ...): the values at
       t_k = start_time + k h, k = 1 .. n_steps.
     """
-    return _run(figure, scene, structure, loading, time_step, n_steps, x0, v0, start_time, newton, segment)[2]
+    return _run(figure, scene, structure, loading, time_step, n_steps, x0, v0, start_time, solver, segment)[2]
 
 
-def trajectory(scene, structure, loading=None, time_step=0.01, n_steps=100, x0=None, v0=None, start_time=0.0,
-               newton: statics.Newton | None = None, segment: int | None = None):
+def trajectory(scene, structure, loading=None, time_step=Implicit.time_step, n_steps=100, x0=None, v0=None,
+               start_time=0.0, solver: Newton | None = None, segment: int | None = None):
     """(xs, vs): positions (m) and velocities (m/s) (n_steps + 1, N, 3) at t_k = start_time + k h, k = 0 ..
     n_steps, the start included; arguments as :func:`series`. For looking at and for short runs: a figure
     of the whole history keeps every state in reverse mode, where :func:`series` of a scalar figure does not."""
     loading = loading or dynamics.Loading()
     x, v, (xs, vs) = _run(lambda now: (now.x, now.v), scene, structure, loading, time_step, n_steps, x0, v0,
-                          start_time, newton, segment)
+                          start_time, solver, segment)
     first_x = jnp.asarray(dynamics.scene_at(scene, loading, jnp.asarray(start_time, dtype=float)).nodes.position
                           if x0 is None else x0, dtype=float)
     first_v = jnp.zeros_like(first_x) if v0 is None else jnp.asarray(v0, dtype=float)
@@ -314,13 +283,13 @@ def smooth_peak(values, width):
     return width * jax.nn.logsumexp(jnp.asarray(values) / width, axis=0)
 
 
-def integrate(figure: Callable, scene, structure, loading=None, time_step=0.01, n_steps=100, x0=None, v0=None,
-              start_time=0.0, newton: statics.Newton | None = None, segment: int | None = None,
+def integrate(figure: Callable, scene, structure, loading=None, time_step=Implicit.time_step, n_steps=100, x0=None,
+              v0=None, start_time=0.0, solver: Newton | None = None, segment: int | None = None,
               reduce: Callable = mean):
     """``reduce`` (default :func:`mean`; e.g. ``functools.partial(smooth_peak, width=10.0)``) of the per-step
     ``figure`` over the run: a time-integrated figure, its gradient by ``jax.grad`` costing one adjoint
     solve per step and O(√n_steps) states of memory (module docstring). Arguments as :func:`series`."""
-    return reduce(series(figure, scene, structure, loading, time_step, n_steps, x0, v0, start_time, newton,
+    return reduce(series(figure, scene, structure, loading, time_step, n_steps, x0, v0, start_time, solver,
                          segment))
 
 

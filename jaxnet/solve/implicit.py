@@ -16,10 +16,10 @@ iterations: those are neither needed (only x* matters) nor cheap (the while loop
 damping would all be unrolled), and their derivative is not the derivative of the solution until they
 have converged anyway.
 
-How it is wired. :func:`equilibrium` solves by :func:`jaxnet.solve.statics.newton_loop` (the jittable
+How it is wired. :func:`equilibrium` solves by :func:`jaxnet.solve.newton.newton_loop` (the jittable
 iteration, its factorisations a host callback) inside a ``jax.custom_jvp``. Its JVP rule forms the
 right-hand side ∂F/∂θ dθ by ``jax.jvp`` of the residual in θ at the converged x*, assembles K's sparse
-entries at x* (:func:`jaxnet.assemble.tangent`, the same code as the solver: closed-form or autodiff
+entries at x* (:func:`jaxnet.solve.kernel.tangent`, the same code as the solver: closed-form or autodiff
 stiffness), and solves through ``jax.lax.custom_linear_solve`` with SuperLU on the host
 (:func:`jaxnet.linalg.solve`). ``custom_linear_solve`` is told how to solve with K and with K^T, so JAX
 transposes the rule for reverse mode: the same code gives ``jax.grad``, ``jax.jacfwd``, ``jax.jacrev``,
@@ -42,7 +42,8 @@ which is the honest answer there (a finite number would be a guess). At a design
 tangent takes (slack twines carry the compression stiffness).
 
 Convergence. The derivative is that of the exact root: its accuracy is that of the forward solve, so the
-default tolerance (``DEFAULT_NEWTON.tol``) is tighter than the static solver's 1e-3 N. The solve starts at
+default options (:data:`jaxnet.solve.options.DIFFERENTIABLE`) converge far below the static solver's
+:data:`~jaxnet.solve.options.TOL_N`. The solve starts at
 ``x0`` (default: the scene's positions): for a design optimisation, start each solve at the last
 equilibrium (:mod:`jaxnet.design.optimize` does), and solve the first from a flat net with
 :func:`jaxnet.solve.statics.solve`, whose stiffness continuation this jittable iteration does not have.
@@ -60,11 +61,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxnet import assemble, linalg, model as model_lib, scene as scene_lib
-from jaxnet.solve import statics
-
-#: the forward solve of a differentiable equilibrium: pure Newton steps near the root (no continuation),
-#: converged far below the static solver's 1e-3 N, because the derivative is only as good as the root.
-DEFAULT_NEWTON = statics.Newton(tol=1e-8, max_iter=200, damping=1e-6, stall_window=None, line_search=30)
+from jaxnet.solve import kernel, newton, statics
+from jaxnet.solve.options import DIFFERENTIABLE, Newton
+from jaxnet.solve.results import CONVERGED, REASONS, Equilibrium
 
 #: refinements of a linear solve when K is not the exact Jacobian (catch), and their relative tolerance
 REFINEMENTS = 20
@@ -98,15 +97,11 @@ def structure_of(scene, dynamic=False) -> Structure:
 def residual(x_free, scene, structure: Structure, step=None):
     """(n,) out-of-balance force F (N) on the free coordinates at free positions ``x_free`` (m): loads minus
     the energy's gradient plus the non-conservative forces (drag, catch pressure); zero at equilibrium. The
-    Newton solver's own evaluation (:func:`jaxnet.solve.statics._evaluate`). ``step``: None, or in an
-    implicit time step its :class:`jaxnet.solve.dynamics.TimeStep` (inertia, the water's acceleration, drag
-    on relative velocities), whose root is the next positions."""
-    pattern, model = structure.pattern, structure.model
-    load = assemble.loads(scene, model)
-    if step is not None:
-        load = load + step.water_load
-    force = statics._evaluate(x_free, jnp.zeros_like(load), load, 1.0, scene, pattern, model, step)[1]
-    return force.ravel()[pattern.free]
+    Newton solver's own evaluation (:func:`jaxnet.solve.kernel.force`). ``step``: None, or in an implicit
+    time step its :class:`jaxnet.solve.dynamics.TimeStep` (inertia, the water's acceleration, drag on
+    relative velocities), whose root is the next positions."""
+    pattern = structure.pattern
+    return kernel.force(x_free, scene, pattern, structure.model, step).ravel()[pattern.free]
 
 
 def _split(scene):
@@ -115,11 +110,11 @@ def _split(scene):
 
 
 @functools.partial(jax.custom_jvp, nondiff_argnums=(0, 1))
-def _root(model, newton, params, rest, pattern, x0, step):
+def _root(model, solver, params, rest, pattern, x0, step):
     """Free coordinates of the equilibrium (of the time step ``step``, if not None), and the solve's
     (status, residual_N, iterations, worst_node)."""
     scene = eqx.combine(params, rest)
-    eq = statics.newton_loop(x0, scene, pattern, model, newton, step)
+    eq = newton.newton_loop(x0, scene, pattern, model, solver, step)
     return eq.x.ravel()[pattern.free], (eq.status, eq.residual_N, eq.iterations, eq.worst_node)
 
 
@@ -131,7 +126,7 @@ def _tangent_solver(x_free, scene, structure, stiffness, step=None):
     (a catch), refine against J."""
     pattern = structure.pattern
     data = jax.lax.stop_gradient(
-        statics._tangent(x_free, None, 1.0, scene, pattern, structure.model, stiffness, step))
+        kernel.tangent(x_free, None, 1.0, scene, pattern, structure.model, stiffness, step))
 
     def matvec(v):
         return -jax.jvp(lambda x: residual(x, scene, structure, step), (x_free,), (v,))[1]
@@ -167,16 +162,16 @@ def _tangent_solver(x_free, scene, structure, stiffness, step=None):
 
 
 @_root.defjvp
-def _root_jvp(model, newton, primals, tangents):
+def _root_jvp(model, solver, primals, tangents):
     params, rest, pattern, x0, step = primals
     d_params, d_step = tangents[0], tangents[4]
-    x_free, info = _root(model, newton, params, rest, pattern, x0, step)
+    x_free, info = _root(model, solver, params, rest, pattern, x0, step)
     structure_ = Structure(pattern=pattern, model=model, exact_tangent=rest.catch is None and params.catch is None)
     scene = eqx.combine(params, rest)
     # ∂F/∂θ dθ at the root: the residual's change with the design (and the step's past), the positions held
     _, rhs = jax.jvp(lambda p, st: residual(x_free, eqx.combine(p, rest), structure_, st), (params, step),
                      (d_params, d_step))
-    matvec, solve, transpose_solve = _tangent_solver(x_free, scene, structure_, newton.stiffness, step)
+    matvec, solve, transpose_solve = _tangent_solver(x_free, scene, structure_, solver.stiffness, step)
     dx = jax.lax.custom_linear_solve(matvec, rhs, solve, transpose_solve)
     zeros = jax.tree.map(
         lambda a: np.zeros(np.shape(a), jax.dtypes.float0) if not jnp.issubdtype(jnp.result_type(a), jnp.inexact)
@@ -184,18 +179,18 @@ def _root_jvp(model, newton, primals, tangents):
     return (x_free, info), (dx, zeros)
 
 
-def _solve_root(params, rest, pattern, x0, step, model, newton):
-    return _root(model, newton, params, rest, pattern, x0, step)
+def _solve_root(params, rest, pattern, x0, step, model, solver):
+    return _root(model, solver, params, rest, pattern, x0, step)
 
 
 # compiled once per scene shape, terms and options: a call from plain Python (a design loop, a test) reuses
 # the program; inside a caller's jit, grad or vmap it is inlined into the caller's program
 # plain jax.jit: it runs inside the caller's traced functions (a loss, a gradient), where XLA refuses options
-_solve = jax.jit(_solve_root, static_argnames=("model", "newton"))
+root_jit = jax.jit(_solve_root, static_argnames=("model", "solver"))
 
 
-def equilibrium(scene, structure: Structure | None = None, x0=None, newton: statics.Newton | None = None,
-                check: bool = True, step=None) -> statics.Equilibrium:
+def equilibrium(scene, structure: Structure | None = None, x0=None, solver: Newton | None = None,
+                throw: bool = True, step=None) -> Equilibrium:
     """The static equilibrium of ``scene``, differentiable with respect to every float array in it.
 
     Args:
@@ -205,50 +200,51 @@ def equilibrium(scene, structure: Structure | None = None, x0=None, newton: stat
         compute it from ``scene`` itself, which must then be concrete (not traced).
       x0: (N, 3) start positions (m), not differentiated; default the scene's positions. Start near the
         answer (the last design's equilibrium): the iteration is plain damped Newton.
-      newton: the forward solve's options (:class:`jaxnet.solve.statics.Newton`); default
-        :data:`DEFAULT_NEWTON`. Its ``stiffness`` also chooses the tangent of the sensitivity solves.
+      solver: the forward solve's options (:class:`jaxnet.solve.options.Newton`); default
+        :data:`jaxnet.solve.options.DIFFERENTIABLE`. Its ``stiffness`` also chooses the tangent of the
+        sensitivity solves.
+      throw: raise when the solve did not converge: :class:`ImplicitError` from here when ``scene`` is
+        concrete, an equinox runtime error (``eqx.error_if``) under ``jit``/``vmap``/``grad``. With
+        ``throw=False`` the caller reads ``status``/``residual_N``/``worst_node`` of the result.
       step: None for a static equilibrium; for one implicit time step of the book's scheme, its
         :class:`jaxnet.solve.dynamics.TimeStep` (past positions and velocities, Δt, masses, the water's load:
         differentiable too), the root then being the positions at the end of the step. ``structure`` must
         then be the dynamic one (``structure_of(scene, dynamic=True)``).
-      check: raise when the solve did not converge: :class:`ImplicitError` from here when ``scene`` is
-        concrete, an equinox runtime error (``eqx.error_if``) under ``jit``/``vmap``/``grad``. With
-        ``check=False`` the caller reads ``status``/``residual_N``/``worst_node`` of the result.
     Returns:
-      a :class:`jaxnet.solve.statics.Equilibrium`; its ``x`` (N, 3, m) carries the derivatives (the fixed
+      an :class:`~jaxnet.solve.results.Equilibrium`; its ``x`` (N, 3, m) carries the derivatives (the fixed
       coordinates are the scene's own, differentiable as such); ``force`` and ``history`` are not computed
-      (zeros / NaN) on this path; the other fields describe the forward solve.
+      (zeros / NaN) on this path, nor ``timing`` (None); the other fields describe the forward solve.
     """
     if structure is None:
         structure = structure_of(scene)
-    newton = newton or DEFAULT_NEWTON
+    solver = solver or DIFFERENTIABLE
     pattern = structure.pattern
     start = jnp.asarray(scene.nodes.position if x0 is None else x0, dtype=float)
     start = jax.lax.stop_gradient(start.ravel()[pattern.free])
     params, rest = _split(scene)
-    x_free, (status, residual_N, iterations, worst) = _solve(params, rest, pattern, start, step, structure.model, newton)
-    converged = status == statics.CONVERGED
-    if check:
+    x_free, (status, residual_N, iterations, worst) = root_jit(params, rest, pattern, start, step, structure.model,
+                                                               solver)
+    converged = status == CONVERGED
+    if throw:
         if isinstance(converged, jax.core.Tracer):
             x_free = eqx.error_if(x_free, ~converged, "jaxnet.solve.implicit.equilibrium: the Newton solve did not "
-                                  "converge (run with check=False and read status, residual_N and worst_node)")
+                                  "converge (run with throw=False and read status, residual_N and worst_node)")
         elif not bool(converged):
             raise ImplicitError(
-                f"differentiable equilibrium: {statics.REASONS[int(status)]} after {int(iterations)} iterations; "
-                f"largest residual {float(residual_N):.4g} N at node {int(worst)} (tolerance {newton.tol:g} N). "
-                "Start nearer the answer (x0: e.g. jaxnet.solve.statics.solve's equilibrium) or loosen newton.tol")
+                f"differentiable equilibrium: {REASONS[int(status)]} after {int(iterations)} iterations; "
+                f"largest residual {float(residual_N):.4g} N at node {int(worst)} (tolerance {solver.tol:g} N). "
+                "Start nearer the answer (x0: e.g. jaxnet.solve.statics.solve's equilibrium) or loosen solver.tol")
     x = assemble.positions(x_free, scene, pattern)
-    return statics.Equilibrium(x=x, force=jnp.zeros_like(x), residual_N=residual_N, iterations=iterations, status=status,
-                               worst_node=worst, history=jnp.full(newton.max_iter + 1, jnp.nan),
-                               energy=jnp.asarray(jnp.nan))
+    return Equilibrium(x=x, force=jnp.zeros_like(x), residual_N=residual_N, iterations=iterations, status=status,
+                       worst_node=worst, history=jnp.full(solver.max_iter + 1, jnp.nan), energy=jnp.asarray(jnp.nan))
 
 
-def solve(scene, newton: statics.Newton | None = None, structure: Structure | None = None):
+def solve(scene, solver: Newton | None = None, structure: Structure | None = None) -> Equilibrium:
     """The equilibrium of a concrete ``scene`` from its flat start, robustly (the host solver's stiffness
     continuation, :func:`jaxnet.solve.statics.solve`) then polished by :func:`equilibrium` to
-    ``newton.tol``: the usual first solve of a design study. Returns the differentiable path's
-    :class:`~jaxnet.solve.statics.Equilibrium`."""
+    ``solver.tol`` (``solver``: its options, default :data:`jaxnet.solve.options.DIFFERENTIABLE`): the usual
+    first solve of a design study. Returns the differentiable path's
+    :class:`~jaxnet.solve.results.Equilibrium`."""
     structure = structure or structure_of(scene)
-    first, _ = statics.solve(scene)
-    return equilibrium(scene, structure, x0=first.x, newton=newton)
-
+    first = statics.solve(scene)
+    return equilibrium(scene, structure, x0=first.x, solver=solver)

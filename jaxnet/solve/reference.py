@@ -6,7 +6,7 @@ What it integrates. The same equations of motion as the book's implicit scheme
     dx/dt = v,      (M + M_a) dv/dt = F(x, v, t)        (m/s, N),
 
 y = (x_free, v_free) the state, M + M_a the lumped inertia per node and axis
-(:func:`jaxnet.solve.dynamics.lumped_masses`, kg), F = :func:`jaxnet.solve.dynamics.out_of_balance` (N):
+(:func:`jaxnet.solve.masses.lumped_masses`, kg), F = :func:`jaxnet.solve.dynamics.out_of_balance` (N):
 the loads, minus the gradient of the stored energy, the drag on the water's velocity relative to v, the
 water's inertia (M_a + ρV) γ_h. The fixed coordinates are not states: their positions are the scene's
 (moved by the loading's prescribed motions, :func:`jaxnet.solve.dynamics.scene_at`) and their velocities
@@ -43,21 +43,11 @@ control resolves every vibration whose amplitude exceeds ``atol`` (a twine of EA
 netting rings at 1e3-1e5 rad/s after any sudden load). Keep a reference to small nets and short runs, and
 start it from a state close to equilibrium where possible.
 
-Measured on the 2-core test machine (shared with other jobs): Kvaerno5, rtol = atol = 1e-5, the hanging panel
-of ``tests/test_reference.py`` at meshes=6 (37 nodes, 210 states), 0.1 s of a current ramped to 0.7 m/s
-from the still-water equilibrium, run time after compilation:
-
-  ==============  =========  ==============  ===============
-  linear solver    run (s)    compile (s)     steps (rejected)
-  ==============  =========  ==============  ===============
-  sparse            4.3         8.1            49 (19)
-  sparse-host       4.1         7.9            49 (19)
-  gmres            36.9         9.8            63 (18)
-  chord            51.0        15.5          1231 (1474)
-  ==============  =========  ==============  ===============
-
-diffrax's chord iteration keeps its Jacobian across steps: the stiff twines make it fail to converge and
-diffrax answers by cutting the step, 25x the steps of a fresh Newton linearisation.
+The sparse solvers are the fastest of these on the hanging panel of ``tests/test_reference.py`` (with
+and without the host's SuperLU alike), GMRES several times slower, and diffrax's chord iteration the
+slowest: it keeps its Jacobian across steps, the stiff twines make it fail to converge, and diffrax answers
+by cutting the step, an order of magnitude more steps than with a fresh Newton linearisation
+(``../shared/notes/solvers.md``).
 
 Reverse-mode gradients through diffrax's implicit solvers form and factorise a dense Jacobian whatever
 the root finder (diffrax calls optx.root_find without an adjoint): differentiate the reference only on
@@ -87,6 +77,8 @@ import scipy.sparse as sp
 
 from jaxnet import assemble, linalg, model as model_lib, scene as scene_lib
 from jaxnet.solve import dynamics, programs
+from jaxnet.solve.masses import lumped_masses
+from jaxnet.solve.results import Timing
 
 #: the solvers by name: implicit (stiff, error-controlled) and explicit (non-stiff checks only)
 IMPLICIT = {"Kvaerno3": diffrax.Kvaerno3, "Kvaerno4": diffrax.Kvaerno4, "Kvaerno5": diffrax.Kvaerno5}
@@ -106,8 +98,8 @@ class ReferenceTrajectory:
 
     times: (R,) the save times (s). positions, velocities: (R, N, 3) every node's position (m) and velocity
     (m/s), the fixed coordinates filled in (prescribed motions included). steps_accepted, steps_rejected:
-    diffrax's step counts. wall_s: wall time of the whole call (s), compile_s: the part spent compiling
-    (s). solver, rtol, atol: what was asked for; linear_solver: "dense" (diffrax's chord iteration on a
+    diffrax's step counts. timing: the :class:`~jaxnet.solve.results.Timing` of the call (s: ``wall_s`` the
+    whole call, ``compile_s`` the part spent compiling). solver, rtol, atol: what was asked for; linear_solver: "dense" (diffrax's chord iteration on a
     dense LU) or "gmres" (Newton with matrix-free GMRES), "none" for an explicit solver.
     """
 
@@ -116,8 +108,7 @@ class ReferenceTrajectory:
     velocities: np.ndarray
     steps_accepted: int
     steps_rejected: int
-    wall_s: float
-    compile_s: float
+    timing: Timing
     solver: str
     rtol: float
     atol: float
@@ -205,7 +196,7 @@ def coloured_entries(mv, pattern: StagePattern, n_colours: int):
 class SparseLU(lx.AbstractLinearSolver):
     """lineax solver for the stage equations: the Jacobian's entries from one JVP per colour
     (:func:`coloured_entries`), then factorised either densely in JAX (``host=False``: for small systems,
-    where a host call's ~1 ms would cost more than the factorisation) or by SuperLU on the host
+    where a host call would cost more than the factorisation) or by SuperLU on the host
     (``host=True``: :func:`jaxnet.linalg.solve`, with its checks of the backward error). The operator must
     act on (x_free, v_free) as ``pattern`` says."""
 
@@ -320,7 +311,7 @@ def free_masses(scene):
     """The free coordinates' flat indices (into (N, 3).ravel()) and their inertia M + M_a (kg); raises
     ValueError naming the node and axis of a free coordinate without inertia (the ODE would be a DAE)."""
     fixed = np.asarray(scene.nodes.fixed, dtype=bool)
-    mass, water = dynamics.lumped_masses(scene)
+    mass, water = lumped_masses(scene)
     free_index = np.flatnonzero(~fixed.ravel())
     m = mass.ravel()[free_index]
     bad = np.flatnonzero(~(m > 0))
@@ -368,7 +359,7 @@ def reference(scene, end_time, loading=None, saveat=None, rtol=1e-6, atol=1e-9, 
     """
     loading = loading or dynamics.Loading()
     scene_lib.validate(scene)
-    dynamics._check_loading(scene, loading)
+    dynamics.check_loading(scene, loading)
     if not (np.isfinite(end_time) and end_time > 0):
         raise ValueError(f"reference: end_time must be finite and > 0, got {end_time!r}")
     if solver not in IMPLICIT and solver not in EXPLICIT:
@@ -423,5 +414,5 @@ def reference(scene, end_time, loading=None, saveat=None, rtol=1e-6, atol=1e-9, 
     positions, velocities = _fill_jit(jnp.asarray(ts), ys, scene, loading, jnp.asarray(free_index))
     return ReferenceTrajectory(times=ts, positions=np.asarray(positions), velocities=np.asarray(velocities),
                                steps_accepted=int(accepted), steps_rejected=int(rejected),
-                               wall_s=_time.perf_counter() - t0, compile_s=compile_s, solver=solver,
+                               timing=Timing(compile_s=compile_s, wall_s=_time.perf_counter() - t0), solver=solver,
                                rtol=float(rtol), atol=float(atol), linear_solver=linear_solver)

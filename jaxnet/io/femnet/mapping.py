@@ -19,7 +19,7 @@ from jaxnet.io.femnet.links import MERGE_TOLERANCE, JoinPlan, all_panels, at_joi
 from jaxnet.io.femnet.parse import parse_don
 from jaxnet.net import HexTwine, Net, Rope, Twine
 from jaxnet.scene import Environment, SceneError
-from jaxnet.solve.statics import Newton
+from jaxnet.solve.options import Newton
 from jaxnet.terms import knot
 
 #: FEMNET's default water density (kg/m³, phobos ``chargement_don.c``: RHO = 1025)
@@ -242,7 +242,7 @@ def read_don(path, femnet_laws=True):
 
     Returns:
       (net, solver, info): a :class:`~jaxnet.net.Net` (jaxnet meshes it; ``net.build()`` gives the scene,
-      checked here to build), the :class:`~jaxnet.solve.statics.Newton` options (tol = FEMNET's threshold in
+      checked here to build), the :class:`~jaxnet.solve.options.Newton` options (tol = FEMNET's threshold in
       N, max_iter, max_step = FEMNET's displacement limit in m), and a dict ``info`` of what the reader
       decided (symmetry planes and copies, FEMNET's solver settings, the inputs and outputs, the depth, the
       joined points, seams and sewn cables, the added masses per node type, the sea bed and the node bodies read).
@@ -295,7 +295,7 @@ def read_don(path, femnet_laws=True):
 
 def result(model, case: DonFile, planes, catch, femnet_laws, plan: JoinPlan | None = None):
     """What :func:`read_don` and :func:`~.mdg.read_mdg` return: (model, solver, info), ``model`` the net (or the
-    scene), ``solver`` the :class:`~jaxnet.solve.statics.Newton` options of the case's numerics, ``info`` what
+    scene), ``solver`` the :class:`~jaxnet.solve.options.Newton` options of the case's numerics, ``info`` what
     the reader decided (:func:`_info`) and whether FEMNET's laws were used. ``planes``: the symmetry planes
     {axis: coordinate}; ``catch``: :func:`catch_of`'s tuple or None; ``plan``: the joins (None on FEMNET's mesh,
     which has its own)."""
