@@ -35,13 +35,13 @@ Sign convention: ``force`` is the out-of-balance force on the nodes (N), zero at
 from __future__ import annotations
 
 import hashlib
-import threading
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxnet.memo import Memo
 from jaxnet.model import STIFFNESS_PATHS, ActiveTerm
 
 class Motion(eqx.Module):
@@ -96,9 +96,7 @@ def _families(model, kind):
 
 
 #: patterns built so far, by a digest of what decides them (:func:`build_pattern`)
-_PATTERNS: dict = {}
-_PATTERNS_LOCK = threading.Lock()
-_MAX_PATTERNS = 16
+_PATTERNS = Memo(maxsize=16)
 
 
 def build_pattern(scene, model) -> Pattern:
@@ -113,20 +111,12 @@ def build_pattern(scene, model) -> Pattern:
     for family in families:
         if family != "nodes":
             digest.update(np.ascontiguousarray(connectivity(scene, family), dtype=np.int64).tobytes())
-    key = digest.digest()
-    with _PATTERNS_LOCK:
-        pattern = _PATTERNS.get(key)
-    if pattern is None:
-        pattern = _build_pattern(scene, families, fixed)
-        with _PATTERNS_LOCK:  # solves may run in several threads (jaxnet.design.batch)
-            if len(_PATTERNS) >= _MAX_PATTERNS:
-                _PATTERNS.pop(next(iter(_PATTERNS)))
-            _PATTERNS[key] = pattern
-    return pattern
+    return _PATTERNS.get_or_make(digest.digest(), lambda: pattern_of(scene, families, fixed))
 
 
-def _build_pattern(scene, families, fixed) -> Pattern:
-    """:func:`build_pattern` of the ``families`` with a stiffness and the flat ``fixed`` mask."""
+def pattern_of(scene, families, fixed) -> Pattern:
+    """The pattern of :func:`build_pattern` for the ``families`` with a stiffness and the flat ``fixed`` mask,
+    built anew."""
     free = np.flatnonzero(~fixed)
     n = free.size
     dof_map = np.full(fixed.size, -1, dtype=np.int64)

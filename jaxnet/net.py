@@ -32,89 +32,12 @@ import dataclasses
 
 import numpy as np
 
+from jaxnet.materials import (DRAG_MODELS, KNOT_FORMS, HexTwine, Rope, Twine, bar_columns, check_material,  # noqa: F401
+                              knot_stiffness, netting_columns, netting_rows)
+from jaxnet.mesh.hinges import netting_hinges
+from jaxnet.mesh.joining import NodeJoiner
 from jaxnet.mesh.panel import PanelError, mesh_panel, side_divisions
 from jaxnet.scene import Bars, Environment, Netting, Nodes, Scene, SceneError
-from jaxnet.terms import knot
-from jaxnet.terms.drag import NETTING_DRAG_MODELS
-
-
-#: how the current loads netting (``Twine.drag_model``) -> code in ``Netting.drag_model``
-DRAG_MODELS = {model.name: code for code, model in enumerate(NETTING_DRAG_MODELS)}
-#: knot contact law (``Twine.knot_form``) -> code in ``Netting.knot_form``
-KNOT_FORMS = {form: code for code, form in enumerate(knot.FORMS)}
-
-
-@dataclasses.dataclass(frozen=True)
-class Twine:
-    """Netting material.
-
-    l0: unstretched twine length = mesh side (m); ea: traction stiffness (N); ea_compression: compression
-    stiffness (N, 0 = twines go slack); diameter: twine (hydrodynamic) diameter (m); density: volumic mass
-    (kg/m³, 1140 = polyamide).
-    cd_normal, tangential_ratio: twine drag: normal coefficient Cd and f, the tangential drag as a fraction
-      of Cd (eqs 4.114-4.115; FEMNET's usual 1.2 and 0.08); drag_model: "twines" (drag on every twine, the book), "loland" or
-      "kristiansen-faltinsen" (screen models of aquaculture engineering), or "femnet-catch" (FEMNET's twine
-      drag of cases with a catch, which misdirects the U twines' cross-flow drag: to reproduce FEMNET only).
-    opening_stiffness: mesh opening stiffness H (N·m/rad, eqs 4.211-4.219); rest_angle: the half opening
-      angle α0 (rad) at which the mesh is unstressed in flexion (π/4: square meshes).
-    knot_size: knot size (m, eq. 4.278: meshes cannot close below the angle it sets; 0 for none);
-      knot_stiffness: contact stiffness (N·m/rad), None for the default of eq. 4.280; knot_form: "book"
-      (4.278-4.280) or "femnet" (FEMNET's law, :mod:`jaxnet.terms.knot`; give it FEMNET's stiffness).
-    bending_stiffness: flexural stiffness EI of one twine (N·m², eqs 4.220-4.245; 0 for none).
-    """
-
-    l0: float
-    ea: float
-    diameter: float
-    ea_compression: float = 0.0
-    density: float = 1140.0
-    cd_normal: float = 1.2
-    tangential_ratio: float = 0.08
-    drag_model: str = "twines"
-    opening_stiffness: float = 0.0
-    rest_angle: float = float(np.pi / 4)
-    knot_size: float = 0.0
-    knot_stiffness: float | None = None
-    knot_form: str = "book"
-    bending_stiffness: float = 0.0
-
-
-@dataclasses.dataclass(frozen=True)
-class Rope:
-    """Cable material: ea, ea_compression (N), diameter (m), density (kg/m³); Morison drag coefficients
-    cd_normal and tangential_ratio f (tangential drag f x Cd; FEMNET's usual 1.2 and 0.08)."""
-
-    ea: float
-    diameter: float
-    ea_compression: float = 0.0
-    density: float = 1140.0
-    cd_normal: float = 1.2
-    tangential_ratio: float = 0.08
-
-
-@dataclasses.dataclass(frozen=True)
-class HexTwine:
-    """Hexagonal-mesh netting material (book eqs 4.76-4.113): three twine families l, m, n.
-
-    l0, ea, ea_compression: per family (l, m, n), or one value for all three: unstretched twine length (m),
-    traction and compression stiffness (N). diameter (m) and density (kg/m³) of the twines. Twine
-    coordinates of a hexagonal panel count *base meshes* (see :mod:`jaxnet.terms.hexagonal`).
-    """
-
-    l0: float | tuple
-    ea: float | tuple
-    diameter: float
-    ea_compression: float | tuple = 0.0
-    density: float = 1140.0
-
-    def per_family(self, name):
-        value = np.broadcast_to(np.asarray(getattr(self, name), dtype=float), (3,))
-        return value
-
-    @property
-    def base_mesh_side(self):
-        """|U| of the regular base mesh (m): 3 twine lengths; sets how finely a panel is meshed."""
-        return 3.0 * float(np.mean(self.per_family("l0")))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -279,17 +202,17 @@ class Net:
                 v = twine.per_family(field)
                 if not np.all(np.isfinite(v)) or np.any(v < 0) or (field == "l0" and np.any(v == 0)):
                     raise SceneError(f"panel '{name}': {field} must be {'> 0' if field == 'l0' else '>= 0'} per family, got {v.tolist()}")
-            _check_material(twine, f"panel '{name}'", ("diameter", "density"))
+            check_material(twine, f"panel '{name}'", ("diameter", "density"))
             self._panels[name] = _Panel(name, corners, twine, float(step))
             return PanelRef(name)
-        _check_material(twine, f"panel '{name}'", ("l0", "ea", "ea_compression", "diameter", "density", "cd_normal",
+        check_material(twine, f"panel '{name}'", ("l0", "ea", "ea_compression", "diameter", "density", "cd_normal",
                         "tangential_ratio", "opening_stiffness", "knot_size", "bending_stiffness"), positive=("l0",))
         if twine.drag_model not in DRAG_MODELS:
             raise SceneError(f"panel '{name}': drag_model must be one of {sorted(DRAG_MODELS)}, got {twine.drag_model!r}")
         if not 0.0 < twine.rest_angle <= np.pi / 2:
             raise SceneError(f"panel '{name}': rest_angle (half opening angle, rad) must be in (0, pi/2], got {twine.rest_angle!r}")
         if twine.knot_stiffness is not None:
-            _check_material(twine, f"panel '{name}'", ("knot_stiffness",))
+            check_material(twine, f"panel '{name}'", ("knot_stiffness",))
         if twine.knot_form not in KNOT_FORMS:
             raise SceneError(f"panel '{name}': knot_form must be one of {sorted(KNOT_FORMS)}, got {twine.knot_form!r}")
         self._panels[name] = _Panel(name, corners, twine, float(step))
@@ -303,7 +226,7 @@ class Net:
             raise SceneError(f"cable '{name}': the name is already used")
         if rope is None:
             raise SceneError(f"cable '{name}': no rope material given")
-        _check_material(rope, f"cable '{name}'", ("ea", "ea_compression", "diameter", "density", "cd_normal", "tangential_ratio"))
+        check_material(rope, f"cable '{name}'", ("ea", "ea_compression", "diameter", "density", "cd_normal", "tangential_ratio"))
         if along is None and (start is None or end is None):
             raise SceneError(f"cable '{name}': give both ends (start=, end=) or a panel side (along=)")
         if n_bars is not None and (int(n_bars) != n_bars or n_bars < 1):
@@ -418,7 +341,7 @@ class Net:
         if not self._panels and not self._cables:
             raise SceneError("the net has no panel and no cable")
         divisions = self._side_divisions()
-        builder = _Builder(self.merge_tolerance)
+        builder = NodeJoiner(self.merge_tolerance)
         meshes = {}
         for p in self._panels.values():
             try:
@@ -488,7 +411,7 @@ class Net:
                         limit=limit, limit_sense=limit_sense),
             netting=netting,
             bars=bars,
-            hinges=_hinges(netting),
+            hinges=netting_hinges(netting),
             hexagonal=hexagonal,
             catch=catch,
             enclosure=enclosure,
@@ -718,80 +641,12 @@ def _mesh_length(twine):
     return twine.base_mesh_side if isinstance(twine, HexTwine) else twine.l0
 
 
-def knot_stiffness(twine: Twine) -> float:
-    """Knot contact stiffness (N·m/rad) of the triangles of a diamond-mesh panel of material ``twine``:
-    ``twine.knot_stiffness`` when given, else the default of eq. 4.280
-    (:func:`jaxnet.terms.knot.default_knot_stiffness`), 0 without knots (knot_size 0)."""
-    if twine.knot_stiffness is not None:
-        return float(twine.knot_stiffness)
-    return float(knot.default_knot_stiffness(float(twine.l0), float(twine.knot_size), float(twine.ea)))
-
-
-def netting_columns(twine: Twine) -> dict:
-    """The :class:`~jaxnet.scene.Netting` parameters of every triangle of a panel of material ``twine``
-    ({field: value}): the one map from a builder's material to the scene's per-triangle rows, used by
-    :meth:`Net.build` and by readers that fill a ``Netting`` themselves (FEMNET's ``.mdg`` mesh)."""
-    return {"l0": float(twine.l0), "ea_traction": float(twine.ea), "ea_compression": float(twine.ea_compression),
-            "diameter": float(twine.diameter), "density": float(twine.density), "cd_normal": float(twine.cd_normal),
-            "tangential_ratio": float(twine.tangential_ratio), "opening_stiffness": float(twine.opening_stiffness),
-            "rest_angle": float(twine.rest_angle), "knot_size": float(twine.knot_size),
-            "bending_stiffness": float(twine.bending_stiffness), "knot_stiffness": knot_stiffness(twine),
-            "knot_form": KNOT_FORMS[twine.knot_form], "drag_model": DRAG_MODELS[twine.drag_model]}
-
-
-def netting_rows(twines, material) -> dict:
-    """{Netting field: (E,) array} of triangles whose material is ``twines[material[e]]`` (``material``: (E,)
-    indices into the sequence ``twines``): :func:`netting_columns` row by row."""
-    columns = [netting_columns(t) for t in twines]
-    material = np.asarray(material, dtype=np.int64)
-    return {k: np.array([c[k] for c in columns])[material] for k in columns[0]}
-
-
-def bar_columns(rope: Rope) -> dict:
-    """The :class:`~jaxnet.scene.Bars` parameters of every bar of a cable of material ``rope`` ({field: value})."""
-    return {"ea_traction": float(rope.ea), "ea_compression": float(rope.ea_compression),
-            "diameter": float(rope.diameter), "density": float(rope.density), "cd_normal": float(rope.cd_normal),
-            "tangential_ratio": float(rope.tangential_ratio)}
-
-
-def bar_rows(ropes, material) -> dict:
-    """{Bars field: (B,) array} of bars whose material is ``ropes[material[b]]``: :func:`bar_columns` row by row."""
-    columns = [bar_columns(r) for r in ropes]
-    material = np.asarray(material, dtype=np.int64)
-    return {k: np.array([c[k] for c in columns])[material] for k in columns[0]}
-
-
 def outward(position, triangles, center) -> np.ndarray:
     """(E,) ``Netting.outward`` of triangles ``triangles`` (E, 3) (node indices into ``position`` (N, 3), m):
     +1 where the triangle's 12 ^ 13 points away from ``center`` (a point on the axis of the net, m), -1
     otherwise. This is how :meth:`Net.build` orients netting for a catch or an enclosure (the catch pushes
     outwards); public for readers that build the :class:`~jaxnet.scene.Netting` themselves."""
     return _outward(np.asarray(position, dtype=float), np.asarray(triangles), np.asarray(center, dtype=float))
-
-
-def _hinges(netting):
-    """Bending hinges (pairs of triangles of one panel sharing an edge) where the twines have an EI."""
-    if netting is None or not np.any(np.asarray(netting.bending_stiffness) > 0):
-        return None
-    from jaxnet.mesh.hinges import find_hinges
-    from jaxnet.scene import Hinges
-
-    vertices = np.asarray(netting.vertices)
-    pairs, nodes = find_hinges(vertices, np.asarray(netting.panel))
-    first, second = pairs[:, 0], pairs[:, 1]
-    uv = np.asarray(netting.uv)
-    # twine coordinates of the four hinge nodes: the first triangle's for the edge and its opposite
-    # node, the second triangle's for its own opposite node (one panel: the edge nodes agree)
-    def uv_of(tri, node):
-        k = np.argmax(vertices[tri] == node[:, None], axis=1)
-        return uv[tri, k]
-
-    hinge_uv = np.stack([uv_of(first, nodes[:, 0]), uv_of(first, nodes[:, 1]), uv_of(first, nodes[:, 2]),
-                         uv_of(second, nodes[:, 3])], axis=1)
-    ei = 0.5 * (np.asarray(netting.bending_stiffness)[first] + np.asarray(netting.bending_stiffness)[second])
-    keep = ei > 0
-    return Hinges(vertices=nodes[keep], uv=hinge_uv[keep], l0=np.asarray(netting.l0)[first][keep], stiffness=ei[keep],
-                  panel=np.asarray(netting.panel)[first][keep])
 
 
 def _triple(value, what, finite=True):
@@ -839,66 +694,3 @@ def _normalised(env):
     return env
 
 
-def _check_material(material, what, fields, positive=()):
-    for f in fields:
-        v = getattr(material, f)
-        if not np.isfinite(v) or v < 0 or (f in positive and v == 0):
-            raise SceneError(f"{what}: {f} must be {'> 0' if f in positive else '>= 0'}, got {v!r}")
-
-
-class _Builder:
-    """Nodes before merging: positions, merge pairs (union-find), resolution into global ids."""
-
-    def __init__(self, tolerance):
-        self.tolerance = tolerance
-        self.chunks = []
-        self.n = 0
-        self.pairs = []
-        self.candidates = []
-
-    @property
-    def xyz(self):
-        return np.concatenate(self.chunks) if self.chunks else np.zeros((0, 3))
-
-    def add_nodes(self, xyz):
-        xyz = np.asarray(xyz, dtype=float).reshape(-1, 3)
-        self.chunks.append(xyz)
-        idx = np.arange(self.n, self.n + len(xyz))
-        self.n += len(xyz)
-        return idx
-
-    def position(self, idx):
-        return self.xyz[idx]
-
-    def merge_pairs(self, a, b):
-        self.pairs.append(np.stack([np.asarray(a), np.asarray(b)], axis=1))
-
-    def mergeable(self, idx):
-        """Mark nodes (panel corners, cable ends) that merge with any other such node at the same point."""
-        self.candidates.append(np.asarray(idx, dtype=np.int64))
-
-    def merge_close(self):
-        """Merge corners and cable ends that start at the same point. Other nodes never merge by position:
-        panels drawn overlapping (the upper and lower panels of a cod-end) must stay apart."""
-        from scipy.spatial import cKDTree
-
-        if not self.candidates:
-            return
-        cand = np.unique(np.concatenate(self.candidates))
-        pairs = cKDTree(self.xyz[cand]).query_pairs(self.tolerance, output_type="ndarray")
-        if len(pairs):
-            self.pairs.append(cand[pairs])
-
-    def resolve(self):
-        import scipy.sparse as sp
-        from scipy.sparse.csgraph import connected_components
-
-        pairs = np.concatenate(self.pairs) if self.pairs else np.zeros((0, 2), dtype=int)
-        g = sp.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(self.n, self.n))
-        _, label = connected_components(g, directed=False)
-        # renumber in order of first appearance so that node numbers follow the description
-        _, first = np.unique(label, return_index=True)
-        order = np.argsort(first)
-        rank = np.empty_like(order)
-        rank[order] = np.arange(len(order))
-        return rank[label]

@@ -144,7 +144,7 @@ def test_the_pattern_is_kept_for_the_same_net_and_rebuilt_for_another():
     held = dataclasses.replace(scene, nodes=dataclasses.replace(scene.nodes, fixed=fixed))
     other = assemble.build_pattern(held, model)
     assert other is not first and other.n == first.n - freed > 0
-    fresh = assemble._build_pattern(held, assemble.stiff_families(model), fixed.ravel())
+    fresh = assemble.pattern_of(held, assemble.stiff_families(model), fixed.ravel())
     assert all(np.array_equal(np.asarray(a), np.asarray(b))
                for a, b in zip(jax.tree.leaves(other), jax.tree.leaves(fresh)))
 

@@ -225,7 +225,7 @@ def _cage_twine(scene):
     Read back rather than restated here, so that the options below are switched on the cage's own twine
     whatever its defaults become; ``terms`` checks that this twine rebuilds the same model.
     """
-    from jaxnet.net import DRAG_MODELS, Twine
+    from jaxnet.materials import DRAG_MODELS, Twine
 
     n = scene.netting
     field = {"ea": "ea_traction"}  # Twine field -> Netting column, where the names differ

@@ -260,20 +260,14 @@ class DesignSpace:
         self._knot_size = np.array([t.knot_size for t in twines], dtype=float)[self._row_slot]
 
     def _hinge_maps(self, scene):
-        """Each hinge node's (triangle, vertex slot), as :func:`jaxnet.net._hinges` takes its twine coordinates:
-        the first triangle's for the shared edge and its opposite node, the second's for its own."""
+        """Each hinge node's (triangle, vertex slot) whose twine coordinates it takes
+        (:func:`jaxnet.mesh.hinges.hinge_rows`), and each hinge's first triangle."""
         if scene.hinges is None:
             return
-        from jaxnet.mesh.hinges import find_hinges
+        from jaxnet.mesh.hinges import hinge_rows
 
-        vertices = np.asarray(scene.netting.vertices)
-        pairs, nodes = find_hinges(vertices, np.asarray(scene.netting.panel))
-        ei = np.asarray(scene.netting.bending_stiffness)
-        keep = 0.5 * (ei[pairs[:, 0]] + ei[pairs[:, 1]]) > 0
-        pairs, nodes = pairs[keep], nodes[keep]
-        self._hinge_tri = np.stack([pairs[:, 0]] * 3 + [pairs[:, 1]], axis=1)
-        self._hinge_slot = np.argmax(vertices[self._hinge_tri] == nodes[:, :, None], axis=2)
-        self._hinge_first = pairs[:, 0]
+        self._hinge_tri, self._hinge_slot, _, _ = hinge_rows(scene.netting)
+        self._hinge_first = self._hinge_tri[:, 0]
 
     def _mounting_maps(self, scene, layout):
         """Mountings: borders on fixed nodes (with the ropes sewn along them), then ropes sewn alone."""

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["find_hinges"]
+__all__ = ["find_hinges", "hinge_rows", "netting_hinges"]
 
 # Sides listed in the refusal message, at most.
 _REPORTED = 5
@@ -100,3 +100,36 @@ def find_hinges(triangles, panel=None):
     pairs = np.stack([owner[i], owner[j]], axis=1)
     nodes = np.stack([start[i], end[i], third[i], third[j]], axis=1)
     return pairs, nodes
+
+
+def hinge_rows(netting):
+    """Where each bending hinge of ``netting`` (a :class:`~jaxnet.scene.Netting`) takes its data: the pairs of
+    triangles of one panel sharing an edge (:func:`find_hinges`) where the twines have a flexural stiffness
+    (the mean EI of the two triangles > 0). Returns (triangles, slots, nodes, ei): triangles (H, 4), the
+    triangle whose twine coordinates each hinge node takes (the first triangle's for the shared edge and its
+    opposite node, the second's for its own opposite node: one panel, so the edge nodes agree); slots (H, 4),
+    that node's vertex slot in that triangle; nodes (H, 4), the hinge nodes [a, b, p, q]; ei (H,), the mean EI
+    (N·m²)."""
+    vertices = np.asarray(netting.vertices)
+    pairs, nodes = find_hinges(vertices, np.asarray(netting.panel))
+    bending = np.asarray(netting.bending_stiffness)
+    ei = 0.5 * (bending[pairs[:, 0]] + bending[pairs[:, 1]])
+    keep = ei > 0
+    pairs, nodes, ei = pairs[keep], nodes[keep], ei[keep]
+    triangles = np.stack([pairs[:, 0]] * 3 + [pairs[:, 1]], axis=1)
+    slots = np.argmax(vertices[triangles] == nodes[:, :, None], axis=2)
+    return triangles, slots, nodes, ei
+
+
+def netting_hinges(netting):
+    """The :class:`~jaxnet.scene.Hinges` of ``netting`` (a :class:`~jaxnet.scene.Netting`): its pairs of triangles
+    of one panel sharing an edge, where the twines have a flexural stiffness EI (:func:`hinge_rows`); None
+    without any."""
+    if netting is None or not np.any(np.asarray(netting.bending_stiffness) > 0):
+        return None
+    from jaxnet.scene import Hinges
+
+    triangles, slots, nodes, ei = hinge_rows(netting)
+    first = triangles[:, 0]
+    return Hinges(vertices=nodes, uv=np.asarray(netting.uv)[triangles, slots], l0=np.asarray(netting.l0)[first],
+                  stiffness=ei, panel=np.asarray(netting.panel)[first])

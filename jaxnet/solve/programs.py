@@ -225,10 +225,29 @@ def obtain(name, jitted, args, static_kwargs=None):
 
 
 def _stable(value):
-    """A repr-stable stand-in for a static argument: the solver's model (active terms) by names and options."""
+    """A repr-stable stand-in for a static argument: the solver's model (active terms) by names and options, and
+    for a term declared outside jaxnet (a user's, a test's: its code is not in the package's digest) the digest
+    of the module that declares its element function."""
     if isinstance(value, tuple) and value and hasattr(value[0], "term"):
-        return tuple((t.name, t.options) for t in value)
+        return tuple((t.name, t.options, _outside_source(t.term.element)) for t in value)
     return value
+
+
+@functools.cache
+def _module_digest(filename):
+    try:
+        return hashlib.blake2b(pathlib.Path(filename).read_bytes(), digest_size=16).hexdigest()
+    except OSError:  # no source file (an interactive session): the program is this process's only
+        return f"unreadable {filename} {os.getpid()}"
+
+
+def _outside_source(function):
+    """None for a function of jaxnet's own modules; else the digest of its module's source file."""
+    module = getattr(function, "__module__", "") or ""
+    if module == "jaxnet" or module.startswith("jaxnet."):
+        return None
+    code = getattr(function, "__code__", None)
+    return _module_digest(code.co_filename) if code is not None else f"{module}.{getattr(function, '__qualname__', '')}"
 
 
 def clear():

@@ -15,7 +15,8 @@ from jaxnet.io.femnet.grammar import twine_coordinates
 from jaxnet.io.femnet.mapping import (catch_of, check_types, environment_of, node_type_fields, result, rope_of,
                                       symmetry_planes, twine_of)
 from jaxnet.io.femnet.parse import parse_don
-from jaxnet.net import bar_rows, netting_rows, outward
+from jaxnet.materials import bar_rows, netting_rows
+from jaxnet.net import outward
 from jaxnet.scene import Bars, Catch, Netting, Nodes, Scene, SceneError, validate
 
 

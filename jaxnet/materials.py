@@ -1,0 +1,151 @@
+"""Materials of a net as a designer gives them, and the one map from a material to its family's rows.
+
+:class:`Twine` (diamond-mesh netting), :class:`HexTwine` (hexagonal-mesh netting) and :class:`Rope` (cables)
+are what :class:`~jaxnet.net.Net` takes per panel and per cable. :func:`netting_columns` and
+:func:`bar_columns` say which value each per-element parameter of the scene (:class:`~jaxnet.scene.Netting`,
+:class:`~jaxnet.scene.Bars`) takes for a material: the builder (:meth:`jaxnet.net.Net.build`) and the readers
+that fill a family themselves (FEMNET's ``.mdg`` mesh) both use them, so the map is written once.
+
+Units: m, N, kg/m³; drag coefficients dimensionless; stiffnesses of the mesh opening and knots in N·m/rad,
+of bending in N·m².
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from jaxnet.scene import SceneError
+from jaxnet.terms import knot
+from jaxnet.terms.drag import NETTING_DRAG_MODELS
+
+#: how the current loads netting (``Twine.drag_model``) -> code in ``Netting.drag_model``
+DRAG_MODELS = {model.name: code for code, model in enumerate(NETTING_DRAG_MODELS)}
+#: knot contact law (``Twine.knot_form``) -> code in ``Netting.knot_form``
+KNOT_FORMS = {form: code for code, form in enumerate(knot.FORMS)}
+
+
+@dataclasses.dataclass(frozen=True)
+class Twine:
+    """Netting material.
+
+    l0: unstretched twine length = mesh side (m); ea: traction stiffness (N); ea_compression: compression
+    stiffness (N, 0 = twines go slack); diameter: twine (hydrodynamic) diameter (m); density: volumic mass
+    (kg/m³, 1140 = polyamide).
+    cd_normal, tangential_ratio: twine drag: normal coefficient Cd and f, the tangential drag as a fraction
+      of Cd (eqs 4.114-4.115; FEMNET's usual 1.2 and 0.08); drag_model: "twines" (drag on every twine, the book), "loland" or
+      "kristiansen-faltinsen" (screen models of aquaculture engineering), or "femnet-catch" (FEMNET's twine
+      drag of cases with a catch, which misdirects the U twines' cross-flow drag: to reproduce FEMNET only).
+    opening_stiffness: mesh opening stiffness H (N·m/rad, eqs 4.211-4.219); rest_angle: the half opening
+      angle α0 (rad) at which the mesh is unstressed in flexion (π/4: square meshes).
+    knot_size: knot size (m, eq. 4.278: meshes cannot close below the angle it sets; 0 for none);
+      knot_stiffness: contact stiffness (N·m/rad), None for the default of eq. 4.280; knot_form: "book"
+      (4.278-4.280) or "femnet" (FEMNET's law, :mod:`jaxnet.terms.knot`; give it FEMNET's stiffness).
+    bending_stiffness: flexural stiffness EI of one twine (N·m², eqs 4.220-4.245; 0 for none).
+    """
+
+    l0: float
+    ea: float
+    diameter: float
+    ea_compression: float = 0.0
+    density: float = 1140.0
+    cd_normal: float = 1.2
+    tangential_ratio: float = 0.08
+    drag_model: str = "twines"
+    opening_stiffness: float = 0.0
+    rest_angle: float = float(np.pi / 4)
+    knot_size: float = 0.0
+    knot_stiffness: float | None = None
+    knot_form: str = "book"
+    bending_stiffness: float = 0.0
+
+
+@dataclasses.dataclass(frozen=True)
+class Rope:
+    """Cable material: ea, ea_compression (N), diameter (m), density (kg/m³); Morison drag coefficients
+    cd_normal and tangential_ratio f (tangential drag f x Cd; FEMNET's usual 1.2 and 0.08)."""
+
+    ea: float
+    diameter: float
+    ea_compression: float = 0.0
+    density: float = 1140.0
+    cd_normal: float = 1.2
+    tangential_ratio: float = 0.08
+
+
+@dataclasses.dataclass(frozen=True)
+class HexTwine:
+    """Hexagonal-mesh netting material (book eqs 4.76-4.113): three twine families l, m, n.
+
+    l0, ea, ea_compression: per family (l, m, n), or one value for all three: unstretched twine length (m),
+    traction and compression stiffness (N). diameter (m) and density (kg/m³) of the twines. Twine
+    coordinates of a hexagonal panel count *base meshes* (see :mod:`jaxnet.terms.hexagonal`).
+    """
+
+    l0: float | tuple
+    ea: float | tuple
+    diameter: float
+    ea_compression: float | tuple = 0.0
+    density: float = 1140.0
+
+    def per_family(self, name):
+        value = np.broadcast_to(np.asarray(getattr(self, name), dtype=float), (3,))
+        return value
+
+    @property
+    def base_mesh_side(self):
+        """|U| of the regular base mesh (m): 3 twine lengths; sets how finely a panel is meshed."""
+        return 3.0 * float(np.mean(self.per_family("l0")))
+
+
+def knot_stiffness(twine: Twine) -> float:
+    """Knot contact stiffness (N·m/rad) of the triangles of a diamond-mesh panel of material ``twine``:
+    ``twine.knot_stiffness`` when given, else the default of eq. 4.280
+    (:func:`jaxnet.terms.knot.default_knot_stiffness`), 0 without knots (knot_size 0)."""
+    if twine.knot_stiffness is not None:
+        return float(twine.knot_stiffness)
+    return float(knot.default_knot_stiffness(float(twine.l0), float(twine.knot_size), float(twine.ea)))
+
+
+def netting_columns(twine: Twine) -> dict:
+    """The :class:`~jaxnet.scene.Netting` parameters of every triangle of a panel of material ``twine``
+    ({field: value}): the one map from a builder's material to the scene's per-triangle rows, used by
+    :meth:`Net.build` and by readers that fill a ``Netting`` themselves (FEMNET's ``.mdg`` mesh)."""
+    return {"l0": float(twine.l0), "ea_traction": float(twine.ea), "ea_compression": float(twine.ea_compression),
+            "diameter": float(twine.diameter), "density": float(twine.density), "cd_normal": float(twine.cd_normal),
+            "tangential_ratio": float(twine.tangential_ratio), "opening_stiffness": float(twine.opening_stiffness),
+            "rest_angle": float(twine.rest_angle), "knot_size": float(twine.knot_size),
+            "bending_stiffness": float(twine.bending_stiffness), "knot_stiffness": knot_stiffness(twine),
+            "knot_form": KNOT_FORMS[twine.knot_form], "drag_model": DRAG_MODELS[twine.drag_model]}
+
+
+def netting_rows(twines, material) -> dict:
+    """{Netting field: (E,) array} of triangles whose material is ``twines[material[e]]`` (``material``: (E,)
+    indices into the sequence ``twines``): :func:`netting_columns` row by row."""
+    columns = [netting_columns(t) for t in twines]
+    material = np.asarray(material, dtype=np.int64)
+    return {k: np.array([c[k] for c in columns])[material] for k in columns[0]}
+
+
+def bar_columns(rope: Rope) -> dict:
+    """The :class:`~jaxnet.scene.Bars` parameters of every bar of a cable of material ``rope`` ({field: value})."""
+    return {"ea_traction": float(rope.ea), "ea_compression": float(rope.ea_compression),
+            "diameter": float(rope.diameter), "density": float(rope.density), "cd_normal": float(rope.cd_normal),
+            "tangential_ratio": float(rope.tangential_ratio)}
+
+
+def bar_rows(ropes, material) -> dict:
+    """{Bars field: (B,) array} of bars whose material is ``ropes[material[b]]``: :func:`bar_columns` row by row."""
+    columns = [bar_columns(r) for r in ropes]
+    material = np.asarray(material, dtype=np.int64)
+    return {k: np.array([c[k] for c in columns])[material] for k in columns[0]}
+
+
+def check_material(material, what, fields, positive=()):
+    """SceneError naming ``what`` unless the ``fields`` of ``material`` are finite and >= 0 (> 0 for those in
+    ``positive``)."""
+    for f in fields:
+        v = getattr(material, f)
+        if not np.isfinite(v) or v < 0 or (f in positive and v == 0):
+            raise SceneError(f"{what}: {f} must be {'> 0' if f in positive else '>= 0'}, got {v!r}")
