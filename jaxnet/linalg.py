@@ -262,6 +262,11 @@ class HostSolver:
         self.factorizations = self.fallbacks = self.refinements = 0
         self.backward_error = float("nan")
 
+    @property
+    def factor_entries(self):
+        """Entries of the kept factor, L's and U's together (its fill), or 0 without one."""
+        return 0 if self._lu is None else int(self._lu.L.nnz + self._lu.U.nnz)
+
     # -- factorisation ----------------------------------------------------------------------------------
 
     def factorize(self, data):

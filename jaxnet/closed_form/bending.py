@@ -43,7 +43,7 @@ the first form does where the hinge is flat, as 4.241-4.243 divide by sin(alpha)
 How the derivatives are taken
 -----------------------------
 theta and sigma_f are explicit functions of nine invariants of the hinge (the same ones the energy is
-computed from, :func:`jaxnet.terms.bending._invariants`), with e = b - a, r = p - a, s = q - a,
+computed from, in :mod:`jaxnet.terms.bending`), with e = b - a, r = p - a, s = q - a,
 n1 = e ^ r, n2 = s ^ e (triangle normals) and Ua, Va, Ub, Vb the twine vectors (4.221-4.224):
 
     z = (|e|², tau = n1 . s, n1 . n2, |n1|², |n2|², |Ua|², |Va|², |Ub|², |Vb|²),

@@ -241,7 +241,7 @@ def _per_vertex(total):
 
 
 def _unit_across_jacobians(axis, water_velocity, inv_c2):
-    """ê (..., 3) of :func:`jaxnet.terms.drag._unit_across` and its derivatives (..., 3, 3) with respect to the
+    """ê (..., 3) of :func:`jaxnet.terms.drag.unit_across` and its derivatives (..., 3, 3) with respect to the
     axis and to the water velocity: ∂ê = (I - ê ê^T)/|a| ∂a, a = W - (W.c) c/|c|²; all 0 where ê is set to 0."""
     c = water_velocity
     along = _dot(axis, c)

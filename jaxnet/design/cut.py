@@ -196,7 +196,7 @@ def round_cut(corners_uv, name="panel"):
     corner or side when the corners are not finite or the rounded polygon is degenerate (two corners on one
     mesh, zero area, crossing sides): a panel too small or too distorted to round.
     """
-    from jaxnet.mesh.panel import PanelError, _validate
+    from jaxnet.mesh.panel import PanelError, check_polygon
 
     uv = np.asarray(corners_uv, dtype=float)
     if uv.ndim != 2 or uv.shape[1] != 2:
@@ -206,8 +206,8 @@ def round_cut(corners_uv, name="panel"):
         raise ValueError(f"panel {name!r}: corner {int(bad[0][0])} has a non-finite twine coordinate")
     mesh = np.rint(np.asarray(twine_to_mesh(uv - uv[0])))  # whole meshes from corner 0
     rounded = uv[0] + np.asarray(mesh_to_twine(mesh))
-    try:  # the mesher's own checks of a polygon (step and l0 are irrelevant here)
-        _validate(rounded, None, 1.0, 1.0, None, name)
+    try:
+        check_polygon(rounded, name)
     except PanelError as err:
         raise ValueError(f"{err} (after rounding the cut to whole meshes: corners at {mesh.tolist()} meshes (u, v) "
                          "from corner 0)") from err

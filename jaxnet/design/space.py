@@ -448,10 +448,10 @@ class DesignSpace:
         return self._scene(full)
 
     def _check_cut(self, name, corners):
-        from jaxnet.mesh.panel import PanelError, _validate
+        from jaxnet.mesh.panel import PanelError, check_polygon
 
-        try:  # the mesher's own checks of a polygon (step and l0 do not matter here)
-            _validate(corners, None, 1.0, 1.0, None, name)
+        try:
+            check_polygon(corners, name)
         except PanelError as err:
             raise ValueError(f"cut[{name!r}]: {err}") from err
         rows = self._panel_rows[name]

@@ -170,6 +170,13 @@ def _check_simple(uv, eps, name):
                          f"runs from corner k to corner k+1)")
 
 
+def check_polygon(corners_uv, name):
+    """The mesher's own checks of a panel's polygon in twine coordinates ``corners_uv`` (C, 2): finite corners,
+    no two at one place, an area, no crossing sides. Raises :class:`PanelError` naming the panel ``name`` and the
+    corner or side; returns nothing (the meshing step and l0 do not matter to these checks)."""
+    _validate(corners_uv, None, 1.0, 1.0, None, name)
+
+
 def _validate(corners_uv, corners_xyz, step, l0, divisions, name):
     uv = _corner_array(corners_uv, 2, ("U", "V"), "corners_uv", name)
     C = uv.shape[0]

@@ -1,18 +1,19 @@
 """The static solver's compiled programs: compiled ahead of time, kept in memory and on disk.
 
 A solve runs a handful of compiled programs (the evaluation of the residual, the tangent, the spring
-network, the loads: :func:`jaxnet.solve.statics.solve`). Compiling them is most of a first solve: on
-FEMNET's cod-end ``c2`` (1906 unknowns, six terms) about 9 s of XLA compilation, where the Newton iteration
-itself takes about 1 s. JAX's persistent compilation cache keeps the XLA executables, but a new process still
-traces and lowers every program before it can look one up: about 3 s on ``c2``, half of a second run's time. So the programs are kept here as whole executables instead, keyed by everything that decides them:
+network, the loads: :func:`jaxnet.solve.statics.solve`). Compiling them is most of a first solve, several
+times the Newton iteration itself on FEMNET's cases. JAX's persistent compilation cache keeps the XLA
+executables, but a new process still traces and lowers every program before it can look one up, about half
+of a second run's time (``validation/femnet_cases.py`` times both). So the programs are kept here as whole
+executables instead, keyed by everything that decides them:
 
-* the program (a name) and its static arguments (the active terms and their options, the stiffness path);
+* the program (a name) and its static arguments (the active terms and their options, the stiffness path;
+  for a term declared outside jaxnet, the digest of its module's source);
 * the structure, shapes and dtypes (weak types included) of its arguments;
 * the jax and jaxlib versions, the backend and its devices, float64, and the jaxnet sources themselves (a
   digest of every ``.py`` file of the package, so an edited model never runs a stale program).
 
-A program found in memory (this process) is reused as it is; one found on disk is loaded (tenths of a
-second, no tracing); otherwise it is traced, compiled and, when a directory is set, written there by a thread
+A program found in memory (this process) is reused as it is; one found on disk is loaded (no tracing); otherwise it is traced, compiled and, when a directory is set, written there by a thread
 of its own while the solve goes on (atomically: a run that is stopped leaves no partial file), and not into
 JAX's own cache as well. The directory is JAX's compilation cache directory when one
 is configured (``jax_compilation_cache_dir``, which ``jaxnet run`` sets; ``--no-cache`` leaves it unset),
@@ -46,13 +47,11 @@ SUBDIRECTORY = "jaxnet-programs"
 
 #: XLA options every jaxnet program is compiled with (:func:`jit`). XLA's CPU backend emits each fusion
 #: through its MLIR "fusion emitters" by default; its older elemental emitter compiles jaxnet's programs
-#: (many small per-element fusions over (E, 3, 3) stacks) 1.4-1.6x faster, and they run as fast, within
-#: the noise (``validation/compile_options.py``, 2 cores, jax 0.10.2): FEMNET's c2 compiles its tangent in
-#: 0.85 s instead of 1.37 s and its evaluation in 0.70 s instead of 1.01 s, and runs them in 3.02 and
-#: 0.64 ms against 3.15 and 0.65 ms. Most of a first solve is compilation. And no YNNPACK fusions (an
-#: empty list of fusion types): by default XLA hands the dots of the (E, 3, 3) stacks and the elementwise
-#: work around them to YNNPACK, which is slower on such small matrices (c2's tangent element matrices
-#: 1.22 ms against 1.35 ms, the same compile time). CPU options: other backends ignore them.
+#: (many small per-element fusions over (E, 3, 3) stacks) markedly faster, and they run as fast: most of a
+#: first solve is compilation. And no YNNPACK fusions (an empty list of fusion types): by default XLA hands
+#: the dots of the (E, 3, 3) stacks and the elementwise work around them to YNNPACK, which is slower on such
+#: small matrices, for the same compile time. ``validation/compile_options.py`` compiles and runs the
+#: solver's programs with XLA's defaults and with these, side by side. CPU options: other backends ignore them.
 COMPILER_OPTIONS = {"xla_cpu_use_fusion_emitters": False, "xla_cpu_experimental_ynn_fusion_type": ""}
 
 
@@ -187,8 +186,7 @@ def lookup(name, args, static_kwargs=None):
 
 def _without_jax_cache_writes():
     """A context in which JAX writes nothing to its own persistent cache (this thread only): a program
-    jaxnet keeps on disk whole would be kept twice, and JAX's write is on the solve's path (c2: 0.15 s,
-    half a megabyte). JAX's setting is a thread-local state of its private config module; without it
+    jaxnet keeps on disk whole would be kept twice, and JAX's write is on the solve's path. JAX's setting is a thread-local state of its private config module; without it
     (another jax), JAX writes as usual."""
     state = getattr(_jax_config, "persistent_cache_min_compile_time_secs", None)
     return state(float("inf")) if callable(state) else contextlib.nullcontext()
@@ -211,7 +209,7 @@ def compile(name, jitted, args, static_kwargs=None, traced=None):  # noqa: A001 
     # would load, then fail at its first call (jax 0.10.2: "Function convert_bitcast_fusion not found").
     # Such a program serves this process only; the next one gets it from JAX's cache again.
     if path is not None and not _THREAD.jax_cache_hit:
-        # serialising and writing take tenths of a second (c2: 0.2 s for 1.2 MB): done beside the solve,
+        # serialising and writing take a noticeable part of a solve: done beside it,
         # which needs only the program in memory. Not a daemon thread: the interpreter waits for it at exit.
         threading.Thread(target=_store, args=(path, program), name=f"jaxnet-store-{name}").start()
     with _LOCK:

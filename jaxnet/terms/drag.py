@@ -185,7 +185,7 @@ def netting_drag(x, uv, l0, diameter, cd_normal, cd_tangential, water_velocity, 
     return jnp.broadcast_to(total / 3.0, (3, 3))
 
 
-def _unit_across(axis, water_velocity, inv_c2):
+def unit_across(axis, water_velocity, inv_c2):
     """Unit vector (3,) of the component of ``axis`` normal to the water velocity; 0 where there is none
     (axis along c, or a zero axis). ``inv_c2`` is 1/|c|² (0 in still water)."""
     across = axis - (jnp.dot(axis, water_velocity) * inv_c2) * water_velocity
@@ -219,8 +219,8 @@ def netting_drag_femnet_catch(x, uv, l0, diameter, cd_normal, cd_tangential, wat
     still = c2 == 0.0
     inv_c2 = jnp.where(still, 0.0, 1.0 / jnp.where(still, 1.0, c2))
     in_line_u = (jnp.dot(force_u, c) * inv_c2) * c
-    across_u = jnp.dot(force_u, _unit_across(U, c, inv_c2))
-    total = force_v + in_line_u + across_u * _unit_across(V, c, inv_c2)
+    across_u = jnp.dot(force_u, unit_across(U, c, inv_c2))
+    total = force_v + in_line_u + across_u * unit_across(V, c, inv_c2)
     return jnp.broadcast_to(total / 3.0, (3, 3))
 
 
