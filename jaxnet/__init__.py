@@ -8,7 +8,8 @@ import jax
 
 jax.config.update("jax_enable_x64", True)
 
-from jaxnet.scene import Bars, Environment, Netting, Nodes, Scene, SceneError, validate  # noqa: E402
+from jaxnet.checks import validate  # noqa: E402
+from jaxnet.scene import Bars, Environment, Netting, Nodes, Scene, SceneError  # noqa: E402
 from jaxnet.solve.options import Newton  # noqa: E402
 from jaxnet.solve.results import Equilibrium, SolveError  # noqa: E402
 from jaxnet.solve.statics import solve  # noqa: E402

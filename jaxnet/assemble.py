@@ -43,6 +43,7 @@ import numpy as np
 
 from jaxnet.memo import Memo
 from jaxnet.model import STIFFNESS_PATHS, ActiveTerm
+from jaxnet.terms.term import resolve
 
 class Motion(eqx.Module):
     """The past of an implicit time step, for velocity-dependent forces: the positions x_previous (N, 3) in
@@ -208,10 +209,11 @@ def states(x, scene, model, previous=None):
     by_function, out = {}, {}
     for t in model:
         if t.term.kind == "force" and t.term.state is not None:
-            if t.term.state not in by_function:
+            function = resolve(t.term.state)
+            if function not in by_function:
                 start = None if previous is None else previous.get(t.name)
-                by_function[t.term.state] = t.term.state(x, scene, start)
-            out[t.name] = by_function[t.term.state]
+                by_function[function] = function(x, scene, start)
+            out[t.name] = by_function[function]
     return out
 
 

@@ -419,7 +419,7 @@ class Net:
             panel_names=tuple(self._panels),
             cable_names=tuple(self._cables),
         )
-        from jaxnet.scene import validate
+        from jaxnet.checks import validate
 
         validate(scene)
         self.layout = Layout(

@@ -20,7 +20,8 @@ import jaxnet as jn
 from jaxnet import assemble, model
 from jaxnet.io import scene_file
 from jaxnet.net import Net, Rope
-from jaxnet.scene import Environment, SceneError, validate
+from jaxnet.checks import validate
+from jaxnet.scene import Environment, SceneError
 from jaxnet.terms import drag
 from traced import traced_terms  # tests/traced.py
 

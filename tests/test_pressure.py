@@ -305,7 +305,7 @@ def test_front_when_the_net_cannot_hold_the_catch():
 
 
 def test_a_front_started_near_its_solution_takes_fewer_passes():
-    # the solver's evaluations start the front from the last iterate's (jaxnet.terms.pressure.catch_state): the same front,
+    # the solver's evaluations start the front from the last iterate's (jaxnet.catch.catch_state): the same front,
     # to the tolerance, in fewer passes over the elements than from the middle of the net
     x, tri = NOISY_CONE
     full = float(volume(x, tri, 0.0, AXIS, 1.0, 1.0))

@@ -22,7 +22,8 @@ import jaxnet as jn
 from jaxnet import assemble, model
 from jaxnet.io import scene_file
 from jaxnet.net import Net, Rope, Twine
-from jaxnet.scene import Environment, SceneError, validate
+from jaxnet.checks import validate
+from jaxnet.scene import Environment, SceneError
 from jaxnet.terms import bottom
 from traced import traced_terms  # tests/traced.py
 

@@ -63,7 +63,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxnet import assemble, catch as catch_lib, model as model_lib, scene as scene_lib
+from jaxnet import assemble, catch as catch_lib, checks, model as model_lib, scene as scene_lib
 from jaxnet.solve import newton, programs, results
 from jaxnet.solve.masses import lumped_masses
 from jaxnet.solve.options import Implicit, Newton
@@ -399,7 +399,7 @@ def simulate(scene, end_time, solver: Implicit | None = None, loading: Loading |
 
     solver = solver or Implicit()
     loading = loading or Loading()
-    scene_lib.validate(scene)
+    checks.validate(scene)
     check_loading(scene, loading)
     if not (np.isfinite(end_time) and end_time > 0):
         raise ValueError(f"simulate: end_time must be finite and > 0, got {end_time!r}")

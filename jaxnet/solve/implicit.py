@@ -60,7 +60,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxnet import assemble, linalg, model as model_lib, scene as scene_lib
+from jaxnet import assemble, checks, linalg, model as model_lib
 from jaxnet.solve import kernel, newton, statics
 from jaxnet.solve.options import DIFFERENTIABLE, Newton
 from jaxnet.solve.results import CONVERGED, REASONS, Equilibrium
@@ -89,7 +89,7 @@ class Structure(eqx.Module):
 
 def structure_of(scene, dynamic=False) -> Structure:
     """The :class:`Structure` of ``scene`` (validated here): its active terms and tangent pattern."""
-    scene_lib.validate(scene)
+    checks.validate(scene)
     model = model_lib.active_terms(scene, dynamic=dynamic)
     return Structure(pattern=assemble.build_pattern(scene, model), model=model, exact_tangent=scene.catch is None)
 

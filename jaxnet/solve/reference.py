@@ -75,7 +75,7 @@ import numpy as np
 import optimistix as optx
 import scipy.sparse as sp
 
-from jaxnet import assemble, linalg, model as model_lib, scene as scene_lib
+from jaxnet import assemble, checks, linalg, model as model_lib
 from jaxnet.solve import dynamics, programs
 from jaxnet.solve.masses import lumped_masses
 from jaxnet.solve.results import Timing
@@ -358,7 +358,7 @@ def reference(scene, end_time, loading=None, saveat=None, rtol=1e-6, atol=1e-9, 
       arguments, :class:`ReferenceError` when the integration fails.
     """
     loading = loading or dynamics.Loading()
-    scene_lib.validate(scene)
+    checks.validate(scene)
     dynamics.check_loading(scene, loading)
     if not (np.isfinite(end_time) and end_time > 0):
         raise ValueError(f"reference: end_time must be finite and > 0, got {end_time!r}")

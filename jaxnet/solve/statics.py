@@ -55,7 +55,7 @@ import time
 import jax
 import numpy as np
 
-from jaxnet import assemble, linalg, model as model_lib, scene as scene_lib
+from jaxnet import assemble, checks, linalg, model as model_lib
 from jaxnet.memo import Memo
 from jaxnet.solve import kernel, newton, programs
 from jaxnet.solve.options import STATIC, Newton
@@ -298,7 +298,7 @@ def solve(scene, solver: Newton | None = None, x0=None, throw: bool = True, **op
       ~0 when a program compiled for a scene of the same shape and terms is reused.
     """
     solver = dataclasses.replace(solver or STATIC, **options)
-    scene_lib.validate(scene)
+    checks.validate(scene)
     model = model_lib.active_terms(scene)
     pattern = assemble.build_pattern(scene, model)
     if x0 is not None:

@@ -181,7 +181,7 @@ def _friction_active(scene, dynamic):
         return None
     where = scene_lib.bottom_axis(env)
     if where is None:
-        return None  # scene.validate names the problem
+        return None  # jaxnet.checks.validate names the problem
     axis, floor = where
     on_floor = np.any(np.asarray(scene.nodes.limit_sense)[:, axis] == floor)
     sliding = np.any(np.delete(np.asarray(env.current_direction, dtype=float), axis) != 0)

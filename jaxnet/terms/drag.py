@@ -365,7 +365,7 @@ def netting_drag_on_element(x, state, uv, l0, diameter, cd_normal, cd_tangential
     :data:`NETTING_DRAG_MODELS`; ``models``: the codes present in the scene, static). In statics the water's
     velocity is the current at the centroid; in dynamics (``moving``) each vertex takes its share with the
     velocity relative to it (:func:`per_vertex`). ``shielded``: the scene has a catch, whose front is in
-    ``state`` (:func:`jaxnet.terms.pressure.catch_state`)."""
+    ``state`` (:func:`jaxnet.catch.catch_state`)."""
     rho = env.water_density
     total = jnp.zeros((3, 3))
     for code in models:
@@ -463,7 +463,7 @@ def _box_active(scene, dynamic):
 
 NETTING_DRAG = register(Term(
     name="netting_drag", family="netting", kind=FORCE, element=netting_drag_on_element, arguments=_netting_arguments,
-    active=_netting_active, group=DRAG_NETTING, moving=True, state=pressure.catch_state,
+    active=_netting_active, group=DRAG_NETTING, moving=True, state="jaxnet.catch:catch_state",
     closed_form=ClosedForm("jaxnet.closed_form.drag_elements:netting_drag_on_element_stiffness",
                            covers=lambda options: all(NETTING_DRAG_MODELS[c].twines for c in options["models"]))))
 BAR_DRAG = register(Term(

@@ -57,7 +57,7 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
-from jaxnet import catch as catch_lib, geometry
+from jaxnet import geometry
 from jaxnet.terms.term import CATCH, FORCE, ClosedForm, Term, register
 
 
@@ -168,24 +168,8 @@ def catch_volume(x, front, axis, sign=1.0):
 # -- the term --------------------------------------------------------------------------------------
 
 
-def catch_state(x, scene, previous=None):
-    """The catch front for positions x (N, 3): ``{"front": abscissa along the axis (m), "pressure": ½ ρ Cd v²
-    (Pa), "axis": the cod-end's axis}``, or None without a catch. The state of the catch pressure and of the
-    netting drag (the netting behind the front is shielded): one function, so that the front is solved for
-    once per evaluation. ``previous``: this state at the solver's last iterate, whose front starts the search
-    (the front moves little from one iterate to the next)."""
-    c, env = scene.catch, scene.environment
-    if c is None:
-        return None
-    guess = None if previous is None else previous["front"]
-    front = catch_lib.catch_front(x, scene.netting.vertices, c.axis, c.volume, c.symmetry, sign=scene.netting.outward,
-                                  guess=guess)
-    p = dynamic_pressure(env.water_density, c.drag_coefficient, env.current_speed)
-    return {"front": front.position, "pressure": p, "axis": c.axis}
-
-
 def catch_pressure_on_element(x, state, sign):
-    """:func:`catch_pressure` of one triangle at the front of ``state`` (:func:`catch_state`)."""
+    """:func:`catch_pressure` of one triangle at the front of ``state`` (:func:`jaxnet.catch.catch_state`)."""
     return catch_pressure(x, state["pressure"], state["front"], state["axis"], sign)
 
 
@@ -198,5 +182,5 @@ def _active(scene, dynamic):
 
 CATCH_PRESSURE = register(Term(
     name="catch_pressure", family="netting", kind=FORCE, element=catch_pressure_on_element,
-    arguments=lambda p, env: {"sign": p.outward}, active=_active, group=CATCH, state=catch_state,
+    arguments=lambda p, env: {"sign": p.outward}, active=_active, group=CATCH, state="jaxnet.catch:catch_state",
     closed_form=ClosedForm("jaxnet.closed_form.pressure:catch_pressure_on_element_stiffness")))

@@ -28,7 +28,8 @@ Each module of :mod:`jaxnet.terms` declares its terms once, at its end: ``regist
   ``state``: for a force, ``state(x, scene, previous) -> pytree``, a global quantity of the positions
   x (N, 3) computed once per evaluation and handed to its elements (the catch front); ``previous`` is its
   value at nearby positions, a start for its solution, or None. Terms sharing a state function share its
-  value.
+  value. Like a closed form it may be named ``"module:name"``: the catch front is solved by
+  :mod:`jaxnet.catch`, which is built on the catch pressure's element functions.
 
 The registry (:func:`registered`) holds the terms module by module in the order of the package's table of
 contents (:data:`jaxnet.terms.CONTENTS`), each module's terms in the order it declares them: the order in
@@ -80,6 +81,14 @@ EXTERNAL = Group("external_N")
 BOTTOM = Group("bottom_N")
 
 
+def resolve(function: Callable | str) -> Callable:
+    """``function`` itself, or the function a ``"module:name"`` string names (imported on first use)."""
+    if callable(function):
+        return function
+    module, _, name = function.partition(":")
+    return getattr(importlib.import_module(module), name)
+
+
 @dataclasses.dataclass(frozen=True)
 class ClosedForm:
     """A term's hand-derived stiffness.
@@ -95,10 +104,7 @@ class ClosedForm:
 
     def function(self) -> Callable:
         """The stiffness function (imported on first use when named by a string)."""
-        if callable(self.stiffness):
-            return self.stiffness
-        module, _, name = self.stiffness.partition(":")
-        return getattr(importlib.import_module(module), name)
+        return resolve(self.stiffness)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -115,7 +121,7 @@ class Term:
     closed_form: ClosedForm | None = None
     elastic: bool = False
     moving: bool = False
-    state: Callable | None = None
+    state: Callable | str | None = None
 
     def __post_init__(self):
         if self.family not in FAMILIES:

@@ -17,7 +17,8 @@ from jaxnet.io.femnet.mapping import (catch_of, check_types, environment_of, nod
 from jaxnet.io.femnet.parse import parse_don
 from jaxnet.materials import bar_rows, netting_rows
 from jaxnet.net import outward
-from jaxnet.scene import Bars, Catch, Netting, Nodes, Scene, SceneError, validate
+from jaxnet.checks import validate
+from jaxnet.scene import Bars, Catch, Netting, Nodes, Scene, SceneError
 
 
 def read_mdg(path, don=None, femnet_laws=True):
