@@ -1,6 +1,6 @@
 """Objectives and constraints of a net design: differentiable figures of an equilibrium, and how to combine them.
 
-Gradient-based design (issue 7) needs scalars of an equilibrium x*(θ) whose gradients flow both into the
+Gradient-based design needs scalars of an equilibrium x*(θ) whose gradients flow both into the
 positions x (and from there, by the implicit function theorem of :mod:`jaxnet.solve.implicit`, into θ) and
 directly into the scene's float leaves (twine diameter, l0, EA, ...). A *figure* here is a small equinox
 Module called on an :class:`Outcome` (the positions, the scene, its active terms) and returning a scalar;

@@ -30,8 +30,8 @@ Known limit. Nets whose equilibrium holds large *slack* regions (twines with EA_
 free sides of a curtain hanging from a rope, which gather and close their meshes) have a degenerate
 minimum — the energy is flat over every arrangement of the slack netting and the last loads are carried by
 twines a few 1e-7 in strain from their slack kink — and converge linearly, in a few hundred iterations
-(issue 2's notes). Well-held nets converge in a few to a few tens of iterations, whatever their size
-(``validation/bench_statics.py``).
+(the stability suite, ``validation/stability.py``, holds such nets). Well-held nets converge in a few to a
+few tens of iterations, whatever their size (``validation/bench_statics.py``).
 
 Units: m, N, J; damping dimensionless.
 """
