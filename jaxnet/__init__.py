@@ -2,19 +2,35 @@
 
 Implements D. Priour's triangular finite element for netting (the FEMNET model). float64 is switched on
 here, on import: netting tangents span EA/l0 against tiny geometric stiffness, which float32 cannot hold.
+
+The names a user needs first are here: describe a net (:class:`Net`, :class:`Twine`, :class:`Rope`, ...) or
+read one (:func:`read_don`, :func:`read_mdg`, :func:`read_scene`, the built-in :mod:`jaxnet.scenes`), each
+giving a :class:`Case`; solve it (:func:`solve_static`, :func:`simulate`) into an :class:`Equilibrium` or a
+:class:`Trajectory`. The subpackages hold the rest: :mod:`jaxnet.solve` (drivers, kernel, options),
+:mod:`jaxnet.terms` (the physics), :mod:`jaxnet.design` (gradients of equilibria), :mod:`jaxnet.io` (readers
+and writers).
 """
 
 import jax
 
 jax.config.update("jax_enable_x64", True)
 
+from jaxnet import scenes  # noqa: E402
+from jaxnet.case import Case, TimeSettings  # noqa: E402
 from jaxnet.checks import validate  # noqa: E402
+from jaxnet.forcing import Loading  # noqa: E402
+from jaxnet.io.femnet import read_don, read_mdg  # noqa: E402
+from jaxnet.io.scene_file import read as read_scene  # noqa: E402
+from jaxnet.net import HexTwine, Net, Rope, Twine  # noqa: E402
 from jaxnet.scene import Bars, Environment, Netting, Nodes, Scene, SceneError  # noqa: E402
-from jaxnet.solve.options import Newton  # noqa: E402
+from jaxnet.solve.dynamics import DynamicsError, Trajectory, simulate  # noqa: E402
+from jaxnet.solve.options import Implicit, Newton  # noqa: E402
 from jaxnet.solve.results import Equilibrium, SolveError  # noqa: E402
-from jaxnet.solve.statics import solve  # noqa: E402
+from jaxnet.solve.statics import solve as solve_static  # noqa: E402
 
 __all__ = [
+    "Case", "TimeSettings", "Loading", "read_don", "read_mdg", "read_scene", "scenes",
+    "Net", "Twine", "Rope", "HexTwine",
     "Bars", "Environment", "Netting", "Nodes", "Scene", "SceneError", "validate",
-    "Equilibrium", "Newton", "SolveError", "solve",
+    "Newton", "Implicit", "Equilibrium", "SolveError", "solve_static", "Trajectory", "DynamicsError", "simulate",
 ]

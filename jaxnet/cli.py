@@ -14,8 +14,10 @@ per Newton iteration and a short summary. Exit status 0 on convergence, 1 on a f
 from its static equilibrium (computed first), to ``--end`` seconds with steps of ``--dt`` seconds, a record
 every ``--record`` seconds written to DIR as it goes (series.json + raw/ arrays, series.npz at the end,
 series.pvd + net_NNNNN.vtu for ParaView, checkpoint.npz; ``--resume`` continues a stopped run from its last
-record), with a progress bar. A FEMNET case takes its own time settings; the built-in ``cage_waves`` (the
-default with ``--dynamic``) is the cage in regular waves, its collar heaving.
+record), with a progress bar. A FEMNET case takes its own time settings and numerics (its threshold, iterations
+and displacement limit, for the static start and for every time step); ``--tol``, ``--max-iter`` and
+``--stiffness`` apply to both as in a static run. The built-in ``cage_waves`` (the default with ``--dynamic``) is
+the cage in regular waves, its collar heaving.
 
 Compiled programs are kept on disk (in ``--cache DIR``, default ``$XDG_CACHE_HOME/jaxnet`` or
 ``~/.cache/jaxnet``: the static solver's programs whole, :mod:`jaxnet.solve.programs`, the others in JAX's
@@ -46,57 +48,63 @@ def _use_compilation_cache(directory):
     jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.2)
 
 
-def _run(args):
-    if not args.no_cache:
-        _use_compilation_cache(args.cache)
-    from jaxnet import figures
-    from jaxnet.io import plot, scene_file, vtk
-    from jaxnet.scenes import BUILT_IN
-    from jaxnet.solve.options import STATIC
-    from jaxnet.solve.statics import SolveError, solve
-
-    from jaxnet.io import femnet
+def _case(args, dynamic):
+    """The case the command names (a built-in scene, a scene file, a FEMNET case on jaxnet's or FEMNET's mesh)."""
+    from jaxnet.io import femnet, scene_file
     from jaxnet.scene import SceneError
+    from jaxnet.scenes import BUILT_IN, DYNAMIC, DYNAMIC_DEFAULT
 
-    if args.dynamic:
-        return _run_dynamic(args)
-    if args.scene is None and args.builtin not in BUILT_IN:
-        raise SceneError(f"the built-in scene '{args.builtin}' is a dynamic one: run it with --dynamic")
-    femnet_info = None
     if args.mesh is not None and (args.scene is None or not str(args.scene).endswith(".don")):
         raise SceneError("--mesh (FEMNET's .mdg mesh) goes with a FEMNET case CASE.don")
     if args.scene is None:
+        if dynamic:
+            name = args.builtin if args.builtin in DYNAMIC else DYNAMIC_DEFAULT
+            make, description = DYNAMIC[name]
+            return make(), f"built-in dynamic scene '{name}': {description}"
+        if args.builtin not in BUILT_IN:
+            raise SceneError(f"the built-in scene '{args.builtin}' is a dynamic one: run it with --dynamic")
         make, description = BUILT_IN[args.builtin]
-        net, solver = make(), STATIC
-        label = f"built-in scene '{args.builtin}': {description}"
-        scene = net.build()
-    elif str(args.scene).endswith(".don"):
-        if args.mesh is not None:
-            scene, solver, femnet_info = femnet.read_mdg(args.mesh, args.scene, femnet_laws=not args.jaxnet_laws)
-            label = f"FEMNET case {args.scene} on FEMNET's mesh {args.mesh}"
-        else:
-            net, solver, femnet_info = femnet.read_don(args.scene, femnet_laws=not args.jaxnet_laws)
-            scene = net.build()
-            label = f"FEMNET case {args.scene}"
-    else:
-        net, solver = scene_file.read(args.scene)
-        label = str(args.scene)
-        scene = net.build()
-    overrides = {k: v for k, v in (("tol", args.tol), ("max_iter", args.max_iter), ("stiffness", args.stiffness))
-                 if v is not None}
+        return make(), f"built-in scene '{args.builtin}': {description}"
+    if str(args.scene).endswith(".don"):
+        laws = not args.jaxnet_laws
+        case = (femnet.read_mdg(args.mesh, args.scene, femnet_laws=laws) if args.mesh is not None
+                else femnet.read_don(args.scene, femnet_laws=laws))
+        return case, case.label
+    case = scene_file.read(args.scene)
+    return case, case.label
+
+
+def _overrides(args):
+    """The Newton options the command line sets (``--tol``, ``--max-iter``, ``--stiffness``): for the static solve,
+    and in a run in time for its start and for every time step."""
+    return {k: v for k, v in (("tol", args.tol), ("max_iter", args.max_iter), ("stiffness", args.stiffness))
+            if v is not None}
+
+
+def _run(args):
+    if not args.no_cache:
+        _use_compilation_cache(args.cache)
+    if args.dynamic:
+        return _run_dynamic(args)
+    from jaxnet import figures
+    from jaxnet.io import femnet, plot, vtk
+    from jaxnet.solve.statics import SolveError, solve
+
+    case, label = _case(args, dynamic=False)
+    scene = case.scene
     print(f"jaxnet: {label}")
     print(f"  {scene.n_nodes} nodes, {scene.n_elements} elements, {scene.n_dof} unknowns")
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     failed = None
     try:
-        eq = solve(scene, solver, verbose=not args.quiet, **overrides)
+        eq = solve(case, verbose=not args.quiet, **_overrides(args))
     except SolveError as err:
         failed, eq = err, err.equilibrium
     result = figures.summary(scene, eq)
-    if femnet_info is not None:
-        result["femnet"] = femnet.femnet_figures(scene, eq, femnet_info["symmetry_axes"])
-        result["femnet_case"] = femnet_info
+    if "symmetry_axes" in case.info:  # a FEMNET case: its own figures, and what the reader decided
+        result["femnet"] = femnet.femnet_figures(scene, eq, case.info["symmetry_axes"])
+        result["femnet_case"] = case.info
     (out / "result.json").write_text(json.dumps(result, indent=2))
     vtk.write_vtu(out / "net.vtu", scene, eq.x)
     plot.save_png(out / "net.png", scene, eq.x, title=label)
@@ -115,57 +123,49 @@ def _run(args):
 
 
 def _run_dynamic(args):
+    import dataclasses
+
     import numpy as np
 
-    from jaxnet.io import femnet, scene_file
+    from jaxnet.case import TimeSettings
     from jaxnet.scene import SceneError
-    from jaxnet.scenes import DYNAMIC, DYNAMIC_DEFAULT
     from jaxnet.solve import dynamics
     from jaxnet.solve.statics import solve
 
-    loading, settings = dynamics.Loading(), {}
-    if args.scene is None:
-        name = args.builtin if args.builtin in DYNAMIC else DYNAMIC_DEFAULT
-        make, description = DYNAMIC[name]
-        scene, loading, settings = make()
-        label = f"built-in dynamic scene '{name}': {description}"
-    elif str(args.scene).endswith(".don"):
-        if args.mesh is not None:
-            scene, _, info = femnet.read_mdg(args.mesh, args.scene, femnet_laws=not args.jaxnet_laws)
-        else:
-            net, _, info = femnet.read_don(args.scene, femnet_laws=not args.jaxnet_laws)
-            scene = net.build()
-        if any(any(v > 0 for v in m) for m in info["added_mass"].values()):
-            raise SceneError(f"{args.scene}: node types with an added mass ({info['added_mass']}) are not yet mapped "
-                             "onto jaxnet's nodes for dynamics")
-        if info["dynamic"] is not None:
-            d = info["dynamic"]
-            settings = {"time_step": d["time_step_s"], "end_time": d["end_time_s"], "record_every": d["record_every_s"]}
-        label = f"FEMNET case {args.scene}"
-    else:
-        net, _ = scene_file.read(args.scene)
-        scene, label = net.build(), str(args.scene)
-    for key, value in (("time_step", args.dt), ("end_time", args.end), ("record_every", args.record)):
-        if value is not None:
-            settings[key] = value
-    if "end_time" not in settings:
+    case, label = _case(args, dynamic=True)
+    added = case.info.get("added_mass", {})
+    if any(any(v > 0 for v in m) for m in added.values()):
+        raise SceneError(f"{args.scene}: node types with an added mass ({added}) are not yet mapped onto jaxnet's "
+                         "nodes for dynamics")
+    overrides = _overrides(args)
+    # the time settings: the case's own (a FEMNET case's, a dynamic built-in's) or the defaults, then the
+    # command line's; each step's Newton takes the case's numerics (a FEMNET case's threshold, iterations and
+    # displacement limit are in its time settings already) and the command line's solver flags
+    settings = case.time or TimeSettings()
+    implicit = settings.solver
+    if args.dt is not None:
+        implicit = dataclasses.replace(implicit, time_step=args.dt, min_time_step=min(implicit.min_time_step, args.dt))
+    implicit = dataclasses.replace(implicit, newton=dataclasses.replace(implicit.newton, **overrides))
+    end_time = args.end if args.end is not None else settings.end_time
+    record_every = args.record if args.record is not None else settings.record_every
+    if end_time is None:
         raise SceneError("--dynamic: give the end time (--end, s); the scene has none")
-    time_step = settings.get("time_step", dynamics.Implicit.time_step)
+    scene = case.scene
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     print(f"jaxnet: {label}")
     print(f"  {scene.n_nodes} nodes, {scene.n_elements} elements, {scene.n_dof} unknowns; dynamics to "
-          f"{settings['end_time']:g} s, step {time_step:g} s")
+          f"{end_time:g} s, step {implicit.time_step:g} s")
     x0 = None
     if not args.resume:
-        eq = solve(dynamics.scene_at(scene, loading, 0.0), verbose=False, throw=False)
+        eq = solve(dynamics.scene_at(scene, settings.loading, 0.0), case.solver, verbose=False, throw=False,
+                   **overrides)
         print(f"  start: static equilibrium {'converged' if eq.converged else 'NOT converged (' + eq.reason + ')'}"
               f" in {int(eq.iterations)} iterations")
         x0 = np.asarray(eq.x)
-    solver = dynamics.Implicit(time_step=time_step)
     try:
-        run = dynamics.simulate(scene, settings["end_time"], solver, loading, record_every=settings.get("record_every"),
-                                out=out, resume=args.resume, x0=x0, progress=not args.quiet)
+        run = dynamics.simulate(scene, end_time, implicit, settings.loading, record_every=record_every, out=out,
+                                resume=args.resume, x0=x0, progress=not args.quiet)
     except dynamics.DynamicsError as err:
         print(f"jaxnet: {err}", file=sys.stderr)
         return 1

@@ -38,6 +38,7 @@ Units: s, m, m/s, rad.
 from __future__ import annotations
 
 import abc
+from typing import Callable
 
 import equinox as eqx
 import jax
@@ -398,7 +399,21 @@ class PrescribedMotion(eqx.Module):
         return self.motion.velocity(t)
 
 
+class Loading(eqx.Module):
+    """What changes with time besides the net (pytree: its numbers can be traced and differentiated): what a
+    run in time (:func:`jaxnet.solve.dynamics.simulate`) is given with its scene.
+
+    current_speed: a history t -> speed (m/s) of the current (a scalar history of this module), scaling the
+      environment's current (its direction and depth profile kept); None: the environment's constant speed.
+    motions: prescribed motions (:class:`PrescribedMotion`): each moves its nodes, which must be fixed in the
+      scene, to their start positions plus its displacement at t.
+    """
+
+    current_speed: Callable | None = None
+    motions: tuple = ()
+
+
 __all__ = [
     "AbstractHistory", "AbstractMotion", "Constant", "Ramp", "Step", "Oscillation", "Towing", "Harmonic", "Sum",
-    "PrescribedMotion",
+    "PrescribedMotion", "Loading",
 ]

@@ -30,7 +30,7 @@ def no_compilation(monkeypatch):
 
 
 def solve_net(net):
-    return jn.solve(net.build())
+    return jn.solve_static(net.build())
 
 
 def hanging(corners=SQUARE, twine=TWINE, fix=True):
@@ -54,7 +54,7 @@ def test_collinear_twine_coordinates_of_a_triangle():
     bad = jn.Scene(nodes=scene.nodes, netting=scene.netting.__class__(**{**scene.netting.__dict__, "uv": uv}),
                    environment=scene.environment, panel_names=scene.panel_names)
     with pytest.raises(jn.SceneError, match=r"triangle 7 \(wall\): collinear twine coordinates"):
-        jn.solve(bad)
+        jn.solve_static(bad)
 
 
 def test_self_intersecting_panel():
@@ -77,7 +77,7 @@ def test_negative_stiffness():
     bad = jn.Scene(nodes=scene.nodes, netting=scene.netting.__class__(**{**scene.netting.__dict__, "ea_traction": ea}),
                    panel_names=scene.panel_names)
     with pytest.raises(jn.SceneError, match=r"triangle 3 \(wall\): traction stiffness EA must be >= 0"):
-        jn.solve(bad)
+        jn.solve_static(bad)
 
 
 def test_negative_length():
@@ -99,7 +99,7 @@ def test_nan_coordinates():
     pos[5, 2] = np.nan
     nodes = scene.nodes.__class__(**{**scene.nodes.__dict__, "position": pos})
     with pytest.raises(jn.SceneError, match="node 5: position is not finite"):
-        jn.solve(jn.Scene(nodes=nodes, netting=scene.netting))
+        jn.solve_static(jn.Scene(nodes=nodes, netting=scene.netting))
 
 
 def test_cable_end_on_no_node():
@@ -138,8 +138,7 @@ def test_unknown_keys_in_scene_file(tmp_path):
     }
     path = tmp_path / "ok.json"
     path.write_text(json.dumps(doc))
-    net, solver = scene_file.read(path)
-    assert net.build().n_nodes > 4
+    assert scene_file.read(path).scene.n_nodes > 4
     doc["panels"][0]["mesh_size"] = 3
     path.write_text(json.dumps(doc))
     with pytest.raises(jn.SceneError, match=r"panels\[0\]: unknown key\(s\) \['mesh_size'\]"):

@@ -40,5 +40,5 @@ def test_the_tripwires_stop_a_real_solve_before_it_compiles():
     # the 'before compilation' verdict can fail: a valid scene reaches the solver's compiled entry points
     scene = small_scene()
     with solver_compilation_watched() as reached, pytest.raises(SolverCompiled):
-        jn.solve(scene)
+        jn.solve_static(scene)
     assert reached == ["statics.compile_pieces"]

@@ -51,7 +51,7 @@ def test_closed_form_modules_never_call_autodiff():
 def test_unknown_stiffness_path_is_refused_before_compiling():
     with pytest.raises(ValueError, match="stiffness must be one of"):
         jn.Newton(stiffness="hand")
-    scene = hanging_panel(meshes=4, step=0.05).build()
+    scene = hanging_panel(meshes=4, step=0.05).scene
     m = model.active_terms(scene)
     with pytest.raises(ValueError, match="stiffness must be one of"):
         assemble.tangent(jnp.asarray(scene.nodes.position), scene, m, assemble.build_pattern(scene, m),
@@ -63,7 +63,7 @@ def every_term_codend():
     compression, bending), slightly perturbed from its start so that no element sits on a kink."""
     twine = Twine(l0=0.06, ea=1e5, ea_compression=1e3, diameter=4e-3, density=1025.0, knot_size=0.01,
                   opening_stiffness=0.05, bending_stiffness=1e-4)
-    scene = codend(meshes_around=8, meshes_along=6, step=0.12, twine=twine).build()
+    scene = codend(meshes_around=8, meshes_along=6, step=0.12, twine=twine).scene
     rng = np.random.default_rng(3)
     x = np.asarray(scene.nodes.position) + 2e-3 * rng.normal(size=scene.nodes.position.shape)
     return scene, jnp.asarray(x)
@@ -84,7 +84,7 @@ def test_a_term_without_closed_form_keeps_autodiff():
     """The screen drag models have no stiffness in the book: with them the netting drag stays on autodiff,
     and the mixed tangent is still the autodiff one."""
     twine = Twine(l0=0.06, ea=1e5, diameter=4e-3, density=1025.0, drag_model="loland")
-    scene = codend(meshes_around=8, meshes_along=4, step=0.12, twine=twine).build()
+    scene = codend(meshes_around=8, meshes_along=4, step=0.12, twine=twine).scene
     m = model.active_terms(scene)
     assert model.stiffness_paths(m)["netting_drag"] == "autodiff"
     assert model.stiffness_paths(m)["netting_tension"] == "closed_form"
@@ -157,9 +157,9 @@ def test_global_tangents_agree_in_a_current_varying_with_depth():
 @pytest.mark.parametrize("name", ["hanging", "codend"])
 def test_both_paths_reach_the_same_equilibrium(name):
     if name == "hanging":
-        scene = hanging_panel(meshes=6, step=0.05).build()
+        scene = hanging_panel(meshes=6, step=0.05).scene
     else:
-        scene = codend(meshes_around=8, meshes_along=6, step=0.12).build()
+        scene = codend(meshes_around=8, meshes_along=6, step=0.12).scene
     eq = {path: statics.solve(scene, jn.Newton(stiffness=path)) for path in assemble.STIFFNESS_PATHS}
     a, c = eq["autodiff"], eq["closed_form"]
     assert a.converged and c.converged
@@ -171,7 +171,7 @@ def test_both_paths_reach_the_same_equilibrium(name):
 def test_jitted_newton_loop_runs_on_the_closed_form():
     """The one-program Newton (``newton.newton_loop``, for traced callers) takes the switch too, and is the
     same iteration as the host loop."""
-    scene = hanging_panel(meshes=6, step=0.05).build()
+    scene = hanging_panel(meshes=6, step=0.05).scene
     solver = jn.Newton(stiffness="closed_form", stall_window=None)
     host = statics.solve(scene, solver)
     m = model.active_terms(scene)
@@ -189,7 +189,7 @@ def test_jitted_newton_loop_threads_the_catch_front_as_the_host_loop():
     the two reach the same equilibrium in the same iterations, the front holding the catch's volume."""
     from jaxnet import catch
 
-    scene = codend(meshes_around=8, meshes_along=6, catch_m3=0.01).build()
+    scene = codend(meshes_around=8, meshes_along=6, catch_m3=0.01).scene
     solver = jn.Newton(stall_window=None)
     host = statics.solve(scene, solver)
     m = model.active_terms(scene)

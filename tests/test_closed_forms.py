@@ -18,7 +18,7 @@ def test_biaxial_panel_edge_forces(theta):
     rng = np.random.default_rng(1)
     start = exact.copy()
     start[free] += rng.normal(scale=0.002, size=(free.sum(), 3))
-    eq = jn.solve(scene, x0=start, tol=1e-9)
+    eq = jn.solve_static(scene, x0=start, tol=1e-9)
     np.testing.assert_allclose(np.asarray(eq.x), exact, atol=1e-9)
     T = ea * strain
     np.testing.assert_allclose(figures.twine_tensions(scene, eq.x), T, rtol=1e-9)
@@ -36,8 +36,8 @@ def test_biaxial_panel_edge_forces(theta):
 def test_hanging_panel_reaction_equals_immersed_weight():
     from jaxnet.scenes.panel import hanging_panel
 
-    scene = hanging_panel(meshes=20, step=0.08).build()
-    eq = jn.solve(scene, tol=1e-9, max_iter=200)
+    scene = hanging_panel(meshes=20, step=0.08).scene
+    eq = jn.solve_static(scene, tol=1e-9, max_iter=200)
     weight = figures.total_load(scene)
     # immersed weight: netting (4.277), sinker bar and headline, all computed independently here
     net, bars, env = scene.netting, scene.bars, scene.environment

@@ -37,7 +37,7 @@ PANEL_MESHES, PANEL_L0 = 4, 0.025
 @pytest.fixture(scope="module")
 def panel():
     """The hanging panel blown by a 1 m/s current across it, solved to 1e-9 N."""
-    net = hanging_panel(meshes=PANEL_MESHES, l0=PANEL_L0, step=0.05)
+    net = hanging_panel(meshes=PANEL_MESHES, l0=PANEL_L0, step=0.05).net
     net.environment = Environment(current_speed=1.0, current_direction=np.array([1.0, 1.0, 0.0]))
     scene = net.build()
     eq = statics.solve(scene, tol=1e-9)
@@ -47,7 +47,7 @@ def panel():
 @pytest.fixture(scope="module")
 def cage():
     """The fish cage as drawn (not solved): an octagonal prism 5 m in radius and depth, with a flat bottom."""
-    scene = fish_cage(step=2.0).build()
+    scene = fish_cage(step=2.0).scene
     return scene, ob.outcome(scene.nodes.position, scene)
 
 
@@ -56,7 +56,7 @@ def cod_end():
     """The built-in cod-end, 8 x 6 meshes, its twine without knots (a program half the size to compile);
     the net holds ~0.01 m³ at equilibrium: a catch of 0.004 m³ puts the catch front inside it."""
     twine = Twine(l0=0.06, ea=1e5, diameter=4e-3, density=1025.0)
-    scene = codend(meshes_around=8, meshes_along=6, step=0.12, catch_m3=0.004, twine=twine).build()
+    scene = codend(meshes_around=8, meshes_along=6, step=0.12, catch_m3=0.004, twine=twine).scene
     eq = statics.solve(scene, tol=1e-9)
     return scene, eq, ob.outcome(eq, scene)
 

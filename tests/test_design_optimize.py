@@ -24,7 +24,7 @@ STEPS = 50
 
 @functools.lru_cache(maxsize=1)
 def problem():
-    net = hanging_panel(meshes=4, step=0.05)
+    net = hanging_panel(meshes=4, step=0.05).net
     net.environment = Environment(current_speed=0.4, current_direction=np.array([0.0, 1.0, 0.0]))
     space = space_lib.DesignSpace(net)
     reference = space.initial()

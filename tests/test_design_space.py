@@ -101,9 +101,9 @@ def assert_same_scene(a, b, tol=1e-12):
 # -- the reference design ----------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("make", [lambda: fish_cage(radius=2.0, depth=1.5, sides=5, l0=0.1, step=0.6),
-                                  lambda: codend(meshes_around=16, meshes_along=8, step=0.2),
-                                  lambda: hanging_panel(meshes=6, step=0.1), rig],
+@pytest.mark.parametrize("make", [lambda: fish_cage(radius=2.0, depth=1.5, sides=5, l0=0.1, step=0.6).net,
+                                  lambda: codend(meshes_around=16, meshes_along=8, step=0.2).net,
+                                  lambda: hanging_panel(meshes=6, step=0.1).net, rig],
                          ids=["cage", "codend", "hanging_panel", "rig"])
 def test_initial_design_is_the_built_net(make):
     net = make()
@@ -222,7 +222,7 @@ def test_materials_equal_the_net_rebuilt_with_them(panel_space):
     with that twine (the step scaled with l0, so that the mesh is the same in twine coordinates): every array
     but the free start positions, ropes included (sewn at the reference hanging ratio)."""
     twine = Twine(l0=0.03, ea=3000.0, diameter=2e-3, density=1140.0, ea_compression=3000.0)
-    rebuilt = hanging_panel(meshes=6, step=0.12, l0=0.03, twine=twine).build()
+    rebuilt = hanging_panel(meshes=6, step=0.12, l0=0.03, twine=twine).scene
     scene = panel_space.scene({"mesh_side": {"netting": 0.03}, "ea": {"netting": 3000.0},
                                "twine_diameter": {"netting": 2e-3}})
     assert_same_scene(scene.netting, rebuilt.netting)
@@ -231,7 +231,7 @@ def test_materials_equal_the_net_rebuilt_with_them(panel_space):
 
 def test_sinker_mass_equals_the_net_rebuilt_with_it(cage_space):
     theta = {"sinker_mass": {name: 25.0 for name in cage_space.initial()["sinker_mass"]}}
-    rebuilt = fish_cage(radius=2.0, depth=1.5, sides=5, l0=0.1, step=0.6, sinker_kg=25.0).build()
+    rebuilt = fish_cage(radius=2.0, depth=1.5, sides=5, l0=0.1, step=0.6, sinker_kg=25.0).scene
     assert_same_scene(cage_space.scene(theta).nodes, rebuilt.nodes)
 
 
@@ -367,7 +367,7 @@ def test_bad_designs_are_named(panel_space):
 
 
 def test_a_design_never_switches_a_term_on_silently():
-    net = framed_panel(meshes=4, step=0.1, sinker_kg=0.0)
+    net = framed_panel(meshes=4, step=0.1, sinker_kg=0.0).net
     # a sinker of 0 kg at the reference: no node weight is compiled for it
     net.sinker(Nearest("netting", (0.07, 0.07, 0.0)), 0.0)
     space = DesignSpace(net)

@@ -189,7 +189,7 @@ def test_stiff_twines_stay_stable_at_any_step(h):
 def _small_net():
     from jaxnet.scenes.panel import hanging_panel
 
-    net = hanging_panel(meshes=6, step=0.05)
+    net = hanging_panel(meshes=6, step=0.05).net
     net.environment = Environment(current_speed=0.7, current_direction=np.array([1.0, 0.2, 0.0]))
     return net.build()
 
@@ -273,7 +273,7 @@ def test_towing_through_still_water_is_the_current_seen_from_the_net():
     from jaxnet.scenes.panel import hanging_panel
 
     speed = 0.4
-    net = hanging_panel(meshes=4, step=0.1)
+    net = hanging_panel(meshes=4, step=0.1).net
     net.environment = Environment(current_speed=speed, current_direction=np.array([1.0, 0.0, 0.0]))
     in_current = net.build()
     eq = statics.solve(in_current, tol=1e-8)

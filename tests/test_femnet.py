@@ -39,7 +39,7 @@ def _residual_at(scene, x):
 @pytest.mark.parametrize("case", sorted(CASES))
 def test_mdg_counts_and_twine_convention(case):
     n_nodes, n_tri, n_bars, efg_fixed, symmetric = CASES[case]
-    scene, solver, info = femnet.read_mdg(DATA / f"{case}.mdg", DATA / f"{case}.don")
+    scene = femnet.read_mdg(DATA / f"{case}.mdg", DATA / f"{case}.don").scene
     assert (scene.n_nodes, len(scene.netting.vertices), len(scene.bars.ends)) == (n_nodes, n_tri, n_bars)
     # unknowns: every coordinate but the .efg's fixed components and those held on symmetry planes
     assert scene.n_dof == 3 * n_nodes - efg_fixed - symmetric
@@ -59,8 +59,7 @@ def test_reading_a_case_runs_no_jax_program(caplog):
     jax.config.update("jax_log_compiles", True)
     try:
         with caplog.at_level("WARNING"):
-            net, _, _ = femnet.read_don(DATA / "c2.don")
-            scene = net.build()
+            scene = femnet.read_don(DATA / "c2.don").scene
     finally:
         jax.config.update("jax_log_compiles", False)
     compiled = [r.getMessage().split(" with ")[0] for r in caplog.records if r.getMessage().startswith("Compiling")]
@@ -68,8 +67,8 @@ def test_reading_a_case_runs_no_jax_program(caplog):
 
 
 def test_read_don_maps_types_symmetry_and_catch():
-    net, solver, info = femnet.read_don(DATA / "c2.don")
-    scene = net.build()
+    case = femnet.read_don(DATA / "c2.don")
+    scene, solver, info = case.scene, case.solver, case.info
     x, fixed = np.asarray(scene.nodes.position), np.asarray(scene.nodes.fixed)
     # the two symmetry planes (y = 0, z = -10) hold y and z there; the front (x = 0) is held along x
     assert np.all(fixed[np.abs(x[:, 1]) < 1e-9, 1]) and np.all(fixed[np.abs(x[:, 2] + 10) < 1e-9, 2])
@@ -81,8 +80,8 @@ def test_read_don_maps_types_symmetry_and_catch():
     assert (solver.tol, solver.max_iter, solver.max_step) == (1e-4, 1000, 0.1)
     # the cod line (7 bars, meshed before the panel) is sewn along the rear side and divides it
     assert len(scene.bars.ends) == 7 and info["cables_sewn_along_sides"] == {"cable 1": "panel 1 side 2"}
-    net, solver, info = femnet.read_don(DATA / "nr_netting.don")
-    scene = net.build()
+    case = femnet.read_don(DATA / "nr_netting.don")
+    scene, info = case.scene, case.info
     assert info["water_density"] == 1000.0 and scene.environment.water_density == 1000.0
     # the sinker rope (cable 5, meshed first) keeps its 57 bars; the one-bar cables 3, 4, 6 follow the sides
     per_cable = np.bincount(np.asarray(scene.bars.cable))
@@ -147,7 +146,8 @@ def test_truncated_and_collinear(tmp_path):
 
 
 def test_nr_netting_on_femnet_mesh_matches_femnet():
-    scene, solver, info = femnet.read_mdg(DATA / "nr_netting.mdg", DATA / "nr_netting.don")
+    case = femnet.read_mdg(DATA / "nr_netting.mdg", DATA / "nr_netting.don")
+    scene, solver, info = case.scene, case.solver, case.info
     pos, strain, _, summary = _sta("nr_netting", scene)
     # FEMNET's equilibrium is one of jaxnet's model to FEMNET's own criterion: at FEMNET's positions jaxnet's
     # residual on the netting nodes has a MEAN norm below the case's 1e-3 N threshold (on the sinker rope,
@@ -197,7 +197,8 @@ def test_nr_netting_on_femnet_mesh_matches_femnet():
 def test_c2_on_femnet_mesh_with_femnet_laws_gives_femnet_answer():
     # With FEMNET's knot contact (fermeture2) and its netting drag of cases with a catch (trainee_fil; both in
     # docs/errata.md), jaxnet's equilibrium is FEMNET's: node by node and in every summary figure.
-    scene, solver, info = femnet.read_mdg(DATA / "c2.mdg", DATA / "c2.don")
+    case = femnet.read_mdg(DATA / "c2.mdg", DATA / "c2.don")
+    scene, solver, info = case.scene, case.solver, case.info
     assert info["femnet_laws"]
     assert set(np.asarray(scene.netting.knot_form).tolist()) == {1} and set(np.asarray(scene.netting.drag_model).tolist()) == {3}
     pos, _, _, summary = _sta("c2", scene)
@@ -236,7 +237,8 @@ def test_c2_iterations_without_a_step_reuse_their_tangent(monkeypatch, capsys):
         return pieces
 
     monkeypatch.setattr(statics, "compile_pieces", counting)
-    scene, solver, _ = femnet.read_mdg(DATA / "c2.mdg", DATA / "c2.don")
+    case = femnet.read_mdg(DATA / "c2.mdg", DATA / "c2.don")
+    scene, solver = case.scene, case.solver
     eq = solve(scene, solver, verbose=True)
     steps = [float(line.split("step")[1]) for line in capsys.readouterr().out.splitlines() if "newton" in line]
     assert len(steps) == int(eq.iterations) and eq.converged
@@ -248,7 +250,8 @@ def test_c2_iterations_without_a_step_reuse_their_tangent(monkeypatch, capsys):
 
 
 def test_c2_on_femnet_mesh_with_jaxnet_laws_differs_as_named():
-    scene, solver, info = femnet.read_mdg(DATA / "c2.mdg", DATA / "c2.don", femnet_laws=False)
+    case = femnet.read_mdg(DATA / "c2.mdg", DATA / "c2.don", femnet_laws=False)
+    scene, solver, info = case.scene, case.solver, case.info
     assert not info["femnet_laws"] and not np.any(np.asarray(scene.netting.drag_model))
     pos, _, vec, summary = _sta("c2", scene)
     front = summary["front"][0]
@@ -326,8 +329,8 @@ def _node_uv(scene):
 def test_links_make_one_node_and_sew_the_sides_between_them():
     from jaxnet.mesh.panel import mesh_panel
 
-    net, solver, info = femnet.read_don(DATA / "links_hub.don")
-    scene = net.build()
+    loaded = femnet.read_don(DATA / "links_hub.don")
+    scene, info = loaded.scene, loaded.info
     case = femnet.parse_don(DATA / "links_hub.don")
     # each panel alone: its nodes, and the division of its diagonals (all four have one length in (U, V))
     meshes = [mesh_panel(femnet.twine_coordinates(p.corners[:, 3:5]), p.corners[:, :3], p.material["step"].value,
@@ -358,15 +361,15 @@ def test_linked_panels_reach_the_equilibrium_of_the_one_panel_net():
     # under a uniform strain) and unique (the energy is strictly convex in the free nodes). The one-panel net
     # starts there; the linked one starts 7 cm away (the hub). The same equilibrium to 1e-9 m: Newton stops at
     # 1e-9 N against stiffnesses of order EA / l0 = 2e4 N/m (axial) and T / l = 1e3 N/m (transverse).
-    single, solver, _ = femnet.read_don(DATA / "links_hub_single.don")
-    single = single.build()
+    case = femnet.read_don(DATA / "links_hub_single.don")
+    single, solver = case.scene, case.solver
     eq1 = solve(single, solver)
     x1, uv1 = np.asarray(eq1.x), _node_uv(single)
     X1 = np.c_[uv1, np.ones(len(uv1))]
     affine, *_ = np.linalg.lstsq(X1, x1, rcond=None)
     assert np.abs(X1 @ affine - x1).max() < 1e-9
-    linked, solver, _ = femnet.read_don(DATA / "links_hub.don")
-    linked = linked.build()
+    case = femnet.read_don(DATA / "links_hub.don")
+    linked, solver = case.scene, case.solver
     X2 = np.c_[_node_uv(linked), np.ones(linked.n_nodes)]
     assert np.abs(X2 @ affine - np.asarray(linked.nodes.position)).max() > 0.05
     eq2 = solve(linked, solver)
@@ -377,8 +380,8 @@ def test_linked_panels_reach_the_equilibrium_of_the_one_panel_net():
 def test_a_linked_cable_divides_the_side_and_seams_join_different_mesh_counts():
     from jaxnet.mesh.panel import side_divisions
 
-    net, solver, info = femnet.read_don(DATA / "links_cable.don")
-    scene = net.build()
+    loaded = femnet.read_don(DATA / "links_cable.don")
+    scene, info = loaded.scene, loaded.info
     case = femnet.parse_don(DATA / "links_cable.don")
     upper, lower = case.panels
     # the cable, meshed first, keeps its 6 bars and the lower panel's bottom side takes them
@@ -443,8 +446,8 @@ def test_link_errors_name_the_line(tmp_path, case, edits, needle, words):
 
 
 def test_a_hexagonal_panel_keeps_femnet_coordinates_counts_its_twines_and_hangs_in_balance():
-    net, solver, info = femnet.read_don(DATA / "hexagonal.don")
-    scene = net.build()
+    case = femnet.read_don(DATA / "hexagonal.don")
+    scene, solver, info = case.scene, case.solver, case.info
     hexa = scene.hexagonal
     assert scene.netting is None and hexa is not None
     # FEMNET's hexagonal (U, V) count base meshes as jaxnet's do (etirement_hexa.c: the knot's neighbours at
@@ -486,7 +489,8 @@ def test_hexagonal_errors_name_the_line(tmp_path, edits, needle, words):
 
 
 def test_added_mass_is_recorded_and_limits_without_sense_are_no_limits(tmp_path):
-    plain, _, info = femnet.read_don(DATA / "nr_netting.don")
+    plain = femnet.read_don(DATA / "nr_netting.don")
+    info = plain.info
     assert info["added_mass"] == {1: [0.0, 0.0, 0.0], 2: [0.0, 0.0, 0.0]}
     # type 2 (every free node) with an added mass (dynamics only) and a limit whose sense is 0 (none)
     block = ("Added mass X,Y,Z (kg):        0.000000  0.000000  0.000000\nLength X,Y,Z (m):        0.000000  0.000000  "
@@ -498,9 +502,10 @@ def test_added_mass_is_recorded_and_limits_without_sense_are_no_limits(tmp_path)
                            "Limits X,Y,Z (m):        0.000000  0.000000  0.000000",
                            "Limits X,Y,Z (m):        0.000000  0.000000  -2.000000")
     path, _ = _edit(tmp_path, "nr_netting", [(block, edited)])
-    net, _, info = femnet.read_don(path)
+    edited = femnet.read_don(path)
+    info = edited.info
     assert info["added_mass"] == {1: [0.0, 0.0, 0.0], 2: [1.5, 2.0, 0.25]}
-    a, b = plain.build(), net.build()
+    a, b = plain.scene, edited.scene
     for field in ("position", "fixed", "mass", "volume", "force"):
         np.testing.assert_array_equal(getattr(a.nodes, field), getattr(b.nodes, field))
     json.dumps(info)
@@ -511,8 +516,7 @@ def test_meshing_order_shorthand(tmp_path):
     # (the cable takes the side's division, 18 segments of jaxnet's mesher)
     for word, bars in (("all", 7), ("bll", 18)):
         path, _ = _edit(tmp_path, "c2", [("Meshing order:\nel:1    pa:     1  ", f"Meshing order: {word}")])
-        net, _, _ = femnet.read_don(path)
-        assert len(net.build().bars.ends) == bars
+        assert len(femnet.read_don(path).scene.bars.ends) == bars
 
 
 def test_dynamic_settings_and_waves_are_read(tmp_path):
@@ -529,7 +533,8 @@ def test_dynamic_settings_and_waves_are_read(tmp_path):
     edit("Wave direction", "90.0")
     path = tmp_path / "waves.don"
     path.write_text("\n".join(lines) + "\n")
-    net, _, info = femnet.read_don(path)
+    case = femnet.read_don(path)
+    net, info = case.net, case.info
     assert info["dynamic"] == {"time_step_s": 0.1, "record_every_s": 0.2, "record_start_s": 0.0, "end_time_s": 30.0}
     waves = net.environment.waves
     assert float(waves.height) == 1.5 and float(waves.period) == 10.0

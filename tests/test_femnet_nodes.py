@@ -88,8 +88,8 @@ def _sinker_nodes(scene):
 
 
 def test_a_floor_goes_to_exactly_the_nodes_of_its_type_with_femnet_stiffness_and_law(tmp_path):
-    net, _, info = femnet.read_don(_write(tmp_path, _case_text()))
-    scene = net.build()
+    case = femnet.read_don(_write(tmp_path, _case_text()))
+    scene, info = case.scene, case.info
     n = scene.n_nodes
     sinker = _sinker_nodes(scene)
     assert len(sinker) == 58  # 57 bars
@@ -109,14 +109,14 @@ def test_a_floor_goes_to_exactly_the_nodes_of_its_type_with_femnet_stiffness_and
                                "limits": {3: {"limit_m": [0.0, 0.0, -2.5], "sense": [0, 0, 1]}}}
     json.dumps(info)
     # the case as FEMNET wrote it has neither: the fields stay None
-    plain = femnet.read_don(DATA / "nr_netting.don")[0].build()
+    plain = femnet.read_don(DATA / "nr_netting.don").scene
     assert plain.nodes.limit is None and plain.nodes.limit_sense is None and plain.nodes.drag_length is None
 
 
 def test_moving_bottom_gives_the_friction_and_a_ceiling_reads_as_sense_minus_one(tmp_path):
-    net, _, info = femnet.read_don(_write(tmp_path, _case_text(limit=(0, 0.9, 0), sense=(0, -1, 0),
-                                                                 inputs=("moving_bottom",))))
-    scene = net.build()
+    case = femnet.read_don(_write(tmp_path, _case_text(limit=(0, 0.9, 0), sense=(0, -1, 0),
+                                                       inputs=("moving_bottom",))))
+    scene, info = case.scene, case.info
     assert scene.environment.bottom_friction == 0.5 and info["sea_bed"]["moving_bottom"] is True
     sinker = _sinker_nodes(scene)
     sense = np.asarray(scene.nodes.limit_sense)
@@ -134,7 +134,7 @@ def test_limits_on_femnet_mesh_follow_the_mdg_node_types(tmp_path):
     assert text.count(block) == 1
     text = text.replace(block, block.replace("0.000000  0.000000  0.000000\nLimits sens X,Y,Z:        0  0  0",
                                              "0.000000  0.000000  -3.000000\nLimits sens X,Y,Z:        0  0  1"))
-    scene, _, _ = femnet.read_mdg(DATA / "nr_netting.mdg", _write(tmp_path, text, "nr_netting"))
+    scene = femnet.read_mdg(DATA / "nr_netting.mdg", _write(tmp_path, text, "nr_netting")).scene
     lines = (DATA / "nr_netting.mdg").read_text().split("\n")
     start = next(i for i, ln in enumerate(lines) if " ".join(ln.lower().split()).startswith("description des noeuds"))
     rows = [ln.split() for ln in lines[start + 1:] if ln.split()][: scene.n_nodes]
@@ -149,8 +149,8 @@ def test_a_box_without_volume_takes_femnet_drag_on_its_nodes(tmp_path):
     # a plate normal to x, 0.5 m wide (y), hanging 0.2 m below its node: FEMNET's "lest inonde" drag along x is
     # 1/2 rho Cd_x L_y |L_z| U^2 (traineecourant2.c), nothing along y (L_x = 0) nor z (horizontal current)
     text = _case_text(length=(0, 0.5, -0.2), cd=(1.0, 1.2, 1.3), sense=(0, 0, 0))
-    net, _, info = femnet.read_don(_write(tmp_path, text))
-    scene = net.build()
+    case = femnet.read_don(_write(tmp_path, text))
+    scene, info = case.scene, case.info
     sinker = _sinker_nodes(scene)
     length, cd = np.asarray(scene.nodes.drag_length), np.asarray(scene.nodes.drag_coefficient)
     boxed = np.zeros(scene.n_nodes, bool)
@@ -166,8 +166,8 @@ def test_a_box_without_volume_takes_femnet_drag_on_its_nodes(tmp_path):
 
 
 def test_a_floor_holds_the_sinker_rope_no_deeper_than_its_load_over_the_stiffness(tmp_path):
-    net, solver, _ = femnet.read_don(_write(tmp_path, _case_text()))
-    scene = net.build()
+    case = femnet.read_don(_write(tmp_path, _case_text()))
+    scene, solver = case.scene, case.solver
     eq = solve(scene, solver)
     x = np.asarray(eq.x)
     sinker = _sinker_nodes(scene)

@@ -14,7 +14,7 @@ def hanging_hexagonal_panel(meshes=8, a=0.02, pull=5.0):
 def test_hexagonal_panel_hangs_in_balance_with_its_weight():
     scene = hanging_hexagonal_panel()
     assert [t.name for t in model.active_terms(scene)] == ["node_force", "hexagonal_tension", "hexagonal_weight"]
-    eq = jn.solve(scene, tol=1e-6)
+    eq = jn.solve_static(scene, tol=1e-6)
     # immersed weight of the twines: |d| twines of each family per triangle (text after 4.82)
     uv = np.asarray(scene.hexagonal.uv)
     d = (uv[:, 1, 0] - uv[:, 0, 0]) * (uv[:, 2, 1] - uv[:, 0, 1]) - (uv[:, 2, 0] - uv[:, 0, 0]) * (uv[:, 1, 1] - uv[:, 0, 1])

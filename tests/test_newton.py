@@ -17,18 +17,18 @@ def balance(scene, eq):
 def test_flat_start_of_a_2000_node_panel_with_slack_twines_converges_in_20_iterations():
     # A horizontal panel held along its border, sagging under its weight and a 20 kg sinker: the flat,
     # stress-free start has no out-of-plane stiffness at all, and the twines have EA_c = 0.
-    scene = framed_panel(meshes=80, step=0.06, sinker_kg=20.0).build()
+    scene = framed_panel(meshes=80, step=0.06, sinker_kg=20.0).scene
     assert scene.n_nodes >= 2000 and not np.any(np.asarray(scene.netting.ea_compression))
-    eq = jn.solve(scene, tol=1e-3, max_iter=20)
+    eq = jn.solve_static(scene, tol=1e-3, max_iter=20)
     assert eq.converged and float(eq.residual_N) <= 1e-3
     assert float(np.asarray(eq.x)[:, 2].min()) < -0.1  # it really sagged (about 0.23 m)
     np.testing.assert_allclose(balance(scene, eq), 0.0, atol=scene.n_nodes * 1e-3)
 
 
 def test_flat_start_of_the_2000_node_default_scene_converges_in_20_iterations():
-    scene = hanging_panel(meshes=80, step=0.06).build()
+    scene = hanging_panel(meshes=80, step=0.06).scene
     assert scene.n_nodes >= 2000
-    eq = jn.solve(scene, tol=1e-3, max_iter=20)
+    eq = jn.solve_static(scene, tol=1e-3, max_iter=20)
     assert eq.converged
     np.testing.assert_allclose(balance(scene, eq), 0.0, atol=scene.n_nodes * 1e-3)
 
@@ -37,11 +37,11 @@ def test_badly_crumpled_start_reaches_the_same_equilibrium():
     # With EA_c = 0 the energy is convex in the positions and this equilibrium (all twines taut) is
     # unique: from a crumpled start (every free node moved at random by up to three twine lengths,
     # many triangles turned inside out) Newton must find the flat start's answer.
-    scene = framed_panel(meshes=20, step=0.08, sinker_kg=2.0).build()
-    flat = jn.solve(scene, tol=1e-8)
+    scene = framed_panel(meshes=20, step=0.08, sinker_kg=2.0).scene
+    flat = jn.solve_static(scene, tol=1e-8)
     rng = np.random.default_rng(0)
     x0 = np.asarray(scene.nodes.position) + rng.uniform(-0.075, 0.075, (scene.n_nodes, 3))
-    crumpled = jn.solve(scene, x0=x0, tol=1e-8)
+    crumpled = jn.solve_static(scene, x0=x0, tol=1e-8)
     np.testing.assert_allclose(np.asarray(crumpled.x), np.asarray(flat.x), atol=1e-7)
 
 
@@ -49,15 +49,15 @@ def test_slack_curtain_converges_even_though_slowly():
     # The hanging curtain with slack twines has a degenerate equilibrium (gathered, slack sides): Newton
     # converges linearly there, but it must converge, and balance the weight.
     slack = Twine(l0=0.025, ea=2000.0, diameter=1.5e-3, ea_compression=0.0)
-    scene = hanging_panel(meshes=40, step=0.1, twine=slack).build()
-    eq = jn.solve(scene, tol=1e-3, max_iter=500)
+    scene = hanging_panel(meshes=40, step=0.1, twine=slack).scene
+    eq = jn.solve_static(scene, tol=1e-3, max_iter=500)
     assert eq.converged
     np.testing.assert_allclose(balance(scene, eq), 0.0, atol=scene.n_nodes * 1e-3)
 
 
 def test_quadratic_convergence_near_the_solution():
-    scene = framed_panel(meshes=20, step=0.08, sinker_kg=2.0).build()
-    eq = jn.solve(scene, tol=1e-9, max_iter=60)
+    scene = framed_panel(meshes=20, step=0.08, sinker_kg=2.0).scene
+    eq = jn.solve_static(scene, tol=1e-9, max_iter=60)
     hist = np.asarray(eq.history)
     hist = hist[np.isfinite(hist)]
     r1, r2 = hist[-2:]
@@ -68,10 +68,10 @@ def test_quadratic_convergence_near_the_solution():
 
 
 def test_failed_solve_names_the_reason_and_the_node():
-    scene = hanging_panel(meshes=20, step=0.08).build()
+    scene = hanging_panel(meshes=20, step=0.08).scene
     with pytest.raises(jn.SolveError, match=r"after 2 iterations: maximum number of iterations reached; largest residual .* N at node \d+"):
-        jn.solve(scene, max_iter=2)
-    eq = jn.solve(scene, max_iter=2, throw=False)
+        jn.solve_static(scene, max_iter=2)
+    eq = jn.solve_static(scene, max_iter=2, throw=False)
     assert not eq.converged and eq.reason == "maximum number of iterations reached"
     assert np.all(np.isfinite(np.asarray(eq.x)))
     worst = int(eq.worst_node)
@@ -111,8 +111,8 @@ def test_host_loop_and_jitted_loop_are_the_same_iteration():
     from jaxnet import assemble, model as model_lib
     from jaxnet.solve import newton
 
-    scene = framed_panel(meshes=12, step=0.1, sinker_kg=2.0).build()
-    host = jn.solve(scene, tol=1e-8)
+    scene = framed_panel(meshes=12, step=0.1, sinker_kg=2.0).scene
+    host = jn.solve_static(scene, tol=1e-8)
     model = model_lib.active_terms(scene)
     pattern = assemble.build_pattern(scene, model)
     start = np.asarray(scene.nodes.position).ravel()[np.asarray(pattern.free)]
@@ -132,7 +132,7 @@ def test_the_pattern_is_kept_for_the_same_net_and_rebuilt_for_another():
 
     from jaxnet import assemble, model as model_lib
 
-    net = framed_panel(meshes=12, step=0.1, sinker_kg=2.0)
+    net = framed_panel(meshes=12, step=0.1, sinker_kg=2.0).net
     scene, again = net.build(), net.build()
     model = model_lib.active_terms(scene)
     first = assemble.build_pattern(scene, model)
@@ -170,9 +170,9 @@ def test_stall_is_a_residual_that_stopped_halving():
 def test_stiffness_continuation_changes_the_path_not_the_equilibrium(capsys):
     # The continuation solves softer nets first; its last stage is the net as it is, so it must land on
     # plain Newton's equilibrium (unique here: EA_c = 0 makes the energy convex, all twines taut).
-    scene = framed_panel(meshes=16, step=0.08, sinker_kg=2.0).build()
-    plain = jn.solve(scene, tol=1e-8, stall_window=None)
-    softened = jn.solve(scene, tol=1e-8, stall_window=0, verbose=True)
+    scene = framed_panel(meshes=16, step=0.08, sinker_kg=2.0).scene
+    plain = jn.solve_static(scene, tol=1e-8, stall_window=None)
+    softened = jn.solve_static(scene, tol=1e-8, stall_window=0, verbose=True)
     printed = capsys.readouterr().out
     assert [line.split()[-1] for line in printed.splitlines() if "stiffness x" in line] == ["0.01", "0.0316", "0.1", "0.316", "1"]
     assert softened.converged and int(softened.iterations) > int(plain.iterations)
@@ -188,13 +188,13 @@ def test_a_solve_with_a_catch_compiles_its_evaluation_and_tangent_once(caplog):
     from jaxnet.scenes.codend import codend
     from jaxnet.solve import programs
 
-    scene = codend(meshes_around=8, meshes_along=6, catch_m3=0.01).build()
+    scene = codend(meshes_around=8, meshes_along=6, catch_m3=0.01).scene
     jax.clear_caches()
     programs.clear()
     jax.config.update("jax_log_compiles", True)  # globally: the pieces compile in worker threads
     try:
         with caplog.at_level("WARNING"):
-            eq = jn.solve(scene)
+            eq = jn.solve_static(scene)
     finally:
         jax.config.update("jax_log_compiles", False)
     compiled = [r.getMessage().split(" with ")[0] for r in caplog.records if r.getMessage().startswith("Compiling jit(")]
@@ -228,7 +228,7 @@ def test_stiffness_continuation_softens_the_net_not_its_weight_and_buoyancy():
     from jaxnet import assemble, model as model_lib
     from jaxnet.scenes.cage import fish_cage
 
-    scene = fish_cage(step=1.0).build()
+    scene = fish_cage(step=1.0).scene
     terms = model_lib.active_terms(scene)
     elastic = tuple(t for t in terms if t.term.kind == "energy" and t.term.elastic)
     others = tuple(t for t in terms if t.term.kind == "energy" and not t.term.elastic)
@@ -244,10 +244,10 @@ def test_a_continuation_that_cannot_finish_gives_way_to_plain_newton(capsys):
     # The continuation gets half the iterations left when it starts; if its stages do not reach the net
     # as it is by then (or a softened net stalls), plain Newton resumes from where the continuation began,
     # so a misjudged start of the continuation costs iterations, never the solve.
-    scene = framed_panel(meshes=16, step=0.08, sinker_kg=2.0).build()
-    plain = jn.solve(scene, tol=1e-8, stall_window=None)
+    scene = framed_panel(meshes=16, step=0.08, sinker_kg=2.0).scene
+    plain = jn.solve_static(scene, tol=1e-8, stall_window=None)
     n = int(plain.iterations)
-    rescued = jn.solve(scene, tol=1e-8, stall_window=0, max_iter=2 * n + 2, verbose=True)
+    rescued = jn.solve_static(scene, tol=1e-8, stall_window=0, max_iter=2 * n + 2, verbose=True)
     assert "stiffness continuation abandoned" in capsys.readouterr().out
     assert rescued.converged and int(rescued.iterations) == (2 * n + 2) // 2 + n
     np.testing.assert_allclose(np.asarray(rescued.x), np.asarray(plain.x), atol=1e-7)

@@ -192,7 +192,7 @@ def test_isotropic_drag_area_still_acts_beside_the_box():
 def test_sinker_with_a_box_body_trails_at_the_angle_of_drag_to_weight():
     sinker = 2.0
     scene = pendulum(sinker=sinker)
-    eq = jn.solve(scene, tol=1e-10)
+    eq = jn.solve_static(scene, tol=1e-10)
     weight = sinker * (1.0 - RHO / 11340.0) * G
     drag_x = 0.5 * RHO * CD[0] * LENGTH[1] * LENGTH[2] * U**2
     np.testing.assert_allclose(eq.reaction(scene)[0], [-drag_x, 0.0, weight], rtol=1e-9, atol=1e-9)
@@ -236,8 +236,7 @@ SCENE = {
 def test_scene_file_bodies_reach_every_node_of_their_reference(tmp_path):
     path = tmp_path / "pendulum.json"
     path.write_text(json.dumps(SCENE))
-    net, _ = scene_file.read(path)
-    scene = net.build()
+    scene = scene_file.read(path).scene
     x = np.asarray(scene.nodes.position)
     end = int(np.argmin(x[:, 2]))
     lengths, cds = np.asarray(scene.nodes.drag_length), np.asarray(scene.nodes.drag_coefficient)
@@ -265,11 +264,11 @@ at = [0, 0, -1]
 drag_length = [0.3, 0.5, -0.4]
 drag_coefficient = [1.1, 0.7, 0.9]
 """)
-    scene = scene_file.read(toml)[0].build()
+    scene = scene_file.read(toml).scene
     np.testing.assert_array_equal(np.asarray(scene.nodes.drag_length)[1], [0.3, 0.5, -0.4])
     bad = dict(SCENE, bodies=[{"at": [0, 0, -1], "drag_length": [0.1, 0.2], "drag_coefficient": [1, 1, 1]}])
     with pytest.raises(SceneError, match=r"bodies\[0\].drag_length: expected 3 numbers"):
-        scene_file.net_from_dict(bad)
+        scene_file.from_dict(bad)
     bad = dict(SCENE, bodies=[{"at": [0, 0, -1], "drag_length": [0.1, 0.2, 0.3]}])
     with pytest.raises(SceneError, match=r"bodies\[0\]: missing key\(s\) \['drag_coefficient'\]"):
-        scene_file.net_from_dict(bad)
+        scene_file.from_dict(bad)

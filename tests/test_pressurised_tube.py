@@ -73,7 +73,7 @@ def tubes():
     out = {}
     for start in (50.0, ANSWER, 60.0):
         scene = quarter_tube(np.radians(start))
-        eq = jn.solve(scene, tol=1e-8, max_iter=200)
+        eq = jn.solve_static(scene, tol=1e-8, max_iter=200)
         out[start] = (scene, eq)
     return out
 

@@ -206,7 +206,7 @@ def solved_sea_bed():
     scene, node, chain = sea_bed()
     assert {t.name for t in model.active_terms(scene)} == {"netting_tension", "bar_tension", "netting_weight", "node_weight",
                                                            "bar_weight", "node_force", "bottom_contact", "bottom_friction"}
-    eq = jn.solve(scene, tol=1e-9)
+    eq = jn.solve_static(scene, tol=1e-9)
     return scene, node, chain, eq, term_forces(scene, eq.x)
 
 
@@ -331,7 +331,7 @@ SCENE = {
 def test_scene_file_limits_and_bottom_reach_the_scene(tmp_path):
     path = tmp_path / "chain.json"
     path.write_text(json.dumps(SCENE))
-    scene = scene_file.read(path)[0].build()
+    scene = scene_file.read(path).scene
     env = scene.environment
     assert (env.bottom_stiffness, env.bottom_friction, env.bottom_band) == (2e6, 0.3, 5e-4)
     x = np.asarray(scene.nodes.position)
@@ -344,7 +344,7 @@ def test_scene_file_limits_and_bottom_reach_the_scene(tmp_path):
     assert {"bottom_contact", "bottom_friction"} <= {t.name for t in model.active_terms(scene)}
     bad = dict(SCENE, limits=[{"at": [2, 0, 0], "limit": [0, 0, 0], "sense": [0, 0, 2]}])
     with pytest.raises(SceneError, match=r"limit_sense must be \+1 \(floor\), -1 \(ceiling\) or 0"):
-        scene_file.net_from_dict(bad)
+        scene_file.from_dict(bad)
     bad = dict(SCENE, limits=[{"at": [2, 0, 0], "limit": [0, 0, 0], "sense": [0, 0, 1], "stiffness": 1}])
     with pytest.raises(SceneError, match=r"limits\[0\]: unknown key\(s\) \['stiffness'\]"):
-        scene_file.net_from_dict(bad)
+        scene_file.from_dict(bad)

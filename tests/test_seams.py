@@ -43,7 +43,7 @@ def test_seam_of_50_and_45_meshes_shares_nodes_and_is_in_equilibrium():
     u_up = {tuple(uv[e][list(tri[e]).index(corner)]) for e in np.flatnonzero((panel == 0) & (tri == corner).any(axis=1))}
     u_lo = {tuple(uv[e][list(tri[e]).index(corner)]) for e in np.flatnonzero((panel == 1) & (tri == corner).any(axis=1))}
     assert u_up == {(50.0, -50.0)} and u_lo == {(65.0, -25.0)}
-    eq = jn.solve(scene, tol=1e-6, max_iter=200)
+    eq = jn.solve_static(scene, tol=1e-6, max_iter=200)
     force = np.linalg.norm(np.asarray(eq.force)[seam], axis=1)
     assert force.max() <= 1e-6
     # the seam carries the weight of the lower panel and sinker: the vertical pull across it is positive

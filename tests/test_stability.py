@@ -107,7 +107,7 @@ def test_a_continuation_out_of_iterations_is_not_thrown_away():
 
     scene = CASES["current 1 m/s along a twine"].build("test").scene
     x0, _ = stability.perturbed_start(scene)
-    eq = jn.solve(scene, x0=x0, throw=False)
+    eq = jn.solve_static(scene, x0=x0, throw=False)
     assert eq.converged and float(eq.residual_N) <= 1e-3
     assert np.all(np.isfinite(np.asarray(eq.x)))
 

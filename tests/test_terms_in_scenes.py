@@ -294,7 +294,7 @@ def curtains():
     net.attach(refs["twines"].corner(0), drag_area=BODY_DRAG_AREA)
     net.attach(refs["twines"].corner(1), force=PULL)
     scene = net.build()
-    eq = jn.solve(scene, tol=1e-8)
+    eq = jn.solve_static(scene, tol=1e-8)
     return scene, eq
 
 
@@ -445,7 +445,7 @@ def still():
     x0 = np.array(scene.nodes.position)
     inner = panel_nodes(scene, "S")
     x0[inner] += rng.uniform(-0.5 * L0, 0.5 * L0, (inner.size, 3))
-    eq = jn.solve(scene, x0=x0, tol=1e-9)
+    eq = jn.solve_static(scene, x0=x0, tol=1e-9)
     return scene, eq
 
 

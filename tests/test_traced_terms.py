@@ -12,7 +12,7 @@ from traced import lowered_text  # tests/traced.py
 
 
 def test_weightless_net_compiles_no_weight():
-    net = hanging_panel(meshes=6, step=0.1)
+    net = hanging_panel(meshes=6, step=0.1).net
     heavy = lowered_text(net.build())
     assert "netting_weight" in heavy and "bar_weight" in heavy
     net.environment = jn.Environment(gravity=0.0)
@@ -25,7 +25,7 @@ def test_weightless_net_compiles_no_weight():
 
 def test_pushing_twines_are_traced_only_when_some_can_push():
     slack = jn.net.Twine(l0=0.025, ea=2000.0, diameter=1.5e-3, ea_compression=0.0)
-    scene = framed_panel(meshes=6, step=0.1, twine=slack).build()
+    scene = framed_panel(meshes=6, step=0.1, twine=slack).scene
     assert scene.bars is None
     assert "compressive_branch" not in lowered_text(scene)
     net = dataclasses.replace(scene.netting, ea_compression=np.full_like(np.asarray(scene.netting.ea_compression), 5.0))

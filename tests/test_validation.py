@@ -48,7 +48,7 @@ def test_held_panel_in_a_current_has_the_morison_drag_of_its_twines(angle_deg):
     # the two families, whose t · y = sin(angle)/√2 alike.
     angle = np.radians(angle_deg)
     scene, normal = textbook.panel_in_current(meshes=6, step=0.05, angle=angle, speed=0.7)
-    eq = jn.solve(scene)
+    eq = jn.solve_static(scene)
     force = -eq.reaction(scene).sum(axis=0)  # the current's force on the net
     cos_psi = np.cos(angle) / np.sqrt(2.0)
     sin_psi = np.sqrt(1.0 - cos_psi**2)

@@ -46,7 +46,7 @@ class BadInput:
     """One kind of malformed input.
 
     kind: unique short name. level: where the input enters (``net``: the :class:`~jaxnet.net.Net` builder;
-    ``scene``: a scene edited by hand and given to ``jaxnet.solve``; ``solver``, ``dynamics``, ``waves``: their
+    ``scene``: a scene edited by hand and given to ``jaxnet.solve_static``; ``solver``, ``dynamics``, ``waves``: their
     options; ``scene file``; ``.don``). input: the mistake, in a few words. attempt: folder -> anything; makes
     and uses the bad input (files in ``folder``) and is expected to raise. error: the exception type expected.
     culprit: a regular expression the message must match (``re.search``): it names the culprit.
@@ -213,7 +213,7 @@ def _scene():
 
 
 def _edited(part, index=None, **values):
-    """An attempt: jaxnet.solve on the scene of :func:`_scene` with fields of ``part`` (nodes, netting, bars,
+    """An attempt: jaxnet.solve_static on the scene of :func:`_scene` with fields of ``part`` (nodes, netting, bars,
     environment) replaced; a value that is a function gets the old array (a copy) and returns the new one;
     ``index``: the entry of the old array to set instead (``values`` then hold one field and its entry's value)."""
     def run(folder):
@@ -230,7 +230,7 @@ def _edited(part, index=None, **values):
             elif callable(value):
                 value = value(np.array(getattr(family, name)))
             changes[name] = value
-        return jn.solve(dataclasses.replace(scene, **{part: dataclasses.replace(family, **changes)}))
+        return jn.solve_static(dataclasses.replace(scene, **{part: dataclasses.replace(family, **changes)}))
     return run
 
 
@@ -238,7 +238,7 @@ def _solved(scene_of, **options):
     def run(folder):
         import jaxnet as jn
 
-        return jn.solve(scene_of(), **options)
+        return jn.solve_static(scene_of(), **options)
     return run
 
 
@@ -260,7 +260,7 @@ def _start_of_wrong_shape(folder):
     import jaxnet as jn
 
     scene = small_scene()
-    return jn.solve(scene, x0=np.asarray(scene.nodes.position)[:-1])
+    return jn.solve_static(scene, x0=np.asarray(scene.nodes.position)[:-1])
 
 
 def _simulated(end_time=1.0, loading=None, **options):
@@ -309,8 +309,7 @@ def _scene_file(change=None, text=None, name="scene.json"):
             if change is not None:
                 change(doc)
             path.write_text(json.dumps(doc))
-        net, solver = scene_file.read(path)
-        return net.build(), solver
+        return scene_file.read(path)
     return run
 
 
@@ -516,7 +515,7 @@ def _catalogue():
                  r"node 0: a limit along z needs environment bottom_stiffness > 0"),
         BadInput("hexagonal netting in a current", net, "HexTwine panel, current 0.5 m/s",
                  _hexagonal_in_current, E, r"hexagonal triangle 0 \(hex\): hexagonal netting has no drag model"),
-        # -- scenes edited by hand, given to jaxnet.solve -------------------------------------------------------
+        # -- scenes edited by hand, given to jaxnet.solve_static ------------------------------------------------
         BadInput("triangle with collinear twine coordinates", scene, "triangle 7: (U, V) = (0,0), (1,1), (2,2)",
                  _edited("netting", 7, uv=[[0, 0], [1, 1], [2, 2]]), E,
                  r"triangle 7 \(wall\): collinear twine coordinates"),
@@ -556,7 +555,7 @@ def _catalogue():
         BadInput("waves that are not waves", scene, "waves='big'", _edited("environment", waves="big"), E,
                  r"environment: waves must be None or waves"),
         BadInput("NaN catch in a scene", scene, "Catch(volume=NaN)",
-                 lambda folder: jn.solve(dataclasses.replace(_scene(), catch=Catch(
+                 lambda folder: jn.solve_static(dataclasses.replace(_scene(), catch=Catch(
                      volume=float("nan"), drag_coefficient=1.4, axis=np.array([1.0, 0.0, 0.0]), center=np.zeros(3)))),
                  E, r"catch: volume must be finite and > 0"),
         # -- solver options ---------------------------------------------------------------------------------------
@@ -782,7 +781,7 @@ def _accepted_by_design():
     from jaxnet.scenes import codend
 
     rows = []
-    scene = codend(catch_m3=1000.0).build()
+    scene = codend(catch_m3=1000.0).scene
     c = scene.catch
     front = catch_lib.catch_front(jnp.asarray(scene.nodes.position), jnp.asarray(scene.netting.vertices),
                                   jnp.asarray(c.axis), c.volume, c.symmetry, jnp.asarray(scene.netting.outward))
@@ -838,7 +837,7 @@ def run(report, quick: bool) -> None:
         "zero stiffness, legal as a scene) is expected to compile and stop with a named reason.")
     levels = list(dict.fromkeys(c.level for c in CASES))
     names = {"net": "The Net builder (panels, cables, seams, fixings, loads, environment)",
-             "scene": "Scenes edited by hand, given to jaxnet.solve",
+             "scene": "Scenes edited by hand, given to jaxnet.solve_static",
              "solver": "Solver options", "dynamics": "Dynamics options", "waves": "Waves",
              "scene file": "Scene files (JSON, TOML)", ".don": "FEMNET .don files"}
     records, number = [], 0

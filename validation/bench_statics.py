@@ -40,10 +40,10 @@ def one(n_target, scene_name, ea_compression):
         ea_compression = 0.0 if scene_name == "framed" else 2000.0
     twine = Twine(l0=l0, ea=2000.0, diameter=1.5e-3, ea_compression=ea_compression)
     if scene_name == "framed":
-        scene = framed_panel(meshes=meshes, l0=l0, step=step, twine=twine, sinker_kg=20.0).build()
+        scene = framed_panel(meshes=meshes, l0=l0, step=step, twine=twine, sinker_kg=20.0).scene
     else:
-        scene = hanging_panel(meshes=meshes, l0=l0, step=step, twine=twine).build()
-    eq = jn.solve(scene, max_iter=200)
+        scene = hanging_panel(meshes=meshes, l0=l0, step=step, twine=twine).scene
+    eq = jn.solve_static(scene, max_iter=200)
     timing = eq.timing
     m = model.active_terms(scene)
     pattern = assemble.build_pattern(scene, m)

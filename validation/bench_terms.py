@@ -9,7 +9,7 @@ machine as it is (the load averages are printed before and after: on a shared ma
 as ratios measured side by side in one run, not as absolute figures). Nothing is asserted.
 
 1. Sizes. Each step runs in its own process, so that the peak resident memory printed is that size's.
-   The scene is solved from its start shape by :func:`jaxnet.solve` (the Newton program's compile time
+   The scene is solved from its start shape by :func:`jaxnet.solve_static` (the Newton program's compile time
    is reported apart from its run time). At the solution are then timed:
      * assembly: one call of a jitted function computing the tangent (``assemble.tangent``) and the
        out-of-balance force (``assemble.nodal_force``) together, compiled before timing, median of
@@ -147,7 +147,7 @@ def _time_assemblies(cases, repeats, compile_repeats):
 def _cage(step, twine=None):
     from jaxnet.scenes.cage import fish_cage
 
-    return fish_cage(step=step, twine=twine).build()
+    return fish_cage(step=step, twine=twine).scene
 
 
 class _TimedHostSolve:
@@ -177,7 +177,7 @@ def one_size(step, repeats):
     timed = _TimedHostSolve(linalg.host_solve)
     linalg.host_solve = timed
     try:
-        eq = jn.solve(scene, throw=False)
+        eq = jn.solve_static(scene, throw=False)
     finally:
         linalg.host_solve = timed.host_solve
     timing = eq.timing
@@ -250,7 +250,7 @@ def terms(step, repeats, compile_repeats):
     from jaxnet import model
 
     scene = _cage(step)
-    eq = jn.solve(scene, throw=False)
+    eq = jn.solve_static(scene, throw=False)
     full = model.active_terms(scene)
     rows = [{"label": "all active terms", "term": None}]
     cases = [_prepare(eq.x, scene, full)]

@@ -37,10 +37,10 @@ def scene_of(case):
     if case == "cage":
         from jaxnet.scenes import cage_in_waves
 
-        return cage_in_waves(step=1.6)[0]
+        return cage_in_waves(step=1.6).scene
     from jaxnet.io import femnet
 
-    return femnet.read_mdg(DATA / f"{case}.mdg", DATA / f"{case}.don")[0]
+    return femnet.read_mdg(DATA / f"{case}.mdg", DATA / f"{case}.don").scene
 
 
 def programs_of(scene):

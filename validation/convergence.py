@@ -33,9 +33,9 @@ def _solve(scene, warm=False, **options):
     import jaxnet as jn
 
     if warm:
-        jn.solve(scene, throw=False, **options)
+        jn.solve_static(scene, throw=False, **options)
     t0 = time.perf_counter()
-    eq = jn.solve(scene, throw=False, **options)
+    eq = jn.solve_static(scene, throw=False, **options)
     timing = eq.timing
     wall = time.perf_counter() - t0
     return eq, {"iterations": int(eq.iterations), "converged": eq.converged, "residual N": float(eq.residual_N),
@@ -78,7 +78,7 @@ def _sweep_one(size, tolerances):
         _progress("biaxial", tol, rows[-1]["error"])
 
     # a curtain hanging from its headline: error = |vertical reaction - immersed weight| / weight
-    scene = hanging_panel(meshes=20 * size, step=0.08).build()
+    scene = hanging_panel(meshes=20 * size, step=0.08).scene
     weight = -float(figures.total_load(scene)[2])
     for tol in tolerances:
         eq, t = _solve(scene, warm=tol == tolerances[0], tol=tol, max_iter=300)
@@ -138,19 +138,19 @@ def _framed(step):
     from jaxnet.scenes.panel import framed_panel
 
     # under its weight alone: a point sinker would put a logarithmic singularity under the measured sag
-    return framed_panel(meshes=40, step=step, sinker_kg=0.0).build()
+    return framed_panel(meshes=40, step=step, sinker_kg=0.0).scene
 
 
 def _cage(step):
     from jaxnet.scenes import fish_cage
 
-    return fish_cage(step=step).build()
+    return fish_cage(step=step).scene
 
 
 def _codend(step):
     from jaxnet.scenes import codend
 
-    return codend(step=step).build()
+    return codend(step=step).scene
 
 
 def _figures_framed(scene, eq):

@@ -34,7 +34,7 @@ REPEATS = 5
 
 def scenes(quick):
     def curtain(meshes, step):
-        net = panel.hanging_panel(meshes=meshes, step=step)
+        net = panel.hanging_panel(meshes=meshes, step=step).net
         net.environment = Environment(current_speed=0.4, current_direction=np.array([0.0, 1.0, 0.0]))
         return net
 

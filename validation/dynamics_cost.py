@@ -114,10 +114,16 @@ def pendulum_table(end=1.0):
     return rows
 
 
-def cage_table(end):
-    from jaxnet.scenes import cage_in_waves
+def cage_and_loading(step):
+    """(scene, loading) of the cage in waves (:func:`jaxnet.scenes.cage_in_waves`) meshed at ``step`` (m)."""
+    from jaxnet import scenes
 
-    scene, loading = cage_in_waves(step=1.6)
+    case = scenes.cage_in_waves(step=step)
+    return case.scene, case.time.loading
+
+
+def cage_table(end):
+    scene, loading = cage_and_loading(1.6)
     eq = statics.solve(scene)
     x0 = np.asarray(eq.x)
     print(f"\n## Cage in waves ({scene.n_nodes} nodes, {scene.n_dof} unknowns): 0 to {end} s from the static "
@@ -200,9 +206,7 @@ def peak(reaction_z):
 def cage_reference_table(end, reference_rtol=1e-6):
     """Work-precision of the book scheme and of Kvaerno5 on the cage in waves, against Kvaerno5 at
     ``reference_rtol`` over [0, end] (module docstring, item 2). Returns the rows (method, wall, error)."""
-    from jaxnet.scenes import cage_in_waves
-
-    scene, loading = cage_in_waves(step=1.6)
+    scene, loading = cage_and_loading(1.6)
     x0 = np.asarray(statics.solve(scene).x)
     record = 0.05
     saveat = np.linspace(0.0, end, int(round(end / record)) + 1)
@@ -248,14 +252,12 @@ def cage_reference_table(end, reference_rtol=1e-6):
 def size_table(steps):
     """Steps per second against size (module docstring, item 3): 0.5 s of the cage in waves from its static
     equilibrium, 0.1 s from 3000 nodes on (a step there takes a large part of a second)."""
-    from jaxnet.scenes import cage_in_waves
-
     print("\n## Cost against size: the cage in waves, Δt = 10 ms, from the static equilibrium\n")
     print("| meshing step (m) | nodes | unknowns | static solve (s) | compile + first 2 steps (s) | simulated (s) | "
           "steps/s | ms per step | Newton it./step |")
     print("|---|---|---|---|---|---|---|---|---|")
     for step in steps:
-        scene, loading = cage_in_waves(step=step)
+        scene, loading = cage_and_loading(step)
         t0 = time.perf_counter()
         eq = statics.solve(scene)
         static_s = time.perf_counter() - t0
@@ -295,9 +297,8 @@ def time_step_problem(mesh_step, run_time, time_step=0.01):
     import jax.numpy as jnp
 
     from jaxnet import assemble, model as model_lib
-    from jaxnet.scenes import cage_in_waves
 
-    scene, loading = cage_in_waves(step=mesh_step)
+    scene, loading = cage_and_loading(mesh_step)
     x_eq = np.asarray(statics.solve(scene).x)
     model = model_lib.active_terms(scene, dynamic=True)
     pattern = assemble.build_pattern(scene, model)

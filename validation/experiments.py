@@ -167,7 +167,7 @@ def panel_coefficients(panel: FlumePanel, angle, twine, step=0.25):
 
     net, normal = panel_net(panel, angle, twine, step)
     scene = net.build()
-    eq = jn.solve(scene)
+    eq = jn.solve_static(scene)
     reaction = eq.reaction(scene).sum(axis=0)
     q_area = 0.5 * panel.water_density * panel.speed**2 * panel.side**2
     flow = np.array([1.0, 0.0, 0.0])

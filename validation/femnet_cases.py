@@ -44,11 +44,8 @@ def one(case, data, mesh, stiffness="autodiff"):
     from jaxnet.solve.statics import solve
 
     don = data / f"{case}.don"
-    if mesh:
-        scene, solver, info = femnet.read_mdg(data / f"{case}.mdg", don)
-    else:
-        net, solver, info = femnet.read_don(don)
-        scene = net.build()
+    loaded = femnet.read_mdg(data / f"{case}.mdg", don) if mesh else femnet.read_don(don)
+    scene, solver, info = loaded.scene, loaded.solver, loaded.info
     eq = solve(scene, solver, throw=False, stiffness=stiffness)
     timing = eq.timing
     cold = time.perf_counter() - t0
@@ -122,7 +119,7 @@ def _at_femnet_positions(scene, positions):
 def _mdg_counts(data, case):
     from jaxnet.io import femnet
 
-    scene, _, _ = femnet.read_mdg(data / f"{case}.mdg", data / f"{case}.don")
+    scene = femnet.read_mdg(data / f"{case}.mdg", data / f"{case}.don").scene
     return scene.n_nodes, (0 if scene.bars is None else int(scene.bars.ends.shape[0])), int(scene.netting.vertices.shape[0])
 
 

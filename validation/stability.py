@@ -15,7 +15,7 @@ inside out, that the flat one never is.
 
 A case's *expected* outcome is "converged" unless it genuinely has no equilibrium or is refused as input;
 then the named stop is the right answer and the case says which (its note says why). Every statics run
-uses ``jaxnet.solve`` with ``throw=False`` (its ``Equilibrium.reason``), every dynamics run
+uses ``jaxnet.solve_static`` with ``throw=False`` (its ``Equilibrium.reason``), every dynamics run
 ``jaxnet.solve.dynamics.simulate`` (its ``DynamicsError`` message when a step fails below the smallest
 step); a scene refused by validation records its ``SceneError``.
 
@@ -120,9 +120,10 @@ def _framed(size, twine=None, sinker_kg=5.0, opening=math.pi / 4):
     from jaxnet.scenes import framed_panel
 
     meshes = _size(size, 10, 40, 100)
-    net = framed_panel(meshes=meshes, step=_size(size, 0.1, 0.07, 0.05), twine=twine or _twine(), sinker_kg=sinker_kg)
+    scene = framed_panel(meshes=meshes, step=_size(size, 0.1, 0.07, 0.05), twine=twine or _twine(),
+                         sinker_kg=sinker_kg).scene
     scale = math.sqrt(2.0)
-    return _drawn(net.build(), (scale * math.sin(opening), scale * math.cos(opening), 1.0))
+    return _drawn(scene, (scale * math.sin(opening), scale * math.cos(opening), 1.0))
 
 
 def _hanging(size, twine=None, current=0.0, direction=(0.0, 1.0, 0.0), sinker_kg_per_m=1.0, meshes=None, step=None):
@@ -134,7 +135,7 @@ def _hanging(size, twine=None, current=0.0, direction=(0.0, 1.0, 0.0), sinker_kg
     meshes = meshes or _size(size, 10, 20, 40)
     step = step or _size(size, 0.1, 0.1, 0.05)
     kw = {} if twine is None else {"twine": twine}
-    net = hanging_panel(meshes=meshes, step=step, sinker_kg_per_m=sinker_kg_per_m, **kw)
+    net = hanging_panel(meshes=meshes, step=step, sinker_kg_per_m=sinker_kg_per_m, **kw).net
     if current:
         net.environment = Environment(current_speed=current, current_direction=np.asarray(direction, dtype=float))
     return net.build()
@@ -318,7 +319,7 @@ def _catch_cases():
     def build(size, fraction):
         around, along = _size(size, (24, 12), (60, 30), (100, 50))
         return codend(meshes_around=around, meshes_along=along, step=_size(size, 0.3, 0.15, 0.12),
-                      catch_m3=fraction * codend_capacity(around, along, 0.06)).build()
+                      catch_m3=fraction * codend_capacity(around, along, 0.06)).scene
 
     cases = []
     for label, fraction in (("tiny", 1e-5), ("small", 1e-2), ("c2's", 0.03), ("half", 0.5), ("overfull", 2.0)):
@@ -353,7 +354,7 @@ def _size_cases():
         n = _size(size, 1000, 10_000, 100_000)
         width = 100 * 0.025 * math.sqrt(2.0)
         # the mesher's lattice holds about 1.15 nodes per step² (validation/bench_statics.py)
-        return framed_panel(meshes=100, step=width / math.sqrt(n / 1.15), twine=_twine()).build()
+        return framed_panel(meshes=100, step=width / math.sqrt(n / 1.15), twine=_twine()).scene
 
     return [Case("large framed panel", "size", _static(framed),
                  "the framed panel (100 × 100 meshes, slack twines, 5 kg sinker) of 10⁴ nodes (quick) or 10⁵ "
@@ -428,8 +429,8 @@ def _femnet_cases():
 
     def build(name):
         def problem(size):
-            net, solver, _ = femnet.read_don(FEMNET_DATA / f"{name}.don")
-            return Problem(net.build(), newton=solver)
+            loaded = femnet.read_don(FEMNET_DATA / f"{name}.don")
+            return Problem(loaded.scene, newton=loaded.solver)
         return problem
 
     notes = {
@@ -556,7 +557,7 @@ def _solve_static(problem: Problem, x0):
     import jaxnet as jn
 
     newton = newton_options(problem)
-    eq = jn.solve(problem.scene, newton, x0=x0, throw=False)
+    eq = jn.solve_static(problem.scene, newton, x0=x0, throw=False)
     it = int(eq.iterations)
     history = np.asarray(eq.history)[: it + 1]
     return dict(converged=eq.converged, reason=eq.reason, iterations=it, residual_N=float(eq.residual_N),
@@ -714,7 +715,7 @@ def run(report, quick: bool) -> None:
         f"{len(cases)} cases in {len(FAMILIES)} families, each run from its flat stress-free start and from a "
         f"perturbed one (every free coordinate displaced by a normal random amount of standard deviation "
         f"σ = {PERTURBATION} × the elements' size at the start, the median of their shortest sides; seed "
-        f"{SEED}). Statics: `jaxnet.solve` with its default options (FEMNET's cases: their own numerics) but "
+        f"{SEED}). Statics: `jaxnet.solve_static` with its default options (FEMNET's cases: their own numerics) but "
         f"up to {MAX_ITERATIONS} Newton iterations, `throw=False`; dynamics: "
         "`dynamics.simulate` with `Implicit(time_step=...)`. Per run: converged (statics: the largest nodal "
         "residual at most the tolerance; dynamics: the end time reached), Newton iterations (dynamics: over "

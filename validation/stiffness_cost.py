@@ -51,8 +51,7 @@ def scene_of_size(triangles):
     around = 4 * max(2, int(round(along / 2.0)))
     scale = 1.0
     for _ in range(8):
-        net = codend(meshes_around=around, meshes_along=along, step=0.12 * scale, twine=twine)
-        scene = net.build()
+        scene = codend(meshes_around=around, meshes_along=along, step=0.12 * scale, twine=twine).scene
         n = scene.netting.vertices.shape[0]
         if 0.7 * triangles <= n <= 1.4 * triangles:
             break

@@ -45,7 +45,8 @@ def femnet_tangent(case):
         seen.append((np.array(data), self.indptr, self.indices))
         return factorize(self, data)
 
-    scene, solver, _ = femnet.read_mdg(DATA / f"{case}.mdg", DATA / f"{case}.don")
+    loaded = femnet.read_mdg(DATA / f"{case}.mdg", DATA / f"{case}.don")
+    scene, solver = loaded.scene, loaded.solver
     linalg.HostSolver.factorize = keep
     try:
         solve(scene, solver, throw=False, stiffness="closed_form")

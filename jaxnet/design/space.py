@@ -74,6 +74,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxnet import model
+from jaxnet.case import Case
 from jaxnet.design import cut as cut_lib
 from jaxnet.net import CableEnd, CableNodes, CableRef, Corner, HexTwine, Nearest, Net, PanelRef, Side
 from jaxnet.scene import Scene
@@ -198,12 +199,20 @@ def _is_concrete(value):
 class DesignSpace:
     """The design parameters of a net and the differentiable map from them to its scene.
 
-    net: the :class:`~jaxnet.net.Net` (built once here, numpy). Attributes: ``reference`` (the built
-    :class:`~jaxnet.scene.Scene`), ``panels`` (names of the diamond-mesh panels, in order), ``mountings``
-    (name -> :class:`Mounting`), ``sinkers``, ``floats``, ``cables`` (names of the free cables).
+    net: the :class:`~jaxnet.net.Net` (built once here, numpy), or a :class:`~jaxnet.case.Case` built from one
+    (its ``net``). Attributes: ``reference`` (the built :class:`~jaxnet.scene.Scene`), ``panels`` (names of
+    the diamond-mesh panels, in order), ``mountings`` (name -> :class:`Mounting`), ``sinkers``, ``floats``,
+    ``cables`` (names of the free cables).
     """
 
-    def __init__(self, net: Net):
+    def __init__(self, net: Net | Case):
+        if isinstance(net, Case):
+            if net.net is None:
+                raise ValueError(f"DesignSpace: the case ({net.label or 'unnamed'}) was not built from a Net "
+                                 "description (a scene read whole, such as FEMNET's .mdg mesh): nothing to vary")
+            net = net.net
+        if not isinstance(net, Net):
+            raise ValueError(f"DesignSpace: expected a Net or a Case, got {type(net).__name__}")
         self.net = net
         self.reference = scene = net.build()
         layout = net.layout

@@ -1,4 +1,5 @@
-"""Scene files: a net described in JSON (``.json``) or TOML (``.toml``), read into a :class:`~jaxnet.net.Net`.
+"""Scene files: a net described in JSON (``.json``) or TOML (``.toml``), read into a :class:`~jaxnet.case.Case`
+(its :class:`~jaxnet.net.Net` built, with the file's solver options).
 
 The format mirrors the Python API (see README, "Scene files"). Top-level keys::
 
@@ -39,6 +40,7 @@ import pathlib
 
 import numpy as np
 
+from jaxnet.case import Case, from_net
 from jaxnet.net import CableEnd, CableNodes, Corner, Net, PanelRef, Rope, Side, Twine
 from jaxnet.scene import Environment, SceneError
 from jaxnet.solve.options import Newton
@@ -156,8 +158,9 @@ def _triple(value, where):
     return arr
 
 
-def net_from_dict(doc: dict) -> tuple[Net, Newton]:
-    """Build a :class:`Net` and solver options from a parsed scene document."""
+def from_dict(doc: dict, label: str = "scene document") -> Case:
+    """The :class:`~jaxnet.case.Case` of a parsed scene document: its :class:`~jaxnet.net.Net` (built here) and
+    solver options."""
     _keys(doc, _TOP, "scene")
     env_fields = {f.name for f in dataclasses.fields(Environment)}
     env_spec = dict(_keys(doc.get("environment", {}), env_fields, "environment"))
@@ -227,11 +230,11 @@ def net_from_dict(doc: dict) -> tuple[Net, Newton]:
         c = _keys(doc["catch"], {"volume", "drag_coefficient", "symmetry", "axis"}, "catch", ("volume",))
         numbers = {k: _number(c[k], f"catch.{k}") for k in ("volume", "drag_coefficient", "symmetry") if k in c}
         net.catch(**numbers, axis=_triple(c["axis"], "catch.axis") if "axis" in c else None)
-    return net, _solver(doc.get("solver", {}))
+    return from_net(net, _solver(doc.get("solver", {})), label=label)
 
 
-def read(path) -> tuple[Net, Newton]:
-    """Read a scene file (.json or .toml)."""
+def read(path) -> Case:
+    """Read a scene file (.json or .toml) into a :class:`~jaxnet.case.Case`."""
     path = pathlib.Path(path)
     if not path.exists():
         raise SceneError(f"scene file {path} does not exist")
@@ -249,4 +252,4 @@ def read(path) -> tuple[Net, Newton]:
         if isinstance(err, SceneError):
             raise
         raise SceneError(f"{path}: cannot parse: {err}") from err
-    return net_from_dict(doc)
+    return from_dict(doc, label=str(path))

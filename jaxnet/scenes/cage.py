@@ -22,23 +22,32 @@ mean surface, not the waves' (``docs``: left for later).
 
 from __future__ import annotations
 
-import numpy as np
+import inspect
 
 import equinox as eqx
+import numpy as np
 
 from jaxnet import forcing, waves
+from jaxnet.case import Case, TimeSettings, from_net
 from jaxnet.net import Net, Rope, Twine
 from jaxnet.scene import Environment
+from jaxnet.solve.options import Implicit
 
 
 def fish_cage(radius: float = 5.0, depth: float = 5.0, sides: int = 8, l0: float = 0.05, step: float = 0.5,
-              current: float = 0.5, sinker_kg: float = 20.0, twine: Twine | None = None) -> Net:
-    """The cage (see module docstring).
+              current: float = 0.5, sinker_kg: float = 20.0, twine: Twine | None = None) -> Case:
+    """The cage (see module docstring), as a :class:`~jaxnet.case.Case` (its ``net`` the description).
 
     radius, depth: of the cylinder at the start (m); sides: number of wall panels (and bottom slices);
     l0: mesh side (m); step: meshing step (m); current: speed along x (m/s); sinker_kg: lead at the foot
     of each wall seam (kg); twine: netting material (default: polyamide 2.5 mm, EA 5000 N, Cd 1.2).
     """
+    net = _describe(radius, depth, sides, l0, step, current, sinker_kg, twine)
+    return from_net(net, label=f"cylindrical fish cage (floating collar, bottom, sinkers) in a {current:g} m/s current")
+
+
+def _describe(radius, depth, sides, l0, step, current, sinker_kg, twine) -> Net:
+    """The cage's description (:func:`fish_cage`'s arguments)."""
     twine = twine or Twine(l0=l0, ea=5000.0, diameter=2.5e-3, density=1140.0, cd_normal=1.2, tangential_ratio=0.08)
     env = Environment(current_speed=current, current_direction=np.array([1.0, 0.0, 0.0]), surface_level=0.0)
     net = Net(environment=env)
@@ -79,19 +88,21 @@ def fish_cage(radius: float = 5.0, depth: float = 5.0, sides: int = 8, l0: float
 
 
 def cage_in_waves(wave_height: float = 2.0, wave_period: float = 6.0, water_depth: float = 50.0,
-                  current: float = 0.2, ramp: float = 2.0, **cage):
+                  current: float = 0.2, ramp: float = 2.0, end_time: float = 12.0, time_step: float = 0.01,
+                  record_every: float = 0.1, **cage) -> Case:
     """The cage of :func:`fish_cage` (its keyword arguments ``cage``) in regular waves along x, for dynamics.
 
     wave_height H (m, crest to trough), wave_period T (s), water_depth (m): linear (Airy) waves
     (:class:`jaxnet.waves.Airy`); current (m/s) along x; ramp: time (s) over which the collar's heave grows
-    smoothly from rest to its full amplitude H/2 (a run starting at rest). Returns (scene, loading): the
-    built :class:`jaxnet.scene.Scene` and its :class:`jaxnet.solve.dynamics.Loading`.
+    smoothly from rest to its full amplitude H/2 (a run starting at rest). A :class:`~jaxnet.case.Case` whose
+    time settings run it to ``end_time`` (s) with steps of ``time_step`` (s), a record every ``record_every``
+    (s), the collar's heave its :class:`~jaxnet.forcing.Loading`.
     """
-    import numpy as np
-
-    from jaxnet.solve.dynamics import Loading
-
-    net = fish_cage(current=current, **cage)
+    options = {k: v.default for k, v in inspect.signature(fish_cage).parameters.items() if k != "current"}
+    unknown = set(cage) - set(options)
+    if unknown:
+        raise TypeError(f"cage_in_waves: unknown cage arguments {sorted(unknown)} (those of fish_cage: {sorted(options)})")
+    net = _describe(current=current, **{**options, **cage})
     env = net.environment
     net.environment = eqx.tree_at(lambda e: e.waves, env, waves.Airy(wave_height, wave_period, direction=(1.0, 0.0, 0.0),
                                                                      depth=water_depth, surface_level=env.surface_level),
@@ -104,4 +115,9 @@ def cage_in_waves(wave_height: float = 2.0, wave_period: float = 6.0, water_dept
     scene = eqx.tree_at(lambda s: s.nodes.fixed, scene, fixed)
     # the heave of the surface at the centre: η = H/2 cos(-ωt) = H/2 sin(ωt + π/2)
     heave = forcing.Harmonic(amplitude=(0.0, 0.0, 0.5 * wave_height), period=wave_period, phase=np.pi / 2, ramp=ramp)
-    return scene, Loading(motions=(forcing.PrescribedMotion(collar, heave),))
+    loading = forcing.Loading(motions=(forcing.PrescribedMotion(collar, heave),))
+    time = TimeSettings(end_time=end_time, record_every=record_every, solver=Implicit(time_step=time_step),
+                        loading=loading)
+    return Case(scene=scene, time=time, net=net,
+                label=f"the cage in {wave_height:g} m, {wave_period:g} s regular waves and a {current:g} m/s current, its "
+                      f"collar heaving; {end_time:g} s")

@@ -13,14 +13,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from jaxnet.case import Case, from_net
 from jaxnet.net import Net, Rope, Twine
 from jaxnet.scene import Environment
 
 
 def codend(meshes_around: int = 100, meshes_along: int = 50, l0: float = 0.06, step: float = 0.12,
            opening: float = 0.1, current: float = 1.5, catch_m3: float = 0.2, catch_cd: float = 1.4,
-           twine: Twine | None = None) -> Net:
-    """The cod-end (see module docstring).
+           twine: Twine | None = None) -> Case:
+    """The cod-end (see module docstring), as a :class:`~jaxnet.case.Case` (its ``net`` the description).
 
     meshes_around (a multiple of 4), meshes_along: mesh counts of the whole cod-end; l0: mesh side (m);
     step: meshing step (m); opening: half opening angle of the meshes at the start (rad, nearly closed);
@@ -47,4 +48,4 @@ def codend(meshes_around: int = 100, meshes_along: int = 50, l0: float = 0.06, s
     # the cod line gathers the rear border onto the axis: a short rope, as in FEMNET's c2
     net.cable("cod line", along=p.side(2), rope=Rope(ea=5e4, diameter=0.01, density=1025.0), length=0.01)
     net.catch(catch_m3, drag_coefficient=catch_cd, symmetry=4.0, center=(0.0, 0.0, 0.0))
-    return net
+    return from_net(net, label=f"trawl cod-end (quarter model) holding {catch_m3:g} m³ of catch at {current:g} m/s")

@@ -25,13 +25,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from jaxnet.case import Case, from_net
 from jaxnet.net import Net, Rope, Twine
 
 
 def hanging_panel(meshes: int = 40, l0: float = 0.025, step: float = 0.1, twine: Twine | None = None,
-                  sinker_kg_per_m: float = 1.0) -> Net:
-    """The default scene (see module docstring). l0: mesh side (m); step: meshing step (m);
-    sinker_kg_per_m: mass of the sinker bar per metre (kg/m, lead)."""
+                  sinker_kg_per_m: float = 1.0) -> Case:
+    """The hanging panel (see module docstring), as a :class:`~jaxnet.case.Case` (its ``net`` the
+    description). l0: mesh side (m); step: meshing step (m); sinker_kg_per_m: mass of the sinker bar per metre
+    (kg/m, lead)."""
     twine = twine or Twine(l0=l0, ea=2000.0, diameter=1.5e-3, density=1140.0, ea_compression=2000.0)
     width = meshes * l0 * np.sqrt(2.0)  # a square mesh of side l0 is l0*sqrt(2) across
     n = meshes
@@ -50,17 +52,18 @@ def hanging_panel(meshes: int = 40, l0: float = 0.025, step: float = 0.1, twine:
     net.cable("sinker bar", along=panel.side(0), rope=Rope(ea=1e5, diameter=diameter, density=lead, ea_compression=1e5))
     net.fix(panel.corner(2))
     net.fix(panel.corner(3))
-    return net
+    return from_net(net, label=f"square panel of {meshes} x {meshes} meshes hanging from a top rope with a sinker "
+                               "bar, still water")
 
 
 def framed_panel(meshes: int = 40, l0: float = 0.025, step: float = 0.1, twine: Twine | None = None,
-                 sinker_kg: float = 5.0) -> Net:
+                 sinker_kg: float = 5.0) -> Case:
     """A horizontal square panel held along its four sides, sagging under its weight and a central sinker.
 
     ``meshes`` meshes a side, square meshes (half opening angle 45°) in the plane z = 0, all border nodes
     fixed; the twine (default: polyamide, EA = 2000 N, EA_c = 0) is stress-free at the start, which is
     flat: the tangent there has no out-of-plane stiffness at all. ``sinker_kg``: lead sinker (kg) at the
-    node nearest the centre. l0: mesh side (m); step: meshing step (m).
+    node nearest the centre. l0: mesh side (m); step: meshing step (m). A :class:`~jaxnet.case.Case`.
     """
     twine = twine or Twine(l0=l0, ea=2000.0, diameter=1.5e-3, density=1140.0)
     width = meshes * l0 * np.sqrt(2.0)
@@ -72,4 +75,5 @@ def framed_panel(meshes: int = 40, l0: float = 0.025, step: float = 0.1, twine: 
         net.fix(panel.side(k))
     if sinker_kg:
         net.sinker(panel.nearest(0.5 * width, 0.5 * width, 0.0), sinker_kg)
-    return net
+    return from_net(net, label=f"horizontal panel of {meshes} x {meshes} meshes held along its border, sagging under "
+                               f"a {sinker_kg:g} kg sinker")

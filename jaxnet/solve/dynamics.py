@@ -56,7 +56,6 @@ from __future__ import annotations
 import dataclasses
 import pathlib
 import time as _time
-from typing import Callable
 
 import equinox as eqx
 import jax
@@ -64,6 +63,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxnet import assemble, catch as catch_lib, checks, model as model_lib, scene as scene_lib
+from jaxnet.case import Case
+from jaxnet.forcing import Loading  # simulate's argument, offered here as dynamics.Loading too
 from jaxnet.solve import newton, programs, results
 from jaxnet.solve.masses import lumped_masses
 from jaxnet.solve.options import Implicit, Newton
@@ -85,19 +86,6 @@ class DynamicsError(RuntimeError):
     def __init__(self, message, state):
         super().__init__(message)
         self.state = state
-
-
-class Loading(eqx.Module):
-    """What changes with time besides the net (pytree: its numbers can be traced and differentiated).
-
-    current_speed: a history t -> speed (m/s) of the current (:mod:`jaxnet.forcing`), scaling the
-      environment's current (its direction and depth profile kept); None: the environment's constant speed.
-    motions: prescribed motions (:class:`jaxnet.forcing.PrescribedMotion`): each moves its nodes, which must
-      be fixed in the scene, to their start positions plus its displacement at t.
-    """
-
-    current_speed: Callable | None = None
-    motions: tuple = ()
 
 
 class TimeStep(eqx.Module):
@@ -375,12 +363,14 @@ def check_loading(scene, loading: Loading):
                                        "a prescribed node must be held (fixed) in the scene")
 
 
-def simulate(scene, end_time, solver: Implicit | None = None, loading: Loading | None = None, record_every=None,
+def simulate(scene, end_time=None, solver: Implicit | None = None, loading: Loading | None = None, record_every=None,
              out=None, resume=False, x0=None, v0=None, progress=True, vtk=True, throw: bool = True) -> Trajectory:
     """Runs ``scene`` from time 0 (or from the last record of ``out`` when ``resume``) to ``end_time`` (s).
 
     Args:
-      scene: a :class:`jaxnet.scene.Scene` (validated here, before anything is compiled).
+      scene: a :class:`jaxnet.scene.Scene` (validated here, before anything is compiled), or a
+        :class:`jaxnet.case.Case`: its scene, and from its time settings the end time, options, loading and
+        record interval not given here.
       end_time: the time to reach (s).
       solver: :class:`Implicit` options. loading: :class:`Loading` (histories, prescribed motions).
       record_every: the interval between records (s); default: every step.
@@ -397,6 +387,15 @@ def simulate(scene, end_time, solver: Implicit | None = None, loading: Loading |
     """
     from jaxnet.io import timeseries
 
+    if isinstance(scene, Case):
+        settings = scene.time
+        if settings is not None:
+            end_time = settings.end_time if end_time is None else end_time
+            solver, loading = solver or settings.solver, loading or settings.loading
+            record_every = settings.record_every if record_every is None else record_every
+        scene = scene.scene
+    if end_time is None:
+        raise ValueError("simulate: give end_time (s): the case has no time settings, or none with an end time")
     solver = solver or Implicit()
     loading = loading or Loading()
     checks.validate(scene)

@@ -56,6 +56,7 @@ import jax
 import numpy as np
 
 from jaxnet import assemble, checks, linalg, model as model_lib
+from jaxnet.case import Case
 from jaxnet.memo import Memo
 from jaxnet.solve import kernel, newton, programs
 from jaxnet.solve.options import STATIC, Newton
@@ -286,7 +287,8 @@ def solve(scene, solver: Newton | None = None, x0=None, throw: bool = True, **op
     """Static equilibrium of ``scene``.
 
     Args:
-      scene: a :class:`jaxnet.scene.Scene` (validated here, before anything is compiled).
+      scene: a :class:`jaxnet.scene.Scene` (validated here, before anything is compiled), or a
+        :class:`jaxnet.case.Case`: its scene, with its solver options unless ``solver`` is given.
       solver: a :class:`~jaxnet.solve.options.Newton` options object (default
         :data:`jaxnet.solve.options.STATIC`); keyword ``options`` override its fields.
       x0: optional (N, 3) start positions (default: the scene's node positions); fixed nodes keep the
@@ -297,6 +299,8 @@ def solve(scene, solver: Newton | None = None, x0=None, throw: bool = True, **op
       an :class:`Equilibrium`, its ``timing`` the compile and run wall times (s): ``timing.compile_s`` is
       ~0 when a program compiled for a scene of the same shape and terms is reused.
     """
+    if isinstance(scene, Case):
+        scene, solver = scene.scene, solver or scene.solver
     solver = dataclasses.replace(solver or STATIC, **options)
     checks.validate(scene)
     model = model_lib.active_terms(scene)

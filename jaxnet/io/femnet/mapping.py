@@ -19,7 +19,8 @@ from jaxnet.io.femnet.links import MERGE_TOLERANCE, JoinPlan, all_panels, at_joi
 from jaxnet.io.femnet.parse import parse_don
 from jaxnet.net import HexTwine, Net, Rope, Twine
 from jaxnet.scene import Environment, SceneError
-from jaxnet.solve.options import Newton
+from jaxnet.case import Case, TimeSettings
+from jaxnet.solve.options import TIME_STEP, Implicit, Newton
 from jaxnet.terms import knot
 
 #: FEMNET's default water density (kg/m³, phobos ``chargement_don.c``: RHO = 1025)
@@ -241,11 +242,12 @@ def read_don(path, femnet_laws=True):
     jaxnet's own physics (the book's laws, corrected).
 
     Returns:
-      (net, solver, info): a :class:`~jaxnet.net.Net` (jaxnet meshes it; ``net.build()`` gives the scene,
-      checked here to build), the :class:`~jaxnet.solve.options.Newton` options (tol = FEMNET's threshold in
-      N, max_iter, max_step = FEMNET's displacement limit in m), and a dict ``info`` of what the reader
-      decided (symmetry planes and copies, FEMNET's solver settings, the inputs and outputs, the depth, the
-      joined points, seams and sewn cables, the added masses per node type, the sea bed and the node bodies read).
+      a :class:`~jaxnet.case.Case`: its ``net`` the :class:`~jaxnet.net.Net` (jaxnet meshes it) and ``scene``
+      the built scene; ``solver`` the :class:`~jaxnet.solve.options.Newton` options (tol = FEMNET's threshold
+      in N, max_iter, max_step = FEMNET's displacement limit in m); for a dynamic case (an end time > 0) its
+      ``time`` settings (:func:`time_settings`); ``info`` a dict of what the reader decided (symmetry planes
+      and copies, FEMNET's solver settings, the inputs and outputs, the depth, the joined points, seams and
+      sewn cables, the added masses per node type, the sea bed and the node bodies read).
     Raises:
       SceneError naming the file and line (see the package's docstring).
     """
@@ -289,17 +291,33 @@ def read_don(path, femnet_laws=True):
         if catch is not None:
             volume, cd, copies, center, axis = catch
             net.catch(volume, drag_coefficient=cd, symmetry=copies, center=tuple(center), axis=tuple(axis))
-        net.build()
-    return result(net, case, planes, catch, femnet_laws, plan)
+        scene = net.build()
+    return result(case, scene, net, planes, catch, femnet_laws, plan, label=f"FEMNET case {case.path}")
 
 
-def result(model, case: DonFile, planes, catch, femnet_laws, plan: JoinPlan | None = None):
-    """What :func:`read_don` and :func:`~.mdg.read_mdg` return: (model, solver, info), ``model`` the net (or the
-    scene), ``solver`` the :class:`~jaxnet.solve.options.Newton` options of the case's numerics, ``info`` what
-    the reader decided (:func:`_info`) and whether FEMNET's laws were used. ``planes``: the symmetry planes
-    {axis: coordinate}; ``catch``: :func:`catch_of`'s tuple or None; ``plan``: the joins (None on FEMNET's mesh,
-    which has its own)."""
-    return model, _solver(case), {**_info(case, planes, catch, plan), "femnet_laws": bool(femnet_laws)}
+def result(case: DonFile, scene, net, planes, catch, femnet_laws, plan: JoinPlan | None = None, label="") -> Case:
+    """What :func:`read_don` and :func:`~.mdg.read_mdg` return: the :class:`~jaxnet.case.Case` of ``scene``
+    (built from ``net``, or read whole: None), with the Newton options of the case's numerics, its time settings
+    (:func:`time_settings`) and ``info``, what the reader decided (:func:`_info`) and whether FEMNET's laws were
+    used. ``planes``: the symmetry planes {axis: coordinate}; ``catch``: :func:`catch_of`'s tuple or None;
+    ``plan``: the joins (None on FEMNET's mesh, which has its own)."""
+    solver = _solver(case)
+    info = {**_info(case, planes, catch, plan), "femnet_laws": bool(femnet_laws)}
+    return Case(scene=scene, solver=solver, time=time_settings(case, solver), net=net, label=label, info=info)
+
+
+def time_settings(case: DonFile, solver: Newton) -> TimeSettings | None:
+    """FEMNET's dynamic settings as a run in time, None for a static case (end time 0): to the end of its
+    records, a record every "record time step", steps of its "time step", each step's Newton the time steps'
+    own (:data:`jaxnet.solve.options.TIME_STEP`) with the case's threshold, iterations and displacement limit
+    (``solver``, FEMNET's numerics: its dynamics iterates each step to the same criterion). FEMNET's
+    "beginning time of record" is kept in ``info`` only: jaxnet records from the start."""
+    n = case.numeric
+    if not n["record_end"].value > 0:
+        return None
+    newton = dataclasses.replace(TIME_STEP, tol=solver.tol, max_iter=solver.max_iter, max_step=solver.max_step)
+    return TimeSettings(end_time=n["record_end"].value, record_every=n["record_dt"].value,
+                        solver=Implicit(time_step=n["dt"].value, newton=newton))
 
 
 def _info(case: DonFile, planes, catch, plan: JoinPlan | None = None):

@@ -22,13 +22,13 @@ from jaxnet.scene import Bars, Catch, Netting, Nodes, Scene, SceneError
 
 
 def read_mdg(path, don=None, femnet_laws=True):
-    """FEMNET's mesh ``path`` (.mdg) as a :class:`~jaxnet.scene.Scene`, with the materials and node types of
-    the ``.don`` case ``don`` (default: the same name with ``.don``).
+    """FEMNET's mesh ``path`` (.mdg) as a :class:`~jaxnet.case.Case` (its scene read whole: no ``net``), with
+    the materials, node types and numerics of the ``.don`` case ``don`` (default: the same name with ``.don``).
 
     The scene's nodes are the ``.mdg``'s, in its order (so the ``.sta``'s positions compare node by node);
     its triangles carry the ``.mdg``'s corner (U, V) turned into twine coordinates (U + V, V - U), and the
     material of the panel named in the triangle's line; its bars the rest length (pro2 - pro1) × L of
-    their cable. Returns (scene, solver, info) as :func:`read_don`.
+    their cable. Solver options, time settings and ``info`` as :func:`~.mapping.read_don`'s.
     """
     path = pathlib.Path(path)
     don = pathlib.Path(don) if don is not None else path.with_suffix(".don")
@@ -137,4 +137,4 @@ def read_mdg(path, don=None, femnet_laws=True):
                   panel_names=tuple(f"panel {k + 1}" for k in range(len(case.panels))),
                   cable_names=tuple(f"cable {k + 1}" for k in range(len(case.cables))))
     validate(scene)
-    return result(scene, case, planes, catch_spec, femnet_laws)
+    return result(case, scene, None, planes, catch_spec, femnet_laws, label=f"FEMNET case {don} on FEMNET's mesh {path}")
