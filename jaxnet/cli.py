@@ -81,6 +81,23 @@ def _overrides(args):
             if v is not None}
 
 
+def time_stepping(case, args):
+    """(time settings, implicit options) of a run in time of ``case`` as the command line asks: the case's own
+    time settings (a FEMNET case's, a dynamic built-in's) or the defaults, its time step replaced by ``--dt``,
+    and each step's Newton its own (a FEMNET case's already holds the file's threshold, iterations and
+    displacement limit) with the command line's solver flags (``--tol``, ``--max-iter``, ``--stiffness``)."""
+    import dataclasses
+
+    from jaxnet.case import TimeSettings
+
+    settings = case.time or TimeSettings()
+    implicit = settings.solver
+    if args.dt is not None:
+        implicit = dataclasses.replace(implicit, time_step=args.dt, min_time_step=min(implicit.min_time_step, args.dt))
+    implicit = dataclasses.replace(implicit, newton=dataclasses.replace(implicit.newton, **_overrides(args)))
+    return settings, implicit
+
+
 def _run(args):
     if not args.no_cache:
         _use_compilation_cache(args.cache)
@@ -123,11 +140,8 @@ def _run(args):
 
 
 def _run_dynamic(args):
-    import dataclasses
-
     import numpy as np
 
-    from jaxnet.case import TimeSettings
     from jaxnet.scene import SceneError
     from jaxnet.solve import dynamics
     from jaxnet.solve.statics import solve
@@ -138,14 +152,7 @@ def _run_dynamic(args):
         raise SceneError(f"{args.scene}: node types with an added mass ({added}) are not yet mapped onto jaxnet's "
                          "nodes for dynamics")
     overrides = _overrides(args)
-    # the time settings: the case's own (a FEMNET case's, a dynamic built-in's) or the defaults, then the
-    # command line's; each step's Newton takes the case's numerics (a FEMNET case's threshold, iterations and
-    # displacement limit are in its time settings already) and the command line's solver flags
-    settings = case.time or TimeSettings()
-    implicit = settings.solver
-    if args.dt is not None:
-        implicit = dataclasses.replace(implicit, time_step=args.dt, min_time_step=min(implicit.min_time_step, args.dt))
-    implicit = dataclasses.replace(implicit, newton=dataclasses.replace(implicit.newton, **overrides))
+    settings, implicit = time_stepping(case, args)
     end_time = args.end if args.end is not None else settings.end_time
     record_every = args.record if args.record is not None else settings.record_every
     if end_time is None:
@@ -175,7 +182,8 @@ def _run_dynamic(args):
     return 0
 
 
-def main(argv=None):
+def argument_parser() -> argparse.ArgumentParser:
+    """The command line's parser (``jaxnet run ...``)."""
     from jaxnet.scenes import BUILT_IN, DEFAULT, DYNAMIC
     from jaxnet.solve.options import Implicit
 
@@ -210,8 +218,13 @@ def main(argv=None):
     run.add_argument("--cache", default=str(default_cache),
                      help=f"directory of compiled programs kept between runs (default: {default_cache})")
     run.add_argument("--no-cache", action="store_true", dest="no_cache", help="compile everything afresh, keep nothing")
-    args = parser.parse_args(argv)
+    return parser
+
+
+def main(argv=None):
     from jaxnet.scene import SceneError
+
+    args = argument_parser().parse_args(argv)
 
     try:
         return _run(args)

@@ -1,6 +1,7 @@
 """`jaxnet run`: the default scene and a scene file, with result.json, VTK and PNG written."""
 
 import json
+import pathlib
 import subprocess
 import sys
 
@@ -129,3 +130,50 @@ def test_dynamic_run_of_a_net_at_rest_stays_at_rest_and_resumes(tmp_path):
     assert np.abs(series["position"] - series["position"][:1]).max() < 1e-6
     np.testing.assert_allclose(series["reaction_total_N"], np.tile([0.0, 0.0, 2.0], (5, 1)), atol=5e-3)
     assert (out / "series.pvd").exists() and (out / "series.npz").exists()
+
+
+def _dynamic_don(tmp_path):
+    """FEMNET's nr_netting made a dynamic case: a time step of 0.05 s, records every 0.1 s to 1 s."""
+    text = (pathlib.Path(__file__).parent / "data" / "femnet" / "nr_netting.don").read_text()
+    for label, value in (("Dynamic: Time step (s):", "0.05"), ("Dynamic: Record time step (s):", "0.1"),
+                         ("Dynamic: End time of record and calculation (s):", "1.0")):
+        head, rest = text.split(label, 1)
+        old = rest.split()[0]
+        text = head + label + rest.replace(old, value, 1)
+    path = tmp_path / "nr_netting_dynamic.don"
+    path.write_text(text)
+    return path
+
+
+def test_a_dynamic_run_takes_the_case_numerics_and_the_solver_flags(tmp_path):
+    """`jaxnet run CASE.don --dynamic`: each time step's Newton takes FEMNET's threshold, iterations and
+    displacement limit from the file, and --tol, --max-iter and --stiffness replace them as in a static run."""
+    from jaxnet.solve.options import TIME_STEP
+
+    path = _dynamic_don(tmp_path)
+    args = cli.argument_parser().parse_args(["run", str(path), "--dynamic"])
+    case, _ = cli._case(args, dynamic=True)
+    settings, implicit = cli.time_stepping(case, args)
+    assert (settings.end_time, settings.record_every, implicit.time_step) == (1.0, 0.1, 0.05)
+    newton = implicit.newton
+    assert (newton.tol, newton.max_iter, newton.max_step) == (0.001, 10000, 10.0)  # the file's numerics
+    assert (newton.damping, newton.line_search, newton.stall_window) == (TIME_STEP.damping, TIME_STEP.line_search, None)
+    flags = ["--tol", "2e-4", "--max-iter", "7", "--stiffness", "autodiff", "--dt", "0.02"]
+    args = cli.argument_parser().parse_args(["run", str(path), "--dynamic", *flags])
+    _, implicit = cli.time_stepping(case, args)
+    newton = implicit.newton
+    assert (newton.tol, newton.max_iter, newton.stiffness, newton.max_step) == (2e-4, 7, "autodiff", 10.0)
+    assert implicit.time_step == 0.02
+
+
+def test_a_dynamic_run_of_a_scene_file_takes_the_solver_flags(tmp_path):
+    from jaxnet.solve.options import TIME_STEP
+
+    path = tmp_path / "scene.json"
+    path.write_text(json.dumps(wall_scene()))
+    args = cli.argument_parser().parse_args(["run", str(path), "--dynamic", "--tol", "5e-5", "--max-iter", "12"])
+    case, _ = cli._case(args, dynamic=True)
+    settings, implicit = cli.time_stepping(case, args)
+    assert settings.end_time is None  # a scene file has no end time: --end must say
+    assert (implicit.newton.tol, implicit.newton.max_iter) == (5e-5, 12)
+    assert implicit.newton.damping == TIME_STEP.damping and implicit.time_step == 0.01

@@ -19,7 +19,7 @@ uses ``jaxnet.solve_static`` with ``throw=False`` (its ``Equilibrium.reason``), 
 ``jaxnet.solve.dynamics.simulate`` (its ``DynamicsError`` message when a step fails below the smallest
 step); a scene refused by validation records its ``SceneError``.
 
-The catalogue is a list of :class:`Case`; ``case.build(size)`` returns the :class:`Problem` at a size:
+The catalogue is a list of :class:`CatalogueCase`; ``case.build(size)`` returns the :class:`Problem` at a size:
 ``"test"`` (the unit tests: seconds), ``"quick"`` (``--quick``: nets of about 10⁴ nodes at most) or
 ``"full"`` (10⁵ nodes). :func:`run_case` runs one case from one start and returns its record (a dict);
 ``tests/test_stability.py`` runs a subset of the catalogue at the test size.
@@ -77,7 +77,7 @@ class Problem:
 
 
 @dataclasses.dataclass(frozen=True)
-class Case:
+class CatalogueCase:
     """One case of the catalogue.
 
     name: unique identifier. family: the issue's family it covers (:data:`FAMILIES`). build: size ->
@@ -148,11 +148,11 @@ def _static(build):
 def _ea_cases():
     cases = []
     for ea in (1e1, 1e2, 1e4, 1e6, 1e8, 1e10):
-        cases.append(Case(
+        cases.append(CatalogueCase(
             f"framed EA {ea:.0e} N", "EA", _static(lambda size, ea=ea: _framed(size, _twine(ea=ea))),
             f"the framed panel (slack twines, EA_c = 0) under its weight and a 5 kg sinker, EA = {ea:g} N"))
     for ea in (1e1, 1e10):
-        cases.append(Case(
+        cases.append(CatalogueCase(
             f"curtain EA {ea:.0e} N", "EA",
             _static(lambda size, ea=ea: _hanging(size, _twine(ea=ea, ea_compression=ea))),
             f"the hanging curtain, twines EA = EA_c = {ea:g} N (headline 5e4 N, sinker bar 1e5 N)"))
@@ -174,32 +174,32 @@ def _slack_cases():
         return eqx.tree_at(lambda s: s.bars.ea_compression, scene, np.zeros_like(scene.bars.ea_compression))
 
     return [
-        Case("loose frame", "slack", _static(loose_frame),
+        CatalogueCase("loose frame", "slack", _static(loose_frame),
              "the framed panel on a frame 70 % of its size: every twine slack at the start; weight and sinker "
              "pull it down until the twines carry them"),
-        Case("loose frame, no load", "slack", _static(lambda size: loose_frame(size, load=False)),
+        CatalogueCase("loose frame, no load", "slack", _static(lambda size: loose_frame(size, load=False)),
              "the same, neutrally buoyant and without sinker: every twine stays slack; the equilibrium is the "
              "whole set of slack shapes (the flat start is one, the perturbed start must find one)"),
-        Case("slack curtain", "slack", _static(lambda size: _hanging(size, _twine())),
+        CatalogueCase("slack curtain", "slack", _static(lambda size: _hanging(size, _twine())),
              "the hanging curtain with twines of EA_c = 0: its free sides gather into slack regions"),
-        Case("slack curtain and sinker bar", "slack", _static(slack_everything),
+        CatalogueCase("slack curtain and sinker bar", "slack", _static(slack_everything),
              "the same with a sinker bar of EA_c = 0: nothing in the net resists compression"),
     ]
 
 
 def _current_cases():
     u_twine = (1.0 / math.sqrt(2.0), 0.0, 1.0 / math.sqrt(2.0))  # the curtain's U twines (U = u + v)
-    cases = [Case("still water", "current", _static(lambda size: _hanging(size)),
+    cases = [CatalogueCase("still water", "current", _static(lambda size: _hanging(size)),
                   "the hanging curtain, no current: the reference of the family")]
     for speed in (0.01, 0.1, 0.5, 1.0, 2.0, 5.0):
-        cases.append(Case(f"current {speed:g} m/s normal", "current",
+        cases.append(CatalogueCase(f"current {speed:g} m/s normal", "current",
                           _static(lambda size, s=speed: _hanging(size, current=s)),
                           f"the hanging curtain in a {speed:g} m/s current normal to it"))
     for speed in (0.01, 1.0, 5.0):
-        cases.append(Case(f"current {speed:g} m/s along a twine", "current",
+        cases.append(CatalogueCase(f"current {speed:g} m/s along a twine", "current",
                           _static(lambda size, s=speed: _hanging(size, current=s, direction=u_twine)),
                           f"the curtain in a {speed:g} m/s current along its U twines (in its plane, 45° up)"))
-    cases.append(Case("current 1 m/s along the headline", "current",
+    cases.append(CatalogueCase("current 1 m/s along the headline", "current",
                       _static(lambda size: _hanging(size, current=1.0, direction=(1.0, 0.0, 0.0))),
                       "the curtain in a 1 m/s current in its plane, along the headline"))
     return cases
@@ -209,17 +209,17 @@ def _opening_cases():
     H = 0.01  # N·m/rad: a twine's opening moment H Δα / l0 ~ 0.3 N, the order of the sinker's tension
     cases = []
     for label, angle in (("nearly closed", 0.05), ("square", math.pi / 4), ("fully open", 1.5)):
-        cases.append(Case(
+        cases.append(CatalogueCase(
             f"cut {label}", "opening",
             _static(lambda size, a=angle: _framed(size, _twine(opening_stiffness=H), opening=a)),
             f"the framed panel cut with meshes of half angle {angle:.3g} rad, opening stiffness {H} N·m/rad, "
             f"rest angle π/4"))
     for label, rest in (("nearly closed", 0.05), ("fully open", math.pi / 2)):
-        cases.append(Case(
+        cases.append(CatalogueCase(
             f"rest angle {label}", "opening",
             _static(lambda size, r=rest: _framed(size, _twine(opening_stiffness=H, rest_angle=r))),
             f"the square-cut framed panel whose meshes rest at half angle {rest:.3g} rad ({H} N·m/rad)"))
-    cases.append(Case(
+    cases.append(CatalogueCase(
         "curtain with opening stiffness", "opening",
         _static(lambda size: _hanging(size, _twine(opening_stiffness=H))),
         f"the slack curtain (EA_c = 0) with opening stiffness {H} N·m/rad holding its meshes open"))
@@ -261,12 +261,12 @@ def _sliver_cases():
         return net.build()
 
     return [
-        Case("sliver strip", "sliver", _static(strip),
+        CatalogueCase("sliver strip", "sliver", _static(strip),
              "a strip 10 000 × 1 twines meshed into 20 triangles of aspect ratio 1e3 in twine coordinates, "
              "hanging between its ends"),
-        Case("sliver strip in a current", "sliver", _static(lambda size: strip(size, 1.0)),
+        CatalogueCase("sliver strip in a current", "sliver", _static(lambda size: strip(size, 1.0)),
              "the same in a 1 m/s current across it"),
-        Case("sliver fan", "sliver", _static(fan),
+        CatalogueCase("sliver fan", "sliver", _static(fan),
              "six triangles (0,0) (1000,0) (500,1) in twine coordinates (aspect 1e3) around a free hub, "
              "their rims held, drawn flat: the twines across each sliver (one twine length from rim to hub in "
              "twine coordinates) are drawn 866 times their length, the hub held by six enormous tensions in "
@@ -297,9 +297,9 @@ def _knot_cases():
         return net.build()
 
     return [
-        Case("knots: frame pushes meshes closed", "knot", _static(closed_frame),
+        CatalogueCase("knots: frame pushes meshes closed", "knot", _static(closed_frame),
              "the framed panel drawn with meshes at half angle 0.1 rad, knots touching below 0.3 rad"),
-        Case("knots: pulled panel", "knot", _static(pulled),
+        CatalogueCase("knots: pulled panel", "knot", _static(pulled),
              "a panel held along its top, 50 N pulling its bottom side: meshes close onto 1 cm knots"),
     ]
 
@@ -323,7 +323,7 @@ def _catch_cases():
 
     cases = []
     for label, fraction in (("tiny", 1e-5), ("small", 1e-2), ("c2's", 0.03), ("half", 0.5), ("overfull", 2.0)):
-        cases.append(Case(f"catch {label}", "catch", lambda size, f=fraction: Problem(build(size, f)),
+        cases.append(CatalogueCase(f"catch {label}", "catch", lambda size, f=fraction: Problem(build(size, f)),
                           f"the built-in cod-end (quarter model, 1.5 m/s, knots 1 cm) holding {fraction:g} of "
                           "the most its netting could hold as a tube" + (" (more than it can: the catch front "
                           "stops at its opening)" if fraction > 1 else "")))
@@ -338,10 +338,10 @@ def _time_step_cases():
         scene = _hanging(size, twine, current=0.5, meshes=_size(size, 6, 10, 20), step=0.1)
         return Problem(scene, dynamic=Dynamic(dynamics.Implicit(time_step=dt, min_time_step=min(dt, 1e-7)), 3 * dt))
 
-    cases = [Case(f"time step {dt:g} s", "time step", lambda size, dt=dt: build(size, dt),
+    cases = [CatalogueCase(f"time step {dt:g} s", "time step", lambda size, dt=dt: build(size, dt),
                   f"dynamics: the curtain, a 0.5 m/s current switched on at t = 0, three implicit steps of {dt:g} s")
              for dt in (1e-5, 1e-3, 1e-1, 1.0, 10.0)]
-    cases += [Case(f"time step {dt:g} s, EA 1e10 N", "time step", lambda size, dt=dt: build(size, dt, 1e10),
+    cases += [CatalogueCase(f"time step {dt:g} s, EA 1e10 N", "time step", lambda size, dt=dt: build(size, dt, 1e10),
                    f"the same with twines of EA = EA_c = 1e10 N (periods of microseconds), steps of {dt:g} s")
               for dt in (1e-5, 10.0)]
     return cases
@@ -356,7 +356,7 @@ def _size_cases():
         # the mesher's lattice holds about 1.15 nodes per step² (validation/bench_statics.py)
         return framed_panel(meshes=100, step=width / math.sqrt(n / 1.15), twine=_twine()).scene
 
-    return [Case("large framed panel", "size", _static(framed),
+    return [CatalogueCase("large framed panel", "size", _static(framed),
                  "the framed panel (100 × 100 meshes, slack twines, 5 kg sinker) of 10⁴ nodes (quick) or 10⁵ "
                  "(full: about 8 minutes for its two runs on 2 cores)")]
 
@@ -384,11 +384,11 @@ def _hexagonal_cases():
         return net.build()
 
     return [
-        Case("hexagonal curtain", "hexagonal", _static(lambda size: panel(size, False)),
+        CatalogueCase("hexagonal curtain", "hexagonal", _static(lambda size: panel(size, False)),
              "a hexagonal-mesh panel (l, m, n = 2, 2, 2.4 cm) hanging from its top, 5 N along its bottom"),
-        Case("hexagonal framed", "hexagonal", _static(lambda size: panel(size, True)),
+        CatalogueCase("hexagonal framed", "hexagonal", _static(lambda size: panel(size, True)),
              "a horizontal hexagonal-mesh panel held along its border, a 2 kg sinker at its centre"),
-        Case("hexagonal framed EA 1e10 N", "hexagonal", _static(lambda size: panel(size, True, 1e10)),
+        CatalogueCase("hexagonal framed EA 1e10 N", "hexagonal", _static(lambda size: panel(size, True, 1e10)),
              "the same with twines of EA = 1e10 N"),
     ]
 
@@ -409,14 +409,14 @@ def _bending_cases():
         return net.build()
 
     return [
-        Case("bending, framed", "bending", _static(lambda size: _framed(size, _twine(bending_stiffness=1e-4))),
+        CatalogueCase("bending, framed", "bending", _static(lambda size: _framed(size, _twine(bending_stiffness=1e-4))),
              "the framed panel with twine bending EI = 1e-4 N·m²"),
-        Case("bending shelf, soft", "bending", _static(lambda size: shelf(size, 1e-5)),
+        CatalogueCase("bending shelf, soft", "bending", _static(lambda size: shelf(size, 1e-5)),
              "a horizontal panel held along one side, a 1 kg lead line along the opposite side, EI = 1e-5 "
              "N·m², knots of 5 mm (its meshes close near the held side, down to the knots)"),
-        Case("bending shelf, stiff", "bending", _static(lambda size: shelf(size, 1e-1)),
+        CatalogueCase("bending shelf, stiff", "bending", _static(lambda size: shelf(size, 1e-1)),
              "the same with EI = 0.1 N·m²"),
-        Case("bending shelf, no knots", "bending", _static(lambda size: shelf(size, 1e-1, knot=0.0)),
+        CatalogueCase("bending shelf, no knots", "bending", _static(lambda size: shelf(size, 1e-1, knot=0.0)),
              "the stiff shelf without knots: meshes may close completely, and a triangle of a closed mesh has "
              "no area, no normal and so no fold angle; the bending energy is continuous there but not "
              "differentiable (the out-of-plane turn of a twine lying along the hinge), which a Newton "
@@ -441,7 +441,7 @@ def _femnet_cases():
         "links_hub": "a square of netting written as four triangular panels around a free hub",
         "links_hub_single": "the same net as one panel",
     }
-    return [Case(f"FEMNET {name}", "FEMNET", build(name), note) for name, note in notes.items()]
+    return [CatalogueCase(f"FEMNET {name}", "FEMNET", build(name), note) for name, note in notes.items()]
 
 
 def _fixing_cases():
@@ -465,16 +465,16 @@ def _fixing_cases():
         return net.build()
 
     return [
-        Case("held at one corner", "fixing", _static(one_corner),
+        CatalogueCase("held at one corner", "fixing", _static(one_corner),
              "a panel held at a single node, in a 0.5 m/s current: it must swing through 90° about that node"),
-        Case("held nowhere", "fixing", _static(unheld),
+        CatalogueCase("held nowhere", "fixing", _static(unheld),
              "a panel with no fixing has no equilibrium (it drifts as a rigid body): refused before solving",
              expect=(REFUSED,)),
     ]
 
 
 def catalogue():
-    """Every case of the suite, family by family (a list of :class:`Case`)."""
+    """Every case of the suite, family by family (a list of :class:`CatalogueCase`)."""
     return (_ea_cases() + _slack_cases() + _current_cases() + _opening_cases() + _sliver_cases() + _knot_cases()
             + _catch_cases() + _time_step_cases() + _size_cases() + _hexagonal_cases() + _bending_cases()
             + _femnet_cases() + _fixing_cases())
@@ -582,7 +582,7 @@ def _solve_dynamic(problem: Problem, x0):
                 nan=not _finite(state.x, state.v, state.force, state.residual_N, *arrays)), np.asarray(state.x)
 
 
-def run_case(case: Case, start: str, size: str):
+def run_case(case: CatalogueCase, start: str, size: str):
     """Build ``case`` at ``size`` and run it from ``start`` ("flat" or "perturbed"): its record (a dict:
     case, family, start, nodes, dof, sigma_m (the perturbation, m), converged, reason, expected (bool: the
     outcome is one the case accepts), iterations, residual_N, tol, worst_node, wall_s (build and solve),
@@ -610,7 +610,7 @@ def run_case(case: Case, start: str, size: str):
     return record
 
 
-def accepted(case: Case, record):
+def accepted(case: CatalogueCase, record):
     """True when the run's outcome is one the case accepts and nothing non-finite appeared: it converged
     (statics) or reached its end time (dynamics) where the case expects that, or stopped with a reason
     the case names."""

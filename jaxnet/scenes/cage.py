@@ -29,7 +29,7 @@ import numpy as np
 
 from jaxnet import forcing, waves
 from jaxnet.case import Case, TimeSettings, from_net
-from jaxnet.net import Net, Rope, Twine
+from jaxnet.net import Net, PanelRef, Rope, Twine
 from jaxnet.scene import Environment
 from jaxnet.solve.options import Implicit
 
@@ -102,17 +102,16 @@ def cage_in_waves(wave_height: float = 2.0, wave_period: float = 6.0, water_dept
     unknown = set(cage) - set(options)
     if unknown:
         raise TypeError(f"cage_in_waves: unknown cage arguments {sorted(unknown)} (those of fish_cage: {sorted(options)})")
-    net = _describe(current=current, **{**options, **cage})
+    options = {**options, **cage}
+    net = _describe(current=current, **options)
     env = net.environment
     net.environment = eqx.tree_at(lambda e: e.waves, env, waves.Airy(wave_height, wave_period, direction=(1.0, 0.0, 0.0),
                                                                      depth=water_depth, surface_level=env.surface_level),
                                   is_leaf=lambda v: v is None)
+    for k in range(options["sides"]):
+        net.fix(PanelRef(f"wall {k}").side(0), axes="z")  # the collar follows the heave: held, then moved
     scene = net.build()
-    fixed = np.asarray(scene.nodes.fixed)
-    collar = np.flatnonzero(fixed[:, 0] & fixed[:, 1])
-    fixed = fixed.copy()
-    fixed[collar, 2] = True
-    scene = eqx.tree_at(lambda s: s.nodes.fixed, scene, fixed)
+    collar = np.flatnonzero(np.asarray(scene.nodes.fixed).all(axis=1))
     # the heave of the surface at the centre: η = H/2 cos(-ωt) = H/2 sin(ωt + π/2)
     heave = forcing.Harmonic(amplitude=(0.0, 0.0, 0.5 * wave_height), period=wave_period, phase=np.pi / 2, ramp=ramp)
     loading = forcing.Loading(motions=(forcing.PrescribedMotion(collar, heave),))
