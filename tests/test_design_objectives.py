@@ -20,7 +20,7 @@ import pytest
 
 import jaxnet  # noqa: F401  (float64)
 from jaxnet import figures
-from jaxnet.design import objectives as ob
+from jaxnet.design import constraints as cs, objectives as ob
 from jaxnet.net import HexTwine, Net, Twine
 from jaxnet.scene import Environment
 from jaxnet.scenes import codend, fish_cage, hanging_panel
@@ -324,32 +324,32 @@ def test_weighted_constraints_and_penalty(panel):
     scene, _, o = panel
     area = float(evaluate(ob.netting_area(), o))
     mass = float(evaluate(ob.material(), o))
-    both = ob.weighted(area=(2.0, ob.netting_area()), mass=ob.material())
+    both = cs.weighted(area=(2.0, ob.netting_area()), mass=ob.material())
     np.testing.assert_allclose(float(evaluate(both, o)), 2 * area + mass, rtol=1e-12)
     np.testing.assert_allclose([float(v) for v in both.parts(o).values()], [area, mass], rtol=1e-12)
 
-    above = ob.Constraint(ob.netting_area(), upper=area / 4, scale=area / 10)
-    below = ob.Constraint(ob.netting_area(), lower=area * 2)
-    inside = ob.Constraint(ob.netting_area(), lower=0.0, upper=area * 2)
+    above = cs.Constraint(ob.netting_area(), upper=area / 4, scale=area / 10)
+    below = cs.Constraint(ob.netting_area(), lower=area * 2)
+    inside = cs.Constraint(ob.netting_area(), lower=0.0, upper=area * 2)
     np.testing.assert_allclose(float(above.violation(o)), 0.75 * area, rtol=1e-12)
     np.testing.assert_allclose(float(above.penalty(o)), 7.5**2, rtol=1e-12)
     np.testing.assert_allclose(float(below.violation(o)), area, rtol=1e-12)
     assert float(inside.violation(o)) == 0.0 and float(inside.penalty(o)) == 0.0
-    objective = ob.penalised(ob.material(), [above, below, inside], weight=3.0)
+    objective = cs.penalised(ob.material(), [above, below, inside], weight=3.0)
     np.testing.assert_allclose(float(evaluate(objective, o)), mass + 3.0 * (7.5**2 + area**2), rtol=1e-12)
     np.testing.assert_allclose(float(objective.violation(o)), 7.5 + area, rtol=1e-12)
 
     # a penalty of the positions: gradient vs central differences (the exterior penalty is C¹)
     x = np.asarray(o.x)
-    near = ob.Constraint(ob.shape_distance(x[:3] + 0.01, nodes=[0, 1, 2]), upper=0.005)
+    near = cs.Constraint(ob.shape_distance(x[:3] + 0.01, nodes=[0, 1, 2]), upper=0.005)
     assert float(near.violation(o)) > 0.01
-    check_position_gradient(ob.penalised(ob.shape_distance(x + 0.02, squared=True), near, weight=10.0), o, seed=5,
+    check_position_gradient(cs.penalised(ob.shape_distance(x + 0.02, squared=True), near, weight=10.0), o, seed=5,
                             h=1e-6, rtol=1e-7)
 
 
 def test_bounds_projection_and_violation():
     theta = {"cut": np.array([-1.0, 0.5, 3.0]), "diameter": 2e-3, "ea": np.array([[100.0, 5000.0]])}
-    box = ob.Bounds(lower={"cut": 0.0, "diameter": 1e-3, "ea": None},
+    box = cs.Bounds(lower={"cut": 0.0, "diameter": 1e-3, "ea": None},
                     upper={"cut": np.array([1.0, 1.0, 2.0]), "diameter": None, "ea": 1000.0})
     projected = box.project(theta)
     np.testing.assert_array_equal(projected["cut"], [0.0, 0.5, 2.0])
@@ -362,31 +362,31 @@ def test_bounds_projection_and_violation():
     np.testing.assert_array_equal(g["cut"], [-1.0, 0.0, 1.0])
     np.testing.assert_array_equal(g["ea"], [[0.0, 1.0]])
     # one number for every leaf
-    np.testing.assert_array_equal(ob.Bounds(lower=0.0).project(theta)["cut"], [0.0, 0.5, 3.0])
+    np.testing.assert_array_equal(cs.Bounds(lower=0.0).project(theta)["cut"], [0.0, 0.5, 3.0])
     # a partial bound: the keys left out are unbounded; nested dicts, as a design space's θ
     nested = {"twine": {"diameter": np.array([5e-4, 2e-3]), "l0": 0.02}, "cut": np.array([-1.0, 3.0])}
-    partial = ob.Bounds(lower={"twine": {"diameter": 1e-3}}, upper={"cut": 2.0})
+    partial = cs.Bounds(lower={"twine": {"diameter": 1e-3}}, upper={"cut": 2.0})
     np.testing.assert_array_equal(partial.project(nested)["twine"]["diameter"], [1e-3, 2e-3])
     np.testing.assert_array_equal(partial.project(nested)["cut"], [-1.0, 2.0])
     np.testing.assert_allclose(float(partial.violation(nested)), 5e-4 + 1.0, rtol=1e-15)
     with pytest.raises(ValueError, match=r"Bounds: lower\['twine'\]\['mesh'\] are not design parameters"):
-        ob.Bounds(lower={"twine": {"mesh": 1.0}}).project(nested)
+        cs.Bounds(lower={"twine": {"mesh": 1.0}}).project(nested)
     with pytest.raises(ValueError, match="structure"):
-        ob.Bounds(lower=[0.0, 1.0]).project(theta)
+        cs.Bounds(lower=[0.0, 1.0]).project(theta)
     with pytest.raises(ValueError, match=r"lower > upper for \['cut'\]"):
-        ob.Bounds(lower={"cut": 2.5, "diameter": 0.0, "ea": 0.0},
+        cs.Bounds(lower={"cut": 2.5, "diameter": 0.0, "ea": 0.0},
                   upper={"cut": 1.0, "diameter": 1.0, "ea": 1.0}).project(theta)
     with pytest.raises(ValueError, match=r"upper bound of \['cut'\] has shape \(2,\)"):
-        ob.Bounds(upper={"cut": np.ones(2), "diameter": None, "ea": None}).project(theta)
+        cs.Bounds(upper={"cut": np.ones(2), "diameter": None, "ea": None}).project(theta)
     with pytest.raises(ValueError, match=r"Bounds: lower\['ea'\] is NaN"):
-        ob.Bounds(lower={"cut": 0.0, "diameter": 0.0, "ea": np.array([np.nan])})
+        cs.Bounds(lower={"cut": 0.0, "diameter": 0.0, "ea": np.array([np.nan])})
 
 
 def test_figures_vmap_over_a_batch_of_positions_and_designs(panel):
     scene, _, o = panel
     drag, tension, shape = ob.drag(direction=scene.environment.current_direction), ob.max_tension(0.5), \
         ob.shape_distance(np.asarray(o.x))
-    objective = ob.weighted(drag=drag, tension=(0.1, tension), shape=(10.0, shape))
+    objective = cs.weighted(drag=drag, tension=(0.1, tension), shape=(10.0, shape))
     xs = o.x[None] + 0.01 * jnp.asarray(np.random.default_rng(6).normal(size=(3,) + o.x.shape))
     scales = jnp.array([0.5, 1.0, 2.0])  # twine diameters D·s
 
@@ -418,11 +418,11 @@ def test_bad_settings_name_the_culprit(panel):
         outward = np.ones(scene.netting.vertices.shape[0])
         ob.volume()(ob.Outcome(o.x, replace(scene, "netting", outward=outward), o.model))
     with pytest.raises(ValueError, match="Constraint: lower 2.0 > upper 1.0"):
-        ob.Constraint(ob.material(), lower=2.0, upper=1.0)
+        cs.Constraint(ob.material(), lower=2.0, upper=1.0)
     with pytest.raises(ValueError, match="Constraint: give lower"):
-        ob.Constraint(ob.material())
+        cs.Constraint(ob.material())
     with pytest.raises(ValueError, match="outcome: x has 3 nodes"):
         ob.outcome(np.zeros((3, 3)), scene)
     with pytest.raises(ValueError, match="weighted: mass is not a figure"):
-        ob.weighted(mass=(1.0, "material"))
+        cs.weighted(mass=(1.0, "material"))
 

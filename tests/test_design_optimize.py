@@ -14,7 +14,7 @@ import optax
 import pytest
 
 import jaxnet  # noqa: F401
-from jaxnet.design import objectives, optimize, space as space_lib
+from jaxnet.design import constraints, objectives, optimize, space as space_lib
 from jaxnet.scene import Environment
 from jaxnet.scenes.panel import hanging_panel
 from jaxnet.solve import implicit
@@ -46,11 +46,11 @@ def run(out):
     space, reference, target, target_x = problem()
     twine = float(space.twine_length(reference)["netting"])
     # the material may grow by 20 % at most (the target's grows by 2/16 = 12.5 %: feasible)
-    material = objectives.Constraint(objectives.twine_length(), upper=1.2 * twine)
-    objective = objectives.penalised(objectives.shape_distance(target_x), [material], weight=10.0)
+    material = constraints.Constraint(objectives.twine_length(), upper=1.2 * twine)
+    objective = constraints.penalised(objectives.shape_distance(target_x), [material], weight=10.0)
     start = {"cut": {"netting": reference["cut"]["netting"]}, "twine_diameter": {"netting": reference["twine_diameter"]["netting"]}}
     diameter = float(reference["twine_diameter"]["netting"])
-    bounds = objectives.Bounds(upper={"cut": {"netting": None}, "twine_diameter": {"netting": 1.25 * diameter}})
+    bounds = constraints.Bounds(upper={"cut": {"netting": None}, "twine_diameter": {"netting": 1.25 * diameter}})
     result = optimize.optimize(space, objective, start, optimizer=optax.adam(0.05), steps=STEPS, bounds=bounds,
                                out=out, progress=False)
     return result, objective, twine, diameter

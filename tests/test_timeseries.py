@@ -17,6 +17,7 @@ import pytest
 import jaxnet  # noqa: F401  (float64)
 from jaxnet import figures as figures_lib
 from jaxnet.io import timeseries as ts
+from jaxnet.io.progress import Progress
 from jaxnet.scene import Bars, Netting, Nodes, Scene
 
 
@@ -234,14 +235,14 @@ def test_resume_refuses_the_series_of_another_scene(tmp_path):
 
 def test_progress_shows_time_step_rate_and_mean_newton_iterations():
     out = io.StringIO()
-    with ts.Progress(0.0, 2.0, file=out, mininterval=0, steps0=10) as bar:
+    with Progress(0.0, 2.0, file=out, mininterval=0, steps0=10) as bar:
         for step, (t, its) in enumerate([(0.5, 3), (1.0, 5), (1.5, 6)], start=11):
             bar.update(t, step, its)
         assert bar.newton_per_step == 14 / 3
         assert bar.steps_per_second > 0
     text = out.getvalue()
     assert "t = 1.5/2 s" in text and "4.67 Newton it./step" in text and "steps/s" in text
-    quiet = ts.Progress(0.0, 1.0, disable=True, file=out)
+    quiet = Progress(0.0, 1.0, disable=True, file=out)
     quiet.update(0.5, 2, 7)
     quiet.close()
     assert quiet.newton_per_step == 3.5 and out.getvalue() == text

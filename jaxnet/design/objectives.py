@@ -1,4 +1,4 @@
-"""Objectives and constraints of a net design: differentiable figures of an equilibrium, and how to combine them.
+"""The figures of a net design: differentiable scalars of an equilibrium (drag, volume, opening, tension, material).
 
 Gradient-based design needs scalars of an equilibrium x*(θ) whose gradients flow both into the
 positions x (and from there, by the implicit function theorem of :mod:`jaxnet.solve.implicit`, into θ) and
@@ -19,9 +19,9 @@ Figures (factories return the Modules; units in each docstring):
   * :func:`drag` (N), :func:`volume` (m³), :func:`opening` (m²), :func:`shape_distance` (m or m²),
     :func:`max_tension` (N, a smooth upper bound of the largest tension), :func:`twine_length` (m),
     :func:`material` (kg, or a cost), :func:`netting_area` (m²);
-  * :func:`weighted` (a weighted sum), :class:`Constraint` (value, violation, exterior penalty),
-    :func:`penalised` (objective + weight × penalties);
-  * :class:`Bounds`: box bounds on a pytree of design parameters, with projection and violation.
+
+Figures combine into objectives and constraints in :mod:`jaxnet.design.constraints` (weighted sums,
+constraints with their penalties, box bounds on the design parameters).
 
 Bad settings raise ValueError naming the parameter when the figure is made, or, for what needs the scene
 (node indices, a missing enclosure), when it is first called, i.e. while tracing, before any compilation.
@@ -30,7 +30,7 @@ Bad settings raise ValueError naming the parameter when the figure is made, or, 
 from __future__ import annotations
 
 import math
-from typing import Any, Callable
+from typing import Any
 
 import equinox as eqx
 import jax
@@ -111,8 +111,9 @@ def _nodes_of(idx, x, what):
     return np.asarray(idx)
 
 
-def _finite_number(value, what, positive=False, nonnegative=False):
-    """A concrete finite float (a tracer passes unchecked: it was checked when the figure was made)."""
+def finite_number(value, what, positive=False, nonnegative=False):
+    """A concrete finite float, or a ValueError naming ``what`` (a tracer passes unchecked: it was checked when
+    the figure was made)."""
     if isinstance(value, jax.core.Tracer):
         return value
     v = float(value)
@@ -260,7 +261,7 @@ def opening(nodes, axis=None, center=None, symmetry=1.0) -> Opening:
     idx = _node_indices(nodes, "opening: nodes", 2 if center is not None else 3)
     axis = None if axis is None else jnp.asarray(_vector(axis, "opening: axis", unit=True))
     center = None if center is None else jnp.asarray(_vector(center, "opening: center"))
-    return Opening(idx, axis, center, _finite_number(symmetry, "opening: symmetry", positive=True))
+    return Opening(idx, axis, center, finite_number(symmetry, "opening: symmetry", positive=True))
 
 
 class ShapeDistance(Figure):
@@ -361,7 +362,7 @@ def max_tension(softness=1.0, families=TENSION_FAMILIES) -> MaxTension:
     unknown = [f for f in families if f not in TENSION_FAMILIES]
     if unknown or not families:
         raise ValueError(f"max_tension: families must be among {TENSION_FAMILIES}, got {unknown or families!r}")
-    return MaxTension(_finite_number(softness, "max_tension: softness", positive=True), families)
+    return MaxTension(finite_number(softness, "max_tension: softness", positive=True), families)
 
 
 # -- material --------------------------------------------------------------------------------------
@@ -419,7 +420,7 @@ def material(price_per_kg=None, families=("netting", "hexagonal")) -> Material:
     """Mass (kg) of the netting's twine, Σ |d| l0 π D²/4 ρ (the dry mass behind the weight of 4.277); with
     ``price_per_kg`` (currency/kg), its cost. ``families``: add "bars" to count the ropes (rest length ×
     π D²/4 × ρ). Smooth in the design (D, ρ, l0, twine coordinates); independent of the positions."""
-    price = None if price_per_kg is None else _finite_number(price_per_kg, "material: price_per_kg")
+    price = None if price_per_kg is None else finite_number(price_per_kg, "material: price_per_kg")
     return Material("mass", price, _material_families(families, "material"))
 
 
@@ -447,197 +448,3 @@ def netting_area(deployed=False) -> NettingArea:
     surface of the netting at the positions, Σ |12 ^ 13|/2 (4.18).
     """
     return NettingArea(bool(deployed))
-
-
-# -- composition ---------------------------------------------------------------------------------
-
-
-class Weighted(Figure):
-    """Σ weight × figure; see :func:`weighted`."""
-
-    figures: dict
-    weights: dict
-
-    def __call__(self, o: Outcome):
-        return sum(self.weights[k] * self.figures[k](o) for k in sorted(self.figures))
-
-    def parts(self, o: Outcome) -> dict:
-        """Each named figure's value (unweighted), for reports and histories."""
-        return {k: self.figures[k](o) for k in sorted(self.figures)}
-
-
-def weighted(**parts) -> Weighted:
-    """A weighted sum of named figures: ``weighted(drag=(1.0, drag()), cost=(0.1, material(2.5)))``; a bare
-    figure has weight 1. Weights are leaves (traceable); mind the units (N + kg: the weight converts)."""
-    if not parts:
-        raise ValueError("weighted: give at least one figure")
-    figures, weights = {}, {}
-    for name, part in parts.items():
-        w, f = part if isinstance(part, tuple) else (1.0, part)
-        if not callable(f):
-            raise ValueError(f"weighted: {name} is not a figure (a callable of an Outcome): {f!r}")
-        figures[name], weights[name] = f, _finite_number(w, f"weighted: weight of {name}")
-    return Weighted(figures, weights)
-
-
-class Constraint(Figure):
-    """lower ≤ figure ≤ upper (None: that side is free); called, it gives its penalty.
-
-    figure: any figure; lower, upper: bounds in the figure's units; scale: a typical size of a violation,
-    in the same units, making penalties of different units comparable (1 by default).
-    """
-
-    figure: Callable
-    lower: float | None = None
-    upper: float | None = None
-    scale: float = 1.0
-
-    def __check_init__(self):
-        if not callable(self.figure):
-            raise ValueError(f"Constraint: figure is not a callable of an Outcome: {self.figure!r}")
-        if self.lower is None and self.upper is None:
-            raise ValueError("Constraint: give lower, upper or both")
-        lo = None if self.lower is None else _finite_number(self.lower, "Constraint: lower")
-        hi = None if self.upper is None else _finite_number(self.upper, "Constraint: upper")
-        if isinstance(lo, float) and isinstance(hi, float) and lo > hi:
-            raise ValueError(f"Constraint: lower {lo} > upper {hi}")
-        _finite_number(self.scale, "Constraint: scale", positive=True)
-
-    def value(self, o: Outcome):
-        return self.figure(o)
-
-    def violation(self, o: Outcome):
-        """How far outside [lower, upper] the figure is (its units, >= 0; 0 when satisfied)."""
-        v = self.figure(o)
-        out = jnp.zeros_like(v)
-        if self.lower is not None:
-            out = out + jnp.maximum(self.lower - v, 0.0)
-        if self.upper is not None:
-            out = out + jnp.maximum(v - self.upper, 0.0)
-        return out
-
-    def penalty(self, o: Outcome):
-        """Exterior quadratic penalty (violation / scale)², dimensionless: 0 inside, C¹ at the bounds."""
-        return (self.violation(o) / self.scale) ** 2
-
-    def __call__(self, o: Outcome):
-        return self.penalty(o)
-
-
-class Penalised(Figure):
-    """objective + weight × Σ penalties; see :func:`penalised`."""
-
-    objective: Callable
-    constraints: tuple
-    weight: float
-
-    def __call__(self, o: Outcome):
-        return self.objective(o) + self.weight * sum(c.penalty(o) for c in self.constraints)
-
-    def violation(self, o: Outcome):
-        """Σ violation / scale over the constraints (dimensionless, 0 when all are met), for histories."""
-        return sum(c.violation(o) / c.scale for c in self.constraints)
-
-
-def penalised(objective, constraints, weight=1.0) -> Penalised:
-    """The exterior penalty method: objective(o) + weight × Σ_c (violation_c / scale_c)². Raise ``weight``
-    over an optimisation to drive the violations to 0 (the minimiser of a fixed weight violates by O(1/weight))."""
-    constraints = tuple(constraints) if not isinstance(constraints, Constraint) else (constraints,)
-    bad = [c for c in constraints if not isinstance(c, Constraint)]
-    if bad:
-        raise ValueError(f"penalised: constraints must be Constraint objects, got {bad[0]!r}")
-    if not callable(objective):
-        raise ValueError(f"penalised: objective is not a figure: {objective!r}")
-    return Penalised(objective, constraints, _finite_number(weight, "penalised: weight", nonnegative=True))
-
-
-# -- bounds on design parameters -----------------------------------------------------------------
-
-
-def _one_for_all(bound):
-    """None or a single number: the same bound for every leaf of θ."""
-    return bound is None or isinstance(bound, (int, float, np.number)) or (
-        isinstance(bound, (np.ndarray, jax.Array)) and bound.ndim == 0)
-
-
-class Bounds(eqx.Module):
-    """Box bounds on a pytree θ of design parameters (e.g. the design of :mod:`jaxnet.design.space`).
-
-    lower, upper: None (unbounded), a number (the same for every leaf of θ), or a pytree of θ's structure
-    whose leaves are None (that leaf unbounded), numbers or arrays broadcastable to the leaf; where θ has a
-    dict, the bound's dict may leave keys out (unbounded) or give one number for a whole subtree, e.g.
-    ``Bounds(lower={"twine": {"diameter": 1e-3}}, upper=1e6)`` for θ = {"cut": ..., "twine": {...}}.
-    """
-
-    lower: Any = None
-    upper: Any = None
-
-    def __check_init__(self):
-        for name in ("lower", "upper"):
-            for path, leaf in jax.tree_util.tree_flatten_with_path(getattr(self, name))[0]:
-                if not isinstance(leaf, jax.core.Tracer) and np.any(np.isnan(np.asarray(leaf, dtype=float))):
-                    raise ValueError(f"Bounds: {name}{jax.tree_util.keystr(path)} is NaN")
-
-    def _pairs(self, theta):
-        """Per leaf of θ: (path name, leaf, lower or None, upper or None), checked."""
-        paths_leaves, treedef = jax.tree_util.tree_flatten_with_path(theta)
-
-        def complete(bound, part, name, path=""):
-            """The bound spread over θ's subtree ``part``: a number or None for all of its leaves, dicts key by key."""
-            if _one_for_all(bound):
-                return jax.tree.map(lambda _: bound, part)
-            if isinstance(bound, dict) and isinstance(part, dict):
-                extra = sorted(set(bound) - set(part), key=str)
-                if extra:
-                    raise ValueError(f"Bounds: {name}{path}{extra} are not design parameters (θ{path} has "
-                                     f"{sorted(part, key=str)})")
-                return {k: complete(bound.get(k), v, name, f"{path}[{k!r}]") for k, v in part.items()}
-            return bound
-
-        def per_leaf(bound, name):
-            try:
-                return treedef.flatten_up_to(complete(bound, theta, name))
-            except (ValueError, TypeError) as e:
-                if str(e).startswith("Bounds:"):
-                    raise
-                raise ValueError(f"Bounds: {name} does not match the structure of the design parameters: {e}") from None
-
-        out = []
-        for (path, leaf), lo, hi in zip(paths_leaves, per_leaf(self.lower, "lower"), per_leaf(self.upper, "upper")):
-            where = jax.tree_util.keystr(path) or "θ"
-            for b, side in ((lo, "lower"), (hi, "upper")):
-                if b is not None:
-                    try:
-                        np.broadcast_shapes(np.shape(b), np.shape(leaf))
-                    except ValueError:
-                        raise ValueError(f"Bounds: {side} bound of {where} has shape {np.shape(b)}, the parameter "
-                                         f"{np.shape(leaf)}") from None
-            concrete = not any(isinstance(b, jax.core.Tracer) for b in (lo, hi))
-            if lo is not None and hi is not None and concrete and np.any(np.asarray(lo) > np.asarray(hi)):
-                raise ValueError(f"Bounds: lower > upper for {where}")
-            out.append((where, leaf, lo, hi))
-        return out, treedef
-
-    def project(self, theta):
-        """θ clipped into the box, leaf by leaf (the projection of projected-gradient methods)."""
-        pairs, treedef = self._pairs(theta)
-        leaves = []
-        for _, leaf, lo, hi in pairs:
-            v = jnp.asarray(leaf)
-            if lo is not None:
-                v = jnp.maximum(v, lo)
-            if hi is not None:
-                v = jnp.minimum(v, hi)
-            leaves.append(v)
-        return jax.tree.unflatten(treedef, leaves)
-
-    def violation(self, theta):
-        """Σ over all entries of θ of the distance outside the box (θ's units, >= 0; 0 inside)."""
-        total = 0.0
-        for _, leaf, lo, hi in self._pairs(theta)[0]:
-            v = jnp.asarray(leaf)
-            if lo is not None:
-                total = total + jnp.sum(jnp.maximum(lo - v, 0.0))
-            if hi is not None:
-                total = total + jnp.sum(jnp.maximum(v - hi, 0.0))
-        return jnp.asarray(total)

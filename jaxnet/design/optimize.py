@@ -14,7 +14,7 @@ only differences of twine coordinates matter) and |θ₀| (a relative change) fo
 Robustness. A step to a design whose equilibrium does not converge (a cut that folds the net, a twine made
 too thin to carry the load) is not taken: the step is halved, up to ``backtracks`` times, and the loop stops
 with that reason if no half of it converges. The optimiser's state is kept from before the rejected step.
-Bounds (:class:`jaxnet.design.objectives.Bounds`) are enforced by projection after each step.
+Bounds (:class:`jaxnet.design.constraints.Bounds`) are enforced by projection after each step.
 
 The end. The continuous optimum's cut is generally not on whole meshes: the result also holds the design
 rounded to whole meshes (:meth:`jaxnet.design.space.DesignSpace.rounded`: legal cutting rates on every side),
@@ -37,7 +37,7 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
-from jaxnet.design import objectives as objectives_lib
+from jaxnet.design import constraints as constraints_lib, objectives as objectives_lib
 from jaxnet.solve import implicit, programs, results, statics
 from jaxnet.solve.options import DIFFERENTIABLE, Newton
 
@@ -99,14 +99,14 @@ def optimize(space, objective, theta, optimizer=None, steps=50, bounds=None, sca
 
     Args:
       space: a :class:`jaxnet.design.space.DesignSpace`.
-      objective: a figure (:mod:`jaxnet.design.objectives`): Outcome -> scalar, e.g. ``penalised(volume...)``;
+      objective: a figure (:mod:`jaxnet.design.objectives`): Outcome -> scalar, e.g. ``constraints.penalised(volume...)``;
         a figure with a ``violation`` (a penalised objective) reports it in the history.
       theta: the starting design: the families and entries to optimise (a subset of ``space.initial()``);
         the others stay at the reference.
       optimizer: an optax GradientTransformation (default ``optax.adam(0.05)`` on the scaled parameters);
         one that needs the value and a value function (``optax.lbfgs()``) gets them.
       steps: the most iterations. gtol: stop when the largest gradient component (scaled) is below it.
-      bounds: :class:`jaxnet.design.objectives.Bounds` on θ (its units), enforced by projection.
+      bounds: :class:`jaxnet.design.constraints.Bounds` on θ (its units), enforced by projection.
       scale: the optimiser's unit per leaf of θ (default :func:`default_scale`).
       solver: the equilibrium solves' options (default :data:`jaxnet.solve.options.DIFFERENTIABLE`).
       backtracks: halvings of a step whose equilibrium does not converge before the loop stops.
@@ -124,7 +124,7 @@ def optimize(space, objective, theta, optimizer=None, steps=50, bounds=None, sca
     model = structure.model
     optimizer = optimizer or optax.adam(0.05)
     solver = solver or DIFFERENTIABLE
-    bounds = bounds or objectives_lib.Bounds()
+    bounds = bounds or constraints_lib.Bounds()
     out = None if out is None else pathlib.Path(out)
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)

@@ -73,7 +73,7 @@ from jaxnet.terms import drag, inertia, term as term_lib
 
 __all__ = ["Implicit", "Loading", "TimeStep", "State", "Trajectory", "DynamicsError", "lumped_masses", "scene_at",
            "water_acceleration", "out_of_balance", "prescribed_velocity", "check_loading", "advance", "simulate",
-           "out_of_balance_jit", "advance_jit", "record_figures", "DRAG_GROUPS", "RUNNING", "DONE", "STEP_FAILED", "REASONS"]
+           "out_of_balance_jit", "advance_jit", "record_figures", "RUNNING", "DONE", "STEP_FAILED", "REASONS"]
 
 #: stop reasons of a dynamic run (``State.status``, ``Trajectory.status``)
 RUNNING, DONE, STEP_FAILED = 0, 1, 2
@@ -386,6 +386,7 @@ def simulate(scene, end_time=None, solver: Implicit | None = None, loading: Load
       a :class:`Trajectory`, its ``timing`` the compile and wall times (s).
     """
     from jaxnet.io import timeseries
+    from jaxnet.io.progress import Progress
 
     if isinstance(scene, Case):
         settings = scene.time
@@ -446,7 +447,7 @@ def simulate(scene, end_time=None, solver: Implicit | None = None, loading: Load
     # record times k * record_every, the same whichever record a run resumes from (so is each step)
     targets = np.minimum(record_every * np.arange(1, int(np.ceil(end_time / record_every - 1e-9)) + 1), end_time)
     targets = targets[targets > float(state.t) + 1e-9 * record_every]
-    bar = timeseries.Progress(float(state.t), end_time, disable=not progress, steps0=int(state.steps))
+    bar = Progress(float(state.t), end_time, disable=not progress, steps0=int(state.steps))
     try:
         with bar:
             for k, target in enumerate(targets):
