@@ -32,11 +32,11 @@ import dataclasses
 
 import numpy as np
 
-from jaxnet.materials import (DRAG_MODELS, KNOT_FORMS, HexTwine, Rope, Twine, bar_columns, check_material,  # noqa: F401
-                              knot_stiffness, netting_columns, netting_rows)
+from jaxnet.materials import DRAG_MODELS, KNOT_FORMS, HexTwine, Rope, Twine, bar_columns, check_material, netting_rows
 from jaxnet.mesh.hinges import netting_hinges
 from jaxnet.mesh.joining import NodeJoiner
-from jaxnet.mesh.panel import PanelError, mesh_panel, side_divisions
+from jaxnet.mesh.panel import mesh_panel
+from jaxnet.mesh.polygon import PanelError, side_divisions
 from jaxnet.scene import Bars, Environment, Netting, Nodes, Scene, SceneError
 
 
@@ -585,7 +585,6 @@ class Net:
             twines.append(p.twine)
         if not rows["vertices"]:
             return None
-        panel = np.concatenate(rows["panel"])
         # the rows of the k-th diamond panel take the k-th diamond material (panel indices count all panels)
         material = np.concatenate([np.full(len(r), k) for k, r in enumerate(rows["panel"])])
         return Netting(**{k: np.concatenate(v) for k, v in rows.items()}, **netting_rows(twines, material))

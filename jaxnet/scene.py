@@ -26,7 +26,6 @@ import dataclasses
 
 import equinox as eqx
 import numpy as np
-import scipy.sparse as sp
 
 
 class SceneError(ValueError):

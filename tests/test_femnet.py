@@ -378,7 +378,7 @@ def test_linked_panels_reach_the_equilibrium_of_the_one_panel_net():
 
 
 def test_a_linked_cable_divides_the_side_and_seams_join_different_mesh_counts():
-    from jaxnet.mesh.panel import side_divisions
+    from jaxnet.mesh.polygon import side_divisions
 
     loaded = femnet.read_don(DATA / "links_cable.don")
     scene, info = loaded.scene, loaded.info

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from jaxnet.mesh import panel as P
-from jaxnet.mesh.panel import PanelError, PanelMesh, mesh_panel, side_divisions
+from jaxnet.mesh.panel import PanelMesh, mesh_panel
+from jaxnet.mesh.polygon import PanelError, side_divisions
 
 L0 = 0.02  # m per twine
 

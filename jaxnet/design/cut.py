@@ -196,7 +196,7 @@ def round_cut(corners_uv, name="panel"):
     corner or side when the corners are not finite or the rounded polygon is degenerate (two corners on one
     mesh, zero area, crossing sides): a panel too small or too distorted to round.
     """
-    from jaxnet.mesh.panel import PanelError, check_polygon
+    from jaxnet.mesh.polygon import PanelError, check_polygon
 
     uv = np.asarray(corners_uv, dtype=float)
     if uv.ndim != 2 or uv.shape[1] != 2:

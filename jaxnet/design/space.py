@@ -457,7 +457,7 @@ class DesignSpace:
         return self._scene(full)
 
     def _check_cut(self, name, corners):
-        from jaxnet.mesh.panel import PanelError, check_polygon
+        from jaxnet.mesh.polygon import PanelError, check_polygon
 
         try:
             check_polygon(corners, name)

@@ -15,7 +15,8 @@ nodes (row by row of the lattice).  Start positions of all nodes are
 ``weights @ corners_xyz``: linear along the sides, mean value coordinates
 (Floater) inside, so an affine map of the corners is reproduced exactly.
 
-This module depends on numpy and scipy only.
+The polygon is checked first (:mod:`jaxnet.mesh.polygon`: a :class:`~jaxnet.mesh.polygon.PanelError` names
+the panel and the culprit). This module depends on numpy and scipy only.
 """
 
 from __future__ import annotations
@@ -25,24 +26,17 @@ import math
 
 import numpy as np
 
-__all__ = ["PanelMesh", "PanelError", "side_divisions", "mesh_panel"]
+from jaxnet.mesh.polygon import REL_EPS, panel_error, validate_panel
+
+__all__ = ["PanelMesh", "mesh_panel"]
 
 #: Refuse to mesh a panel whose estimated node count exceeds this.
 MAX_NODES = 5_000_000
 
 # Lattice points closer than this fraction of h to the boundary are dropped.
 _CLEARANCE = 0.6
-# Relative tolerance of the geometric predicates (times the squared scale).
-_REL_EPS = 1e-12
 # Points processed per chunk in the vectorised (points x corners) kernels.
 _CHUNK = 100_000
-
-
-class PanelError(ValueError):
-    """Invalid panel description (or a panel that could not be meshed).
-
-    The message names the panel and the culprit (corner, side or parameter).
-    """
 
 
 @dataclasses.dataclass(frozen=True)
@@ -84,185 +78,6 @@ class PanelMesh:
     corner_nodes: np.ndarray
     side_nodes: tuple
     weights: np.ndarray
-
-
-# --------------------------------------------------------------------------
-# validation
-# --------------------------------------------------------------------------
-
-def _err(name, msg):
-    return PanelError(f"panel {name!r}: {msg}")
-
-
-def _positive_scalar(value, what, name):
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise _err(name, f"{what} must be a positive number, got {value!r}") from None
-    if isinstance(value, (bool, np.bool_)) or not math.isfinite(v) or v <= 0.0:
-        raise _err(name, f"{what} must be a positive finite number, got {what}={value!r}")
-    return v
-
-
-def _corner_array(corners, ncols, labels, what, name, ncorners=None):
-    try:
-        arr = np.asarray(corners, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise _err(name, f"{what} must be a numeric array of shape (C, {ncols})") from None
-    if arr.ndim != 2 or arr.shape[1] != ncols:
-        raise _err(name, f"{what} must have shape (C, {ncols}), got shape {arr.shape}")
-    if ncorners is None and arr.shape[0] < 3:
-        raise _err(name, f"a panel needs at least 3 corners, got {arr.shape[0]}")
-    if ncorners is not None and arr.shape[0] != ncorners:
-        raise _err(name, f"{what} has {arr.shape[0]} corners but corners_uv has {ncorners}")
-    bad = np.argwhere(~np.isfinite(arr))
-    if bad.size:
-        k, c = bad[0]
-        raise _err(name, f"corner {k} has a non-finite {labels[c]} coordinate "
-                         f"({what}[{k}, {c}] = {arr[k, c]})")
-    return arr
-
-
-def _orient_sign(a, b, c, eps):
-    """Sign (-1, 0, 1) of the orientation of (a, b, c), arrays (..., 2)."""
-    cr = (b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1]) - (b[..., 1] - a[..., 1]) * (c[..., 0] - a[..., 0])
-    return np.where(np.abs(cr) <= eps, 0, np.sign(cr)).astype(np.int64)
-
-
-def _on_segment(p, q, r):
-    """For collinear p, q, r: is r within the bounding box of segment pq."""
-    return ((np.minimum(p[..., 0], q[..., 0]) <= r[..., 0]) & (r[..., 0] <= np.maximum(p[..., 0], q[..., 0]))
-            & (np.minimum(p[..., 1], q[..., 1]) <= r[..., 1]) & (r[..., 1] <= np.maximum(p[..., 1], q[..., 1])))
-
-
-def _check_simple(uv, eps, name):
-    """Raise if two sides of the closed polygon ``uv`` intersect illegally."""
-    C = len(uv)
-    a, b = uv, np.roll(uv, -1, axis=0)
-    # adjacent sides k, k+1 share corner k+1; they may not fold back on each other
-    e0 = b - a
-    e1 = np.roll(e0, -1, axis=0)
-    cr = e0[:, 0] * e1[:, 1] - e0[:, 1] * e1[:, 0]
-    dt = (e0 * e1).sum(axis=1)
-    fold = np.nonzero((np.abs(cr) <= eps) & (dt < 0))[0]
-    if fold.size:
-        k = int(fold[0])
-        raise _err(name, f"sides {k} and {(k + 1) % C} overlap (the polygon folds back at "
-                         f"corner {(k + 1) % C}; self-intersecting polygon)")
-    if C < 4:
-        return
-    i, j = np.triu_indices(C, k=2)
-    keep = ~((i == 0) & (j == C - 1))          # sides 0 and C-1 are adjacent
-    i, j = i[keep], j[keep]
-    p1, p2, q1, q2 = a[i], b[i], a[j], b[j]
-    o1 = _orient_sign(p1, p2, q1, eps)
-    o2 = _orient_sign(p1, p2, q2, eps)
-    o3 = _orient_sign(q1, q2, p1, eps)
-    o4 = _orient_sign(q1, q2, p2, eps)
-    hit = (o1 * o2 < 0) & (o3 * o4 < 0)
-    hit |= (o1 == 0) & _on_segment(p1, p2, q1)
-    hit |= (o2 == 0) & _on_segment(p1, p2, q2)
-    hit |= (o3 == 0) & _on_segment(q1, q2, p1)
-    hit |= (o4 == 0) & _on_segment(q1, q2, p2)
-    if hit.any():
-        m = int(np.nonzero(hit)[0][0])
-        raise _err(name, f"sides {i[m]} and {j[m]} cross (self-intersecting polygon; side k "
-                         f"runs from corner k to corner k+1)")
-
-
-def check_polygon(corners_uv, name):
-    """The mesher's own checks of a panel's polygon in twine coordinates ``corners_uv`` (C, 2): finite corners,
-    no two at one place, an area, no crossing sides. Raises :class:`PanelError` naming the panel ``name`` and the
-    corner or side; returns nothing (the meshing step and l0 do not matter to these checks)."""
-    _validate(corners_uv, None, 1.0, 1.0, None, name)
-
-
-def _validate(corners_uv, corners_xyz, step, l0, divisions, name):
-    uv = _corner_array(corners_uv, 2, ("U", "V"), "corners_uv", name)
-    C = uv.shape[0]
-    xyz = None
-    if corners_xyz is not None:
-        xyz = _corner_array(corners_xyz, 3, ("x", "y", "z"), "corners_xyz", name, ncorners=C)
-    step = _positive_scalar(step, "step", name)
-    l0 = _positive_scalar(l0, "l0", name)
-    h = step / l0
-    if not math.isfinite(h) or h <= 0.0:
-        raise _err(name, f"step/l0 = {step}/{l0} is not a usable mesh size")
-
-    nxt = np.roll(uv, -1, axis=0)
-    seg = np.hypot(*(nxt - uv).T)
-    scale = float(np.max(np.abs(uv - uv.mean(axis=0)))) or 1.0
-    dup = np.nonzero(seg <= 1e-12 * scale)[0]
-    if dup.size:
-        k = int(dup[0])
-        raise _err(name, f"corners {k} and {(k + 1) % C} have the same twine coordinates "
-                         f"({uv[k, 0]:g}, {uv[k, 1]:g}) (side {k} has zero length)")
-    eps = _REL_EPS * scale * scale
-    # all corners on one line -> zero area
-    c0 = uv - uv[0]
-    rel = c0 / scale
-    if np.linalg.matrix_rank(rel, tol=1e-9) < 2:
-        raise _err(name, "the polygon has zero area in twine space (all corners are collinear, d = 0)")
-    _check_simple(uv, eps, name)
-    area = 0.5 * float(np.sum(uv[:, 0] * nxt[:, 1] - nxt[:, 0] * uv[:, 1]))
-    if abs(area) <= 1e-9 * scale * scale:
-        raise _err(name, f"the polygon has zero area in twine space (signed area {area:g}, d = 0)")
-
-    if divisions is None:
-        div = _default_divisions(seg, h)
-    else:
-        div = _check_divisions(divisions, C, name)
-    return uv, xyz, h, seg, area, scale, div
-
-
-def _check_divisions(divisions, C, name):
-    try:
-        raw = np.asarray(divisions)
-    except Exception:                      # pragma: no cover - exotic input
-        raise _err(name, f"divisions must be a sequence of {C} positive integers") from None
-    if raw.ndim != 1 or raw.shape[0] != C:
-        raise _err(name, f"divisions must have one entry per side ({C}), got shape {raw.shape}")
-    if raw.dtype == np.bool_ or not (np.issubdtype(raw.dtype, np.integer)
-                                     or np.issubdtype(raw.dtype, np.floating)):
-        raise _err(name, f"divisions must be positive integers, got dtype {raw.dtype}")
-    for k, v in enumerate(raw.tolist()):
-        if isinstance(v, float) and (not math.isfinite(v) or v != int(v)):
-            raise _err(name, f"divisions[{k}] (side {k}) must be a positive integer, got {v!r}")
-        if int(v) < 1:
-            raise _err(name, f"divisions[{k}] (side {k}) must be a positive integer, got {v!r}")
-    return np.asarray([int(v) for v in raw.tolist()], dtype=np.int64)
-
-
-def _default_divisions(seg_len, h):
-    # the small relative slack keeps e.g. a 10-twine side with h = 1 at 10 segments
-    n = np.ceil(seg_len / h * (1.0 - 1e-12))
-    return np.maximum(n, 1).astype(np.int64)
-
-
-def side_divisions(corners_uv, step, l0) -> np.ndarray:
-    """Default number of segments of each side of a panel.
-
-    Parameters
-    ----------
-    corners_uv : array_like, shape (C, 2)
-        Twine coordinates of the corners (twines).
-    step : float
-        Meshing step (m).
-    l0 : float
-        Unstretched twine length (m per twine).
-
-    Returns
-    -------
-    np.ndarray, shape (C,), int64
-        ``ceil(|side| / h)`` (at least 1) for each side ``k`` (from corner
-        ``k`` to corner ``(k + 1) % C``), where ``|side|`` is the side length
-        in twines and ``h = step / l0`` (twines).
-    """
-    uv = _corner_array(corners_uv, 2, ("U", "V"), "corners_uv", "side_divisions")
-    step = _positive_scalar(step, "step", "side_divisions")
-    l0 = _positive_scalar(l0, "l0", "side_divisions")
-    seg = np.hypot(*(np.roll(uv, -1, axis=0) - uv).T)
-    return _default_divisions(seg, step / l0)
 
 
 # --------------------------------------------------------------------------
@@ -472,20 +287,20 @@ def mesh_panel(corners_uv, corners_xyz, step, l0, divisions=None, name="panel") 
         non-positive ``step`` or ``l0``, bad ``divisions``), or if the panel
         could not be meshed.
     """
-    uv_c, xyz_c, h, seg, area, scale, div = _validate(corners_uv, corners_xyz, step, l0, divisions, name)
+    uv_c, xyz_c, h, seg, area, scale, div = validate_panel(corners_uv, corners_xyz, step, l0, divisions, name)
     C = len(uv_c)
     if xyz_c is None:
-        raise _err(name, "corners_xyz is required")
+        raise panel_error(name, "corners_xyz is required")
 
     perim = float(seg.sum())
     estimate = abs(area) / (h * h * math.sqrt(3.0) / 2.0) + float(div.sum()) + perim / h
     if estimate > MAX_NODES:
-        raise _err(name, f"step={step} m with l0={l0} m gives h={h:g} twines and about "
+        raise panel_error(name, f"step={step} m with l0={l0} m gives h={h:g} twines and about "
                          f"{estimate:.3g} nodes (limit {MAX_NODES}); use a larger step")
 
     e = np.roll(uv_c, -1, axis=0) - uv_c
     turn = e[:, 0] * np.roll(e[:, 1], -1) - e[:, 1] * np.roll(e[:, 0], -1)
-    convex = bool(np.all(turn * np.sign(area) >= -_REL_EPS * scale * scale))
+    convex = bool(np.all(turn * np.sign(area) >= -REL_EPS * scale * scale))
 
     w_b, sides, segs = _boundary(uv_c, div)
     b_pts = w_b @ uv_c
@@ -606,7 +421,7 @@ def _recover_segments(nodes, tri, missing, constraint, name):
         while queue:
             budget -= 1
             if budget < 0:
-                raise _err(name, f"could not recover boundary segment between nodes {a} and {b} "
+                raise panel_error(name, f"could not recover boundary segment between nodes {a} and {b} "
                                  f"(edge flipping did not converge)")
             u, v = queue.pop(0)
             qd = lm.quad(u, v)
@@ -655,7 +470,7 @@ def _triangulate(nodes, uv_c, area, segs, scale, name):
 
         dl = Delaunay((nodes - centre) / scale)
     except Exception as exc:  # qhull failure
-        raise _err(name, f"Delaunay triangulation failed ({exc})") from exc
+        raise panel_error(name, f"Delaunay triangulation failed ({exc})") from exc
     tri = np.array(dl.simplices, dtype=np.int64)
     d = _signed_d(nodes, tri)
     good = np.abs(d) > 1e-13 * scale * scale
@@ -691,17 +506,17 @@ def _triangulate(nodes, uv_c, area, segs, scale, name):
     if not present.all():
         miss = sk[~present][0]
         a, b = int(miss // n), int(miss % n)
-        raise _err(name, f"boundary segment between nodes {a} at UV ({nodes[a, 0]:.6g}, "
+        raise panel_error(name, f"boundary segment between nodes {a} at UV ({nodes[a, 0]:.6g}, "
                          f"{nodes[a, 1]:.6g}) and {b} at UV ({nodes[b, 0]:.6g}, {nodes[b, 1]:.6g}) "
                          f"is missing from the triangulation")
     once = uk[cnt == 1]
     if len(once) != len(sk) or np.any(cnt > 2):
-        raise _err(name, "triangulation is not a manifold covering of the polygon")
+        raise panel_error(name, "triangulation is not a manifold covering of the polygon")
     if np.any(d * np.sign(area) <= 0.0):
-        raise _err(name, "triangulation produced an inverted or degenerate triangle")
+        raise panel_error(name, "triangulation produced an inverted or degenerate triangle")
     tot = 0.5 * float(np.abs(d).sum())
     if abs(tot - abs(area)) > 1e-9 * abs(area):
-        raise _err(name, f"triangles cover area {tot!r} but the polygon has area {abs(area)!r} (twines^2)")
+        raise panel_error(name, f"triangles cover area {tot!r} but the polygon has area {abs(area)!r} (twines^2)")
     if len(np.unique(tri)) != n:
-        raise _err(name, "some nodes are not used by any triangle")
+        raise panel_error(name, "some nodes are not used by any triangle")
     return tri
