@@ -73,11 +73,11 @@ def lumped_masses(scene, xp=np):
     hexa = scene.hexagonal
     if hexa is not None:
         d = xp.abs(_per_element(geometry.twine_determinant, xp, xp.asarray(hexa.uv)))
-        v = d * xp.pi * xp.asarray(hexa.diameter) ** 2 / 4.0 * xp.sum(xp.asarray(hexa.l0), axis=1) / 3.0
+        v = geometry.twine_volume(d, xp.sum(xp.asarray(hexa.l0), axis=1), xp.asarray(hexa.diameter)) / 3.0
         mass, volume = spread(mass, hexa.vertices, xp.asarray(hexa.density) * v), spread(volume, hexa.vertices, v)
     bars = scene.bars
     if bars is not None:
-        v = xp.pi * xp.asarray(bars.diameter) ** 2 / 4.0 * xp.asarray(bars.rest_length) / 2.0
+        v = geometry.twine_volume(1.0, xp.asarray(bars.rest_length), xp.asarray(bars.diameter)) / 2.0
         mass, volume = spread(mass, bars.ends, xp.asarray(bars.density) * v), spread(volume, bars.ends, v)
     nodes = scene.nodes
     added = xp.broadcast_to((ca * rho * volume)[:, None], (n, 3))

@@ -1,0 +1,59 @@
+"""The public namespace imports as documented: the subpackages are not shadowed, the top-level names are
+the library's own objects, and every name the README's code imports exists."""
+
+from __future__ import annotations
+
+import ast
+import importlib
+import importlib.util
+import pathlib
+import re
+
+import jaxnet
+
+README = pathlib.Path(__file__).parents[1] / "README.md"
+
+
+def test_the_solve_subpackage_is_not_shadowed():
+    import jaxnet.solve.dynamics as dynamics  # failed while jaxnet.solve was bound to a function
+    import jaxnet.solve.statics as statics
+
+    assert jaxnet.solve is importlib.import_module("jaxnet.solve")
+    assert jaxnet.simulate is dynamics.simulate and jaxnet.solve_static is statics.solve
+
+
+def test_every_public_name_resolves():
+    from jaxnet.case import Case
+    from jaxnet.io import femnet
+    from jaxnet.net import Net, Twine
+    from jaxnet.solve.options import Newton
+
+    missing = [name for name in jaxnet.__all__ if not hasattr(jaxnet, name)]
+    assert not missing
+    assert (jaxnet.Case, jaxnet.Net, jaxnet.Twine, jaxnet.Newton, jaxnet.read_don) == (Case, Net, Twine, Newton,
+                                                                                       femnet.read_don)
+
+
+def _readme_code():
+    return "\n".join(re.findall(r"```python\n(.*?)```", README.read_text(), flags=re.S))
+
+
+def test_what_the_readme_imports_exists():
+    tree = ast.parse(_readme_code())
+    imported = 0
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.module.startswith("jaxnet"):
+            module = importlib.import_module(node.module)
+            for alias in node.names:
+                assert hasattr(module, alias.name) or importlib.util.find_spec(f"{node.module}.{alias.name}"), \
+                    f"README: from {node.module} import {alias.name}"
+                imported += 1
+        elif isinstance(node, ast.Import):
+            for alias in node.names:
+                if alias.name.startswith("jaxnet"):
+                    importlib.import_module(alias.name)
+                    imported += 1
+    # jn.NAME as the README uses it (import jaxnet as jn)
+    used = set(re.findall(r"\bjn\.([A-Za-z_]+)", _readme_code()))
+    assert used and not [name for name in used if not hasattr(jaxnet, name)]
+    assert imported >= 5
