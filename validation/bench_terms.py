@@ -14,8 +14,8 @@ as ratios measured side by side in one run, not as absolute figures). Nothing is
      * assembly: one call of a jitted function computing the tangent (``assemble.tangent``) and the
        out-of-balance force (``assemble.nodal_force``) together, compiled before timing, median of
        ``--repeats`` calls;
-     * linear solve in the loop: every factorisation + solve the Newton loop calls back to the host for
-       (``linalg.host_solve``, wrapped by a timer for this solve), mean per call: the loop factorises
+     * linear solve in the loop: every factorisation + solve of the static solve's host loop
+       (``linalg.HostSolver.solve``, wrapped by a timer for this solve), mean per call: the loop factorises
        K + mu S, the tangent damped by the spring network;
      * linear solve at the solution: one sparse LU factorisation + solve of the undamped tangent at the
        solution (diagonal raised by 1e-9 x max|K|, as in bench_statics.py), median of ``--repeats``.
@@ -150,19 +150,30 @@ def _cage(step, twine=None):
     return fish_cage(step=step, twine=twine).scene
 
 
-class _TimedHostSolve:
-    """Stands in for ``linalg.host_solve`` (the host callback of the Newton loop's linear solves) and
-    records the wall time of each call, so that the factorisations done inside the jitted loop, on the
-    damped matrices K + mu S that the loop really factorises, are timed."""
+class _TimedSolves:
+    """Times every call of ``linalg.HostSolver.solve`` (the static solve's host loop factorises and solves
+    K + mu S with it at each iteration) while in use: the factorisations the loop really does, on the damped
+    matrices, are timed. A context manager; ``seconds`` the wall time of each call."""
 
-    def __init__(self, host_solve):
-        self.host_solve, self.seconds = host_solve, []
+    def __init__(self, linalg):
+        self.linalg, self.seconds = linalg, []
 
-    def __call__(self, *args):
-        t0 = time.perf_counter()
-        out = self.host_solve(*args)
-        self.seconds.append(time.perf_counter() - t0)
-        return out
+    def __enter__(self):
+        original = self.original = self.linalg.HostSolver.solve
+        seconds = self.seconds
+
+        def solve(solver, *args, **kwargs):
+            t0 = time.perf_counter()
+            out = original(solver, *args, **kwargs)
+            seconds.append(time.perf_counter() - t0)
+            return out
+
+        self.linalg.HostSolver.solve = solve
+        return self
+
+    def __exit__(self, *exc):
+        self.linalg.HostSolver.solve = self.original
+        return False
 
 
 def one_size(step, repeats):
@@ -173,13 +184,8 @@ def one_size(step, repeats):
     from jaxnet import assemble, linalg, model
 
     scene = _cage(step)
-    # the callback is looked up when the Newton program is traced: patch it for this solve only
-    timed = _TimedHostSolve(linalg.host_solve)
-    linalg.host_solve = timed
-    try:
+    with _TimedSolves(linalg) as timed:  # this solve's own factorisations and solves
         eq = jn.solve_static(scene, throw=False)
-    finally:
-        linalg.host_solve = timed.host_solve
     timing = eq.timing
     m = model.active_terms(scene)
     pattern = assemble.build_pattern(scene, m)
