@@ -676,7 +676,7 @@ How to read the slow and failed runs. Three classes explain every run above a fe
    that wrinkle out of their plane (many of the curtain's twines, with EA_c = EA, are in compression under
    its own weight: in still water it stays in its plane by symmetry, any current or perturbation makes it
    wrinkle) have an energy that is flat, or a kink, in some directions at the solution. Newton
-   converges there linearly, in hundreds of iterations (`jaxnet/solve/statics.py`, "Known limit"); the
+   converges there linearly, in hundreds of iterations (`jaxnet/solve/newton.py`, "Known limit"); the
    residual histories of the plot are of this kind. A crumpled start (the perturbed runs) makes most of
    these nets visit such states on the way, hence the perturbed runs' larger counts. They converge: the
    iteration cap here is larger than the library's default (500), to tell slow convergence from none.
