@@ -30,13 +30,34 @@ REASONS = {
 
 @dataclasses.dataclass(frozen=True)
 class Timing:
-    """Wall times of a solve on the host (s): ``compile_s`` obtaining its compiled programs (~0 when a
-    program compiled for a scene of the same shape and terms is reused; for a dynamic run, the first record
-    interval, which compiles and runs), ``wall_s`` the whole call, compilation included. Frozen (hashable):
-    a static field of the results that hold it."""
+    """Wall times of a solve on the host (s), and what its iterations did. Frozen (hashable): a static field
+    of the results that hold it.
+
+    compile_s: obtaining the compiled programs (~0 when a program compiled for a scene of the same shape and
+      terms is reused; for a dynamic run, the first record interval, which compiles and runs).
+    wall_s: the whole call, compilation included.
+    The static solve's host loop (:func:`jaxnet.solve.statics.host_loop`) also splits its own time, where
+    the others leave these at 0:
+    assembly_s: computing the tangents (element matrices on the device and their sum into the pattern).
+    factorisation_s: factorising and solving with them on the host (SuperLU: ordering, factors, the
+      triangular solves and their accuracy checks).
+    evaluation_s: evaluating the residual (once per line-search trial, and at the start).
+    factorisations, evaluations: how many of each the solve made.
+    The rest of ``wall_s`` less ``compile_s`` is the loop's own bookkeeping on the host.
+    """
 
     compile_s: float
     wall_s: float
+    assembly_s: float = 0.0
+    factorisation_s: float = 0.0
+    evaluation_s: float = 0.0
+    factorisations: int = 0
+    evaluations: int = 0
+
+    @property
+    def factorisation_each_s(self):
+        """The mean time of one factorisation and its solve (s); NaN where the solve made none."""
+        return self.factorisation_s / self.factorisations if self.factorisations else float("nan")
 
 
 class Equilibrium(eqx.Module):

@@ -161,7 +161,9 @@ def host_loop(start, scene, pattern, model, solver: Newton, pieces=None):
     driven from Python: each iteration calls the compiled tangent once, factorises on the host (SuperLU) and
     calls the compiled evaluation once per line-search trial. Same rules (shared functions), same result;
     prints progress as it goes when verbose. ``pieces``: the compiled programs (:func:`compile_pieces`),
-    obtained here if not given. Returns an :class:`Equilibrium` (``timing`` None: :func:`solve` times)."""
+    obtained here if not given. Returns an :class:`Equilibrium` whose :class:`Timing` splits the loop's
+    time (its ``compile_s`` 0: :func:`solve` adds the compilation)."""
+    t_start = time.perf_counter()
     if pieces is None:
         pieces = compile_pieces(np.asarray(start, dtype=float), scene, pattern, model, solver.stiffness)
     evaluate, tangent, scatter = pieces["evaluate"], pieces["tangent"], pieces["scatter"]
@@ -169,6 +171,14 @@ def host_loop(start, scene, pattern, model, solver: Newton, pieces=None):
     free = np.asarray(pattern.free)
     indptr, indices = np.asarray(pattern.indptr), np.asarray(pattern.indices)
     factor = linalg.HostSolver(indptr, indices)
+    spent = dict(assembly_s=0.0, factorisation_s=0.0, evaluation_s=0.0, factorisations=0, evaluations=0)
+
+    def factor_solve(entries, rhs):
+        t = time.perf_counter()
+        out = factor.solve(entries, rhs)
+        spent["factorisation_s"] += time.perf_counter() - t
+        spent["factorisations"] += 1
+        return out
     # The scene and pattern moved to the device once: the programs take them at every call, and a numpy
     # leaf would be copied to the device at each (a good part of a call's dispatch on small nets).
     scene_on_device, pattern_on_device = jax.device_put((scene, pattern))
@@ -195,9 +205,13 @@ def host_loop(start, scene, pattern, model, solver: Newton, pieces=None):
 
     def run(x, f_frozen, previous):
         # previous: the force terms' states at the last accepted iterate, where their solutions start
+        t = time.perf_counter()
         e, force, f_nc, m, state = evaluate(x, f_frozen, load_device, scales[stage], scene_on_device,
                                             pattern_on_device, previous)
-        return float(e), np.asarray(force), np.asarray(f_nc), float(m), state
+        out = float(e), np.asarray(force), np.asarray(f_nc), float(m), state
+        spent["evaluation_s"] += time.perf_counter() - t
+        spent["evaluations"] += 1
+        return out
 
     x = np.asarray(start, dtype=float)
     e_stored, force, f_nc, _, state = run(x, np.zeros_like(load), _unknown_states(scene, pattern, model))
@@ -245,10 +259,12 @@ def host_loop(start, scene, pattern, model, solver: Newton, pieces=None):
         if tangent_at is None or tangent_at[0] is not x or tangent_at[1] is not state or tangent_at[2] != stage:
             # an iteration that took no step leaves x as it was: its tangent serves again, only mu changes
             # element matrices, on the device
+            t = time.perf_counter()
             blocks = tangent(x, state, scales[stage], scene_on_device, pattern_on_device)
             data, tangent_at = np.asarray(scatter(blocks, pattern_on_device)), (x, state, stage)
+            spent["assembly_s"] += time.perf_counter() - t
         dx, slope, predicted, usable, roundoff, res_now = newton.direction(f, data, springs, mu, e, work, solver,
-                                                                           factor.solve, matvec, nodal, np)
+                                                                           factor_solve, matvec, nodal, np)
         trials, alpha, accepted, m_new = 0, 1.0, False, np.inf
         while usable and trials < solver.line_search and not accepted:
             alpha = 1.0 if trials == 0 else 0.5 * alpha
@@ -280,6 +296,7 @@ def host_loop(start, scene, pattern, model, solver: Newton, pieces=None):
         **jax.device_put(dict(x=X, force=force, residual_N=nodal_f.max(), iterations=np.int64(it), status=np.int64(st),
                               worst_node=np.int64(np.argmax(nodal_f)), history=hist,
                               energy=np.float64(e_stored - float(np.sum((load + f_nc) * X))))),
+        timing=Timing(compile_s=0.0, wall_s=time.perf_counter() - t_start, **spent),
     )
 
 
@@ -318,7 +335,8 @@ def solve(scene, solver: Newton | None = None, x0=None, throw: bool = True, **op
     pieces = compile_pieces(start, scene, pattern, model, solver.stiffness)
     t1 = time.perf_counter()
     eq = host_loop(start, scene, pattern, model, solver, pieces)
-    eq = dataclasses.replace(eq, timing=Timing(compile_s=t1 - t0, wall_s=time.perf_counter() - t0))
+    eq = dataclasses.replace(eq, timing=dataclasses.replace(eq.timing, compile_s=t1 - t0,
+                                                            wall_s=time.perf_counter() - t0))
     if throw and not eq.converged:
         node = int(eq.worst_node)
         raise SolveError(
