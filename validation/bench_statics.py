@@ -1,75 +1,99 @@
-"""Benchmark of the static solver: panels of 10² to 10⁵ nodes under weight, from the flat stress-free start.
+"""Benchmark of the static solver against size: panels, the cage in a current, FEMNET's cases, from their drawn start.
 
-    python validation/bench_statics.py [--sizes 100 1000 10000 100000] [--scene framed|hanging]
-                                       [--ea-compression EA_C]
+    python validation/bench_statics.py [--scene framed|hanging|cage|femnet] [--sizes 100 1000 10000 100000]
+                                       [--ea-compression EA_C] [--current U] [--max-iter N]
 
-Scenes (jaxnet.scenes.panel): ``framed`` — a horizontal panel of 100 x 100 meshes held along its border,
-sagging under its weight and a 20 kg sinker (twines EA_c = 0 by default: slack allowed); ``hanging`` — the
-default scene, a curtain of 100 x 100 meshes hanging from a headline with a sinker bar (twines EA_c = EA
-by default). The meshing step sets the node count.
+Scenes:
 
-Each size runs in its own process (so that peak memory is that size's). Printed per size: nodes, unknowns,
-tangent non-zeros, compile time, Newton iterations, time of one tangent assembly and of one sparse
-factorisation + solve at the solution, total solve time, total / (iterations x factorisation), peak resident
-memory; then the growth exponents (least squares of log cost against log nodes).
+* ``framed`` (jaxnet.scenes.panel): a horizontal panel of 100 x 100 meshes held along its border, sagging
+  under its weight and a 20 kg sinker (twines EA_c = 0 by default: slack allowed);
+* ``hanging``: the default panel scene, a curtain of 100 x 100 meshes hanging from a headline with a sinker
+  bar (twines EA_c = EA by default);
+* ``cage`` (jaxnet.scenes.cage): the fish cage (physical twine, EA_c = 0) in a current of ``--current`` m/s
+  (default 0.5), meshed finer for more nodes (step 0.5 m gives 1161 nodes; nodes grow as 1/step²);
+* ``femnet``: FEMNET's worked cases that jaxnet reads (``--cases``: .don files, default the cod-end c2 and
+  nr_netting of ``tests/data/femnet``), each at its own size (``--sizes`` unused). No trawl of FEMNET's
+  corpus reads yet: the cod-end is the towed-gear case here.
+
+The meshing step sets the node count. Each size runs in its own process (so that peak memory is that size's),
+with at most ``--max-iter`` Newton iterations. Printed per size, from the solve's own :class:`Timing`: nodes,
+unknowns, tangent non-zeros, compile time, Newton iterations, factorisations, the time of one tangent assembly
+and of one factorisation with its solve (means over the solve), the time of one iteration, that time over
+(one assembly + one factorisation), the whole solve over (iterations x one factorisation), peak resident
+memory; then the growth exponents (least squares of log cost against log nodes). A solve that does not
+converge is printed with its reason: its costs still count.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import pathlib
 import resource
 import subprocess
 import sys
-import time
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+#: FEMNET's cases timed by default (``--scene femnet``)
+FEMNET_CASES = (str(ROOT / "tests" / "data" / "femnet" / "c2.don"), str(ROOT / "tests" / "data" / "femnet" / "nr_netting.don"))
+#: the cage's meshing step (m) and node count it gives: nodes grow as 1/step²
+CAGE_STEP, CAGE_NODES = 0.5, 1161
 
 
-def one(n_target, scene_name, ea_compression):
-    import jax
+def build(scene_name, size, ea_compression, current):
+    """The scene of one row: a panel or the cage of about ``size`` nodes, or the FEMNET case at path ``size``."""
     import numpy as np
 
-    import jaxnet as jn
-    from jaxnet import assemble, linalg, model
+    from jaxnet.io.femnet import read_don
     from jaxnet.net import Twine
+    from jaxnet.scenes.cage import fish_cage
     from jaxnet.scenes.panel import framed_panel, hanging_panel
 
+    if scene_name == "femnet":
+        return read_don(size)
+    if scene_name == "cage":
+        return fish_cage(step=CAGE_STEP * float(np.sqrt(CAGE_NODES / int(size))), current=current)
     meshes, l0 = 100, 0.025
     width = meshes * l0 * np.sqrt(2.0)
-    step = width / np.sqrt(n_target / 1.15)  # the mesher's lattice holds about 1.15 nodes per step²
+    step = width / np.sqrt(int(size) / 1.15)  # the mesher's lattice holds about 1.15 nodes per step²
     if ea_compression is None:
         ea_compression = 0.0 if scene_name == "framed" else 2000.0
     twine = Twine(l0=l0, ea=2000.0, diameter=1.5e-3, ea_compression=ea_compression)
     if scene_name == "framed":
-        scene = framed_panel(meshes=meshes, l0=l0, step=step, twine=twine, sinker_kg=20.0).scene
-    else:
-        scene = hanging_panel(meshes=meshes, l0=l0, step=step, twine=twine).scene
-    eq = jn.solve_static(scene, max_iter=200)
-    timing = eq.timing
-    m = model.active_terms(scene)
-    pattern = assemble.build_pattern(scene, m)
-    tangent = jax.jit(assemble.tangent, static_argnames="model")
-    data = jax.block_until_ready(tangent(eq.x, scene, model=m, pattern=pattern))
-    t0 = time.perf_counter()
-    for _ in range(3):
-        data = jax.block_until_ready(tangent(eq.x, scene, model=m, pattern=pattern))
-    t_assembly = (time.perf_counter() - t0) / 3
-    rhs = np.ones(pattern.n)
-    d = np.asarray(data).copy()
-    d[np.asarray(pattern.diagonal)] += 1e-9 * np.abs(d).max()
-    t0 = time.perf_counter()
-    linalg.host_solve(d, rhs, np.asarray(pattern.indptr), np.asarray(pattern.indices))
-    t_factor = time.perf_counter() - t0
-    run_s = timing.wall_s - timing.compile_s
+        return framed_panel(meshes=meshes, l0=l0, step=step, twine=twine, sinker_kg=20.0)
+    return hanging_panel(meshes=meshes, l0=l0, step=step, twine=twine)
+
+
+def one(size, scene_name, ea_compression, current, max_iter):
+    """Solve one scene in this process; its row (a dict)."""
+    import jaxnet as jn
+
+    case = build(scene_name, size, ea_compression, current)
+    scene = case.scene
+    eq = jn.solve_static(case, throw=False, max_iter=max_iter)
+    t = eq.timing
+    from jaxnet import assemble, model
+
+    pattern = assemble.build_pattern(scene, model.active_terms(scene))
+    iterations = max(int(eq.iterations), 1)
+    assembly = t.assembly_s / max(t.factorisations, 1)
+    factor = t.factorisation_each_s
+    run_s = t.wall_s - t.compile_s
     return {
+        "case": pathlib.Path(size).stem if scene_name == "femnet" else f"{scene_name} {size}",
         "nodes": scene.n_nodes,
         "dof": scene.n_dof,
         "nnz": int(pattern.nnz),
-        "compile_s": timing.compile_s,
+        "compile_s": t.compile_s,
         "iterations": int(eq.iterations),
-        "assembly_s": t_assembly,
-        "factor_s": t_factor,
+        "factorisations": t.factorisations,
+        "reason": eq.reason,
+        "assembly_s": assembly,
+        "factor_s": factor,
+        "iteration_s": run_s / iterations,
+        "per_iteration": run_s / iterations / (assembly + factor),
         "run_s": run_s,
-        "ratio": run_s / max(int(eq.iterations), 1) / t_factor,
+        "ratio": run_s / (iterations * factor),
         "residual_N": float(eq.residual_N),
         "peak_MB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
     }
@@ -78,33 +102,46 @@ def one(n_target, scene_name, ea_compression):
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--sizes", type=int, nargs="*", default=[100, 1000, 10000, 100000])
-    parser.add_argument("--scene", choices=("framed", "hanging"), default="framed")
-    parser.add_argument("--ea-compression", type=float, default=None, help="twine EA_c (N); default per scene")
-    parser.add_argument("--one", type=int, help=argparse.SUPPRESS)
+    parser.add_argument("--scene", choices=("framed", "hanging", "cage", "femnet"), default="framed")
+    parser.add_argument("--cases", nargs="*", default=list(FEMNET_CASES), help="with --scene femnet: .don files")
+    parser.add_argument("--ea-compression", type=float, default=None, help="panels' twine EA_c (N); default per scene")
+    parser.add_argument("--current", type=float, default=0.5, help="the cage's current (m/s)")
+    parser.add_argument("--max-iter", type=int, default=500, help="Newton iterations at most")
+    parser.add_argument("--one", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.one:
-        print(json.dumps(one(args.one, args.scene, args.ea_compression)))
+        print(json.dumps(one(args.one, args.scene, args.ea_compression, args.current, args.max_iter)))
         return
     import numpy as np
 
     rows = []
-    head = f"{'nodes':>7} {'dof':>7} {'nnz':>9} {'compile s':>9} {'iter':>4} {'assembly s':>10} {'factor s':>9} {'total s':>8} {'tot/(it*fac)':>12} {'residual N':>10} {'peak MB':>8}"
-    print(f"{args.scene} panel, flat stress-free start, twine EA_c = {args.ea_compression if args.ea_compression is not None else 'scene default'} N")
-    print(head)
-    for n in args.sizes:
+    columns = ("case", "nodes", "dof", "nnz", "compile s", "it", "fact", "assembly s", "factor s", "s/it",
+               "it/(asm+fac)", "total/(it*fac)", "residual N", "peak MB")
+    print({"framed": "framed panel, flat stress-free start", "hanging": "hanging panel, flat stress-free start",
+           "cage": f"fish cage in a {args.current:g} m/s current, drawn start",
+           "femnet": "FEMNET's cases, drawn start"}[args.scene]
+          + ("" if args.scene in ("cage", "femnet") else
+             f", twine EA_c = {args.ea_compression if args.ea_compression is not None else 'scene default'} N")
+          + f"; at most {args.max_iter} Newton iterations\n")
+    print("| " + " | ".join(columns) + " |\n|" + "---|" * len(columns))
+    sizes = args.cases if args.scene == "femnet" else [str(n) for n in args.sizes]
+    for size in sizes:
         extra = [] if args.ea_compression is None else ["--ea-compression", str(args.ea_compression)]
-        out = subprocess.run([sys.executable, __file__, "--one", str(n), "--scene", args.scene, *extra],
-                             capture_output=True, text=True)
+        out = subprocess.run([sys.executable, __file__, "--one", size, "--scene", args.scene, "--current",
+                              str(args.current), "--max-iter", str(args.max_iter), *extra], capture_output=True, text=True)
         if out.returncode != 0:
-            print(f"{n:>7} failed: {out.stderr.strip().splitlines()[-1] if out.stderr else out.returncode}")
+            print(f"| {size} | failed: {out.stderr.strip().splitlines()[-1] if out.stderr else out.returncode} |")
             continue
         r = json.loads(out.stdout.strip().splitlines()[-1])
         rows.append(r)
-        print(f"{r['nodes']:>7} {r['dof']:>7} {r['nnz']:>9} {r['compile_s']:>9.2f} {r['iterations']:>4} {r['assembly_s']:>10.4f} "
-              f"{r['factor_s']:>9.4f} {r['run_s']:>8.2f} {r['ratio']:>12.2f} {r['residual_N']:>10.2e} {r['peak_MB']:>8.0f}", flush=True)
-    if len(rows) >= 2:
+        stop = "" if r["reason"] == "converged" else f" ({r['reason']})"
+        print(f"| {r['case']}{stop} | {r['nodes']} | {r['dof']} | {r['nnz']} | {r['compile_s']:.2f} | {r['iterations']} | "
+              f"{r['factorisations']} | {r['assembly_s']:.4f} | {r['factor_s']:.4f} | {r['iteration_s']:.4f} | "
+              f"{r['per_iteration']:.2f} | {r['ratio']:.2f} | {r['residual_N']:.2e} | {r['peak_MB']:.0f} |", flush=True)
+    if len(rows) >= 2 and args.scene != "femnet":
         n = np.log([r["nodes"] for r in rows])
-        for key in ("assembly_s", "factor_s", "run_s", "compile_s", "peak_MB"):
+        print()
+        for key in ("assembly_s", "factor_s", "iteration_s", "run_s", "compile_s", "peak_MB"):
             slope = np.polyfit(n, np.log([r[key] for r in rows]), 1)[0]
             print(f"growth exponent of {key}: {slope:.2f}")
 
