@@ -58,7 +58,7 @@ import numpy as np
 from jaxnet import assemble, checks, linalg, model as model_lib
 from jaxnet.case import Case
 from jaxnet.memo import Memo
-from jaxnet.solve import kernel, newton, programs
+from jaxnet.solve import diagnosis, kernel, newton, programs
 from jaxnet.solve.options import STATIC, Newton
 from jaxnet.solve.results import (CONVERGED, MAX_ITERATIONS, NON_FINITE, REASONS, RUNNING, STALLED,  # noqa: F401
                                   Equilibrium, SolveError, Timing)
@@ -339,9 +339,9 @@ def solve(scene, solver: Newton | None = None, x0=None, throw: bool = True, **op
                                                             wall_s=time.perf_counter() - t0))
     if throw and not eq.converged:
         node = int(eq.worst_node)
+        found = "".join(f"; {hint}" for hint in diagnosis.hints(scene, eq))
         raise SolveError(
             f"static solve failed after {int(eq.iterations)} iterations: {eq.reason}; largest residual "
-            f"{float(eq.residual_N):.4g} N at node {node} (position {np.asarray(eq.x)[node].round(4).tolist()})",
-            eq,
-        )
+            f"{float(eq.residual_N):.4g} N at node {node} (position {np.asarray(eq.x)[node].round(4).tolist()})"
+            f"{found}", eq)
     return eq

@@ -1,0 +1,73 @@
+"""Why a static solve stopped short: what the state it stopped in says about the net, for the failure's message.
+
+A solve that does not converge raises :class:`jaxnet.solve.results.SolveError` naming its reason, its worst
+node and where it is. Some nets have no stable equilibrium for any solver to find, and the state a failed
+solve stops in often shows why. :func:`hints` reads it and returns sentences that say what was found and
+what to try; the static solve appends them to its error.
+
+Struts. jaxnet's cable bars carry no bending moment: the joints of a cable are hinges. A cable whose bars
+have a compression stiffness (``Rope(ea_compression=...)``) and are pushed into compression is a chain of
+hinged struts: unless something else holds its joints, it buckles (a compressed straight chain is a
+saddle of the energy, and the bent one folds further at no cost), and the net around it has no stable
+equilibrium, or only a crumpled one. This is met with sinker bars along the free bottom of a curtain: the
+netting above gathers (its meshes close under the weight) and pushes the bar's ends together. A real rope
+goes slack in compression (``ea_compression=0``); a rigid bar needs a bending stiffness that cable bars do
+not model. In ``validation/robustness.py`` the curtains with slack-prone twines (the README's, the built-in
+hanging panel) stop on their sinker bar this way; given a slack sinker rope instead, more of them converge,
+not all: a strut is one cause of failure, the one this module recognises.
+
+Units: m, N.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: a bar is in compression when its strain is below minus this (dimensionless): not roundoff about its rest
+#: length
+COMPRESSED_STRAIN = 1e-9
+
+
+def compressed_struts(scene, x):
+    """The cables whose bars are pushed into compression with a compression stiffness, at positions x (N, 3)
+    (m), and whose compressed bars meet at a free joint (a node of exactly two bars that is not fixed on every
+    axis): hinged struts that buckle. Returns ``[(cable name, bars in compression, largest compressive strain,
+    one such joint)]``, the cable with the most compressed bars first; [] when there are none."""
+    bars = scene.bars
+    if bars is None:
+        return []
+    ends = np.asarray(bars.ends)
+    X = np.asarray(x, dtype=float)
+    length = np.linalg.norm(X[ends[:, 1]] - X[ends[:, 0]], axis=1)
+    strain = length / np.asarray(bars.rest_length, dtype=float) - 1.0
+    pushed = (strain < -COMPRESSED_STRAIN) & (np.asarray(bars.ea_compression, dtype=float) > 0.0)
+    if not pushed.any():
+        return []
+    degree = np.bincount(ends.ravel(), minlength=scene.n_nodes)
+    held = np.asarray(scene.nodes.fixed).all(axis=1)
+    cable = np.asarray(bars.cable)
+    found = []
+    for c in np.unique(cable[pushed]):
+        mine = pushed & (cable == c)
+        joints = [n for n in np.unique(ends[mine]) if degree[n] == 2 and not held[n]
+                  and np.count_nonzero(mine & ((ends[:, 0] == n) | (ends[:, 1] == n))) == 2]
+        if joints:
+            name = scene.cable_names[c] if c < len(scene.cable_names) else f"cable {int(c)}"
+            found.append((name, int(mine.sum()), float(-strain[mine].min()), int(joints[0])))
+    return sorted(found, key=lambda f: -f[1])
+
+
+def hints(scene, eq):
+    """Sentences saying what the stopping state of a failed static solve ``eq`` (an
+    :class:`~jaxnet.solve.results.Equilibrium`) shows and what to try; [] when nothing is recognised."""
+    out = []
+    struts = compressed_struts(scene, eq.x)
+    if struts:
+        name, count, strain, joint = struts[0]
+        others = "" if len(struts) == 1 else f" (and {len(struts) - 1} other cable(s))"
+        out.append(
+            f"cable {name!r}{others} has {count} bars in compression (strain down to {-strain:.3g}) that meet at "
+            f"free joints such as node {joint}: cable bars have no bending stiffness, so a compressed chain of "
+            f"them buckles and the net may have no stable equilibrium; a rope goes slack in compression: give it "
+            f"ea_compression=0 (jaxnet.solve.diagnosis explains)")
+    return out

@@ -1,0 +1,60 @@
+"""What a failed static solve says about the net (jaxnet.solve.diagnosis): hinged struts in compression.
+
+A chain of two cable bars between two held ends, drawn shorter than the bars: both are in compression by an
+exact strain. With a compression stiffness, the free joint between them makes a strut that buckles; a rope
+without one (ea_compression=0) goes slack and is no strut; a stretched chain, or a joint held on every axis,
+is none either.
+"""
+
+import numpy as np
+import pytest
+
+import jaxnet as jn
+from jaxnet.scene import Bars, Environment, Nodes, Scene
+from jaxnet.solve import diagnosis
+
+
+def chain(span=1.9, ea_compression=1e4, joint_fixed=False, load=0.0):
+    """Two bars of rest length 1 m from (0, 0, 0) to (span, 0, 0), the joint drawn at the middle; ``load``
+    (N) pushes the joint sideways (along y)."""
+    pos = np.array([[0.0, 0.0, 0.0], [span / 2, 0.0, 0.0], [span, 0.0, 0.0]])
+    fixed = np.array([[True] * 3, [joint_fixed] * 3, [True] * 3])
+    force = np.zeros((3, 3))
+    force[1, 1] = load
+    nodes = Nodes(position=pos, fixed=fixed, mass=np.zeros(3), volume=np.zeros(3), force=force)
+    bars = Bars(ends=np.array([[0, 1], [1, 2]]), rest_length=np.ones(2), ea_traction=np.full(2, 1e4),
+                ea_compression=np.full(2, ea_compression), diameter=np.full(2, 1e-3), density=np.full(2, 1e-9),
+                cable=np.zeros(2, dtype=int))
+    return Scene(nodes=nodes, bars=bars, environment=Environment(gravity=0.0), cable_names=("strut",))
+
+
+def test_a_compressed_chain_with_compression_stiffness_is_a_strut():
+    scene = chain(span=1.9)
+    (name, count, strain, joint), = diagnosis.compressed_struts(scene, scene.nodes.position)
+    assert (name, count, joint) == ("strut", 2, 1)
+    assert strain == pytest.approx(0.05, rel=1e-12)  # each bar 0.95 m for 1 m at rest
+
+
+@pytest.mark.parametrize("options, span", [({"ea_compression": 0.0}, 1.9), ({}, 2.1), ({"joint_fixed": True}, 1.9)],
+                         ids=["slack rope", "stretched", "joint held"])
+def test_no_strut(options, span):
+    scene = chain(span=span, **options)
+    assert diagnosis.compressed_struts(scene, scene.nodes.position) == []
+
+
+def test_a_failed_solve_names_the_strut_and_what_to_try():
+    # the joint pushed sideways: the compressed straight chain has a negative sideways stiffness, so the first
+    # damped step is no descent and the solve stops where it started, on the strut
+    scene = chain(span=1.9, load=1.0)
+    with pytest.raises(jn.SolveError) as failure:
+        jn.solve_static(scene, max_iter=1)
+    assert diagnosis.compressed_struts(scene, failure.value.equilibrium.x)
+    assert "cable 'strut' has 2 bars in compression" in str(failure.value)
+    assert "ea_compression=0" in str(failure.value)
+
+
+def test_a_failed_solve_without_struts_claims_none():
+    scene = chain(span=1.9, load=1.0, ea_compression=0.0)  # a slack rope: nothing holds the joint
+    with pytest.raises(jn.SolveError) as failure:
+        jn.solve_static(scene, max_iter=1)
+    assert "compression" not in str(failure.value)
