@@ -2,9 +2,11 @@
 
 The tangent of a net is sparse, often nearly singular (slack twines, a flat membrane has no out-of-plane
 stiffness) and badly conditioned (EA/l0 against small geometric stiffness): Krylov methods with cheap
-preconditioners do not converge on it (measured: ../shared/notes/solvers.md), so it is factorised by
-SuperLU (scipy), called from inside jitted code through ``jax.pure_callback`` and run on a Python thread
-of this module's (:func:`on_solver_thread`: SuperLU's memory is freed only there). The structure (indptr,
+preconditioners do not converge on it (measured: ../shared/notes/solvers.md), so it is factorised on the
+host: by oneMKL's PARDISO where MKL is installed (:class:`PardisoSolver`, :mod:`jaxnet.pardiso` says why),
+else by SuperLU (scipy, :class:`HostSolver`), which is also PARDISO's fallback; :func:`direct_solver`
+picks. Jitted code calls them through ``jax.pure_callback``, on a Python thread of this module's
+(:func:`on_solver_thread`: SuperLU's memory is freed only there). What follows is SuperLU's. The structure (indptr,
 indices) is passed as arguments, so one compiled program serves every scene of the same shape. The
 minimum-degree ordering on A^T + A suits the structurally symmetric pattern of finite elements (about
 half the fill of COLAMD on these matrices).
@@ -44,6 +46,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from jaxnet import pardiso
 from jaxnet.memo import Memo
 
 #: A diagonal entry is the pivot of its column when it is at least this fraction of the column's largest
@@ -132,7 +135,7 @@ def _lookup_solver(indptr, indices):
     # one solver per structure and thread: the callbacks of a program sharded over several devices run in
     # several of XLA's threads at once, and a solver holds its last factor (not to be shared mid-solve)
     key = (_structure_digest(indptr, indices), threading.get_ident())
-    return _SOLVERS.get_or_make(key, lambda: HostSolver(indptr, indices))
+    return _SOLVERS.get_or_make(key, lambda: direct_solver(indptr, indices))
 
 
 def host_solve(data, rhs, indptr, indices, transpose=False, reuse=False):
@@ -410,3 +413,42 @@ class HostSolver:
             r, norm = b - self._a @ x, self._norm
         scale = norm * np.max(np.abs(x), axis=0, initial=0.0) + np.max(np.abs(b), axis=0, initial=0.0)
         return np.max(np.abs(r), axis=0, initial=0.0) / np.where(scale > 0, scale, 1.0), r
+
+
+class PardisoSolver(HostSolver):
+    """:class:`HostSolver` with its factorisations made by PARDISO (:mod:`jaxnet.pardiso`) instead of SuperLU:
+    the same interface, the same check of every solution's backward error, the same iterative refinement,
+    and the same fallback, to SuperLU with partial pivoting (counted in ``fallbacks``), when a solution stays
+    inaccurate, PARDISO fails, or it perturbs a pivot (the matrix is singular or nearly so). Its structure is analysed (ordered) at its first factorisation. ``order`` is
+    None: PARDISO keeps its ordering to itself."""
+
+    def __init__(self, indptr, indices, tolerance=TOLERANCE, refinements=REFINEMENTS):
+        super().__init__(indptr, indices, tolerance=tolerance, refinements=refinements)
+        self._pardiso = pardiso.Factor(self.indptr, self.indices)
+
+    @property
+    def factor_entries(self):
+        if self._lu is None:
+            return 0
+        return super().factor_entries if self._pivoted else self._pardiso.entries
+
+    def _factor_diagonal(self, data):
+        # a RuntimeError (PARDISO failed, or perturbed a pivot) sends HostSolver.factorize to the fallback
+        self._pardiso.factor(data)
+        if self._pardiso.perturbed_pivots:
+            # A perturbed pivot factorises a nearby matrix: of a singular one, a solution far too large whose
+            # backward error is nevertheless small. Partial pivoting decides instead (SuperLU's exact zero
+            # pivots refuse a singular matrix). The Newton tangents, damped, perturb none.
+            raise RuntimeError("PARDISO perturbed a pivot")
+        self._lu, self._perm = self._pardiso, None
+
+    def _lu_solve(self, b, transpose=False):
+        if self._pivoted:
+            return super()._lu_solve(b, transpose)
+        return self._pardiso.solve(b, transpose)
+
+
+def direct_solver(indptr, indices):
+    """The sparse direct solver of the tangents of one structure: a :class:`PardisoSolver` where MKL is installed
+    (:func:`jaxnet.pardiso.available`), else a :class:`HostSolver` (SuperLU). Both have the same interface."""
+    return PardisoSolver(indptr, indices) if pardiso.available() else HostSolver(indptr, indices)

@@ -39,8 +39,8 @@ class Timing:
     The static solve's host loop (:func:`jaxnet.solve.statics.host_loop`) also splits its own time, where
     the others leave these at 0:
     assembly_s: computing the tangents (element matrices on the device and their sum into the pattern).
-    factorisation_s: factorising and solving with them on the host (SuperLU: ordering, factors, the
-      triangular solves and their accuracy checks).
+    factorisation_s: factorising and solving with them on the host (:func:`jaxnet.linalg.direct_solver`:
+      ordering, factors, the triangular solves and their accuracy checks).
     evaluation_s: evaluating the residual (once per line-search trial, and at the start).
     factorisations, evaluations: how many of each the solve made.
     The rest of ``wall_s`` less ``compile_s`` is the loop's own bookkeeping on the host.

@@ -6,7 +6,8 @@ stiffness continuation, its pieces compiled once per scene shape.
 
 The driver. :func:`solve` compiles the evaluation of the residual and the tangent once each (in parallel,
 :func:`compile_pieces`), and each iteration of :func:`host_loop` calls the tangent once, factorises on the
-host (SuperLU, the ordering computed once per sparsity pattern and kept: :class:`jaxnet.linalg.HostSolver`)
+host (:func:`jaxnet.linalg.direct_solver`: PARDISO where MKL is installed, else SuperLU with its ordering kept
+per sparsity pattern)
 and calls the evaluation once per line-search trial, from the last accepted iterate's catch front
 (:func:`jaxnet.solve.kernel.evaluate`'s ``previous``). Same rules and arithmetic as the jittable
 :func:`jaxnet.solve.newton.newton_loop` (shared functions). Its compiled pieces are half the size of the
@@ -158,7 +159,7 @@ def compile_pieces(start, scene, pattern, model, stiffness="autodiff"):
 
 def host_loop(start, scene, pattern, model, solver: Newton, pieces=None):
     """The Newton iteration of :func:`jaxnet.solve.newton.newton_loop` with the stiffness continuation,
-    driven from Python: each iteration calls the compiled tangent once, factorises on the host (SuperLU) and
+    driven from Python: each iteration calls the compiled tangent once, factorises on the host and
     calls the compiled evaluation once per line-search trial. Same rules (shared functions), same result;
     prints progress as it goes when verbose. ``pieces``: the compiled programs (:func:`compile_pieces`),
     obtained here if not given. Returns an :class:`Equilibrium` whose :class:`Timing` splits the loop's
@@ -170,7 +171,7 @@ def host_loop(start, scene, pattern, model, solver: Newton, pieces=None):
     n_nodes = scene.n_nodes
     free = np.asarray(pattern.free)
     indptr, indices = np.asarray(pattern.indptr), np.asarray(pattern.indices)
-    factor = linalg.HostSolver(indptr, indices)
+    factor = linalg.direct_solver(indptr, indices)
     spent = dict(assembly_s=0.0, factorisation_s=0.0, evaluation_s=0.0, factorisations=0, evaluations=0)
 
     def factor_solve(entries, rhs):

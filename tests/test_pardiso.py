@@ -1,0 +1,135 @@
+"""PardisoSolver (jaxnet.linalg, jaxnet.pardiso): the same checks as SuperLU's HostSolver (tests/test_linalg.py)
+on the same matrices: solutions against numpy's dense solve, transposed solves on one factor, several
+right-hand sides, a nearly singular net tangent solved backward stably, a zero diagonal block, singular and
+non-finite matrices refused without NaN; and which solver jaxnet picks.
+
+MKL is a dependency of jaxnet on x86-64 (pyproject.toml): there PARDISO must be found, and these tests run.
+Elsewhere MKL does not exist and jaxnet factorises with SuperLU alone; the PARDISO tests then have nothing to
+test and say so.
+"""
+
+import platform
+
+import numpy as np
+import pytest
+
+from jaxnet import linalg, pardiso
+from test_linalg import backward_error, block_mask, csr, kkt, net_tangent, random_on, sheet
+
+needs_mkl = pytest.mark.skipif(platform.machine() not in ("x86_64", "AMD64") and pardiso.library() is None,
+                               reason="MKL exists on x86-64 only: SuperLU alone factorises here")
+
+
+def test_mkl_is_found_wherever_it_is_a_dependency():
+    if platform.machine() in ("x86_64", "AMD64"):
+        assert pardiso.library() is not None
+
+
+@needs_mkl
+def test_random_block_systems_and_their_transposes_match_the_dense_solve():
+    rng = np.random.default_rng(1)
+    x, edges = sheet()
+    mask = block_mask(len(x), edges)
+    A = random_on(mask, rng)
+    indptr, indices, data = csr(mask, A)
+    solver = linalg.PardisoSolver(indptr, indices)
+    b = rng.standard_normal(A.shape[0])
+    xs, ok = solver.solve(data, b)
+    assert ok and solver.fallbacks == 0 and solver.factor_entries > len(data) // 2
+    np.testing.assert_allclose(xs, np.linalg.solve(A, b), rtol=0, atol=1e-12 * np.abs(xs).max())
+    xt, ok = solver.solve(data, b, transpose=True, reuse=True)
+    assert ok and solver.factorizations == 1  # the transposed solve on the same factor
+    np.testing.assert_allclose(xt, np.linalg.solve(A.T, b), rtol=0, atol=1e-12 * np.abs(xt).max())
+
+
+@needs_mkl
+def test_a_nearly_singular_net_tangent_is_solved_backward_stably():
+    rng = np.random.default_rng(2)
+    mask, A = net_tangent(rng)
+    cond = np.linalg.cond(A)
+    assert cond > 1e10
+    indptr, indices, data = csr(mask, A)
+    solver = linalg.PardisoSolver(indptr, indices)
+    for _ in range(2):  # the second matrix reuses the analysis
+        b = rng.standard_normal(A.shape[0])
+        xs, ok = solver.solve(data, b)
+        assert ok and backward_error(A, xs, b) < 1e-14 and solver.backward_error < 1e-14
+        np.testing.assert_allclose(xs, np.linalg.solve(A, b), rtol=0, atol=1e-15 * cond * np.abs(xs).max())
+
+
+@needs_mkl
+def test_a_zero_diagonal_block_is_solved_accurately_by_the_fallback():
+    # PARDISO perturbs the zero pivots of the saddle point instead of exchanging rows: the matrix is then
+    # factorised again by SuperLU with partial pivoting, and solved accurately
+    rng = np.random.default_rng(3)
+    mask, A = kkt(rng, eps=0.0)
+    indptr, indices, data = csr(mask, A)
+    b = rng.standard_normal(A.shape[0])
+    solver = linalg.PardisoSolver(indptr, indices)
+    xs, ok = solver.solve(data, b)
+    assert ok and solver.fallbacks == 1 and backward_error(A, xs, b) < 1e-14
+    np.testing.assert_allclose(xs, np.linalg.solve(A, b), rtol=0, atol=1e-11 * np.abs(xs).max())
+
+
+@needs_mkl
+def test_singular_or_non_finite_matrices_give_ok_false_and_no_nan():
+    rng = np.random.default_rng(5)
+    x, edges = sheet()
+    mask = block_mask(len(x), edges)
+    A = random_on(mask, rng)
+    A[7, :] = A[:, 7] = 0.0  # a dof with no stiffness at all: exactly singular
+    indptr, indices, data = csr(mask, A)
+    b = rng.standard_normal(A.shape[0])
+    solver = linalg.PardisoSolver(indptr, indices)
+    xs, ok = solver.solve(data, b)
+    assert not ok and np.all(xs == 0) and not solver.ok
+    assert solver.fallbacks == 1  # PARDISO perturbed the zero pivot: partial pivoting refused the matrix
+    bad = data.copy()
+    bad[3] = np.nan
+    xs, ok = solver.solve(bad, b)
+    assert not ok and np.all(xs == 0)
+    good = csr(mask, random_on(mask, rng))[2]  # a regular matrix afterwards is solved again
+    xs, ok = solver.solve(good, b)
+    assert ok and np.all(np.isfinite(xs))
+
+
+@needs_mkl
+def test_several_right_hand_sides_equal_column_by_column_solves():
+    rng = np.random.default_rng(6)
+    mask, A = net_tangent(rng, mu=1e-3)
+    indptr, indices, data = csr(mask, A)
+    solver = linalg.PardisoSolver(indptr, indices)
+    assert solver.factorize(2 * data) and solver.factorize(data)
+    B = rng.standard_normal((A.shape[0], 4))
+    X = solver.apply(B)
+    assert X.shape == B.shape and solver.ok
+    for j in range(B.shape[1]):
+        # PARDISO solves several columns with other kernels than one: the same to rounding, not to the bit
+        np.testing.assert_allclose(X[:, j], solver.apply(B[:, j]), rtol=0, atol=1e-11 * np.abs(X).max())
+    np.testing.assert_allclose(X, np.linalg.solve(A, B), rtol=0, atol=1e-9 * np.abs(X).max())
+
+
+@needs_mkl
+def test_the_same_matrix_gives_the_same_bits():
+    # a solve does not depend on what was solved before (SuperLU's first factorisation of a structure orders
+    # itself and the later ones take the stored permutation: their last bits differ)
+    rng = np.random.default_rng(8)
+    mask, A = net_tangent(rng, mu=1e-3)
+    indptr, indices, data = csr(mask, A)
+    b = rng.standard_normal(A.shape[0])
+    solver = linalg.PardisoSolver(indptr, indices)
+    first, _ = solver.solve(data, b)
+    solver.solve(2 * data, b)
+    again, _ = solver.solve(data, b)
+    fresh, _ = linalg.PardisoSolver(indptr, indices).solve(data, b)
+    assert np.array_equal(first, again) and np.array_equal(first, fresh)
+
+
+def test_the_choice_of_solver(monkeypatch):
+    x, edges = sheet()
+    indptr, indices, _ = csr(block_mask(len(x), edges), np.zeros((3 * len(x),) * 2))
+    monkeypatch.setenv(pardiso.CHOICE, "superlu")
+    assert type(linalg.direct_solver(indptr, indices)) is linalg.HostSolver
+    monkeypatch.delenv(pardiso.CHOICE)
+    expected = linalg.PardisoSolver if pardiso.library() is not None else linalg.HostSolver
+    assert type(linalg.direct_solver(indptr, indices)) is expected
