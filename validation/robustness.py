@@ -644,13 +644,18 @@ def _change(b, a):
 # -- the report section and the command line -------------------------------------------------------------------
 
 
+#: the records the report compares each run with: the quick set on the solver as it was before this set existed
+#: (SuperLU factorising, revision f313c60)
+BASELINE = ROOT / "validation" / "results" / "robustness_before.json"
+
+
 def run(report, quick: bool) -> None:
-    """The report section (``python -m validation`` interface): the set at the quick or full size."""
+    """The report section (``python -m validation`` interface): the set at the quick or full size; the per-case
+    table goes to the output and ``validation/results/robustness.json``, the report gets the summary, the
+    failures and the comparison with :data:`BASELINE` per family."""
     size = "quick" if quick else "full"
     report.text(__doc__.split("\n\n", 2)[2].split("\n\nPer case")[0])
-    records = run_cases(cases(size), out=report.results / "robustness.json",
-                        echo=lambda line: print(line, flush=True))
-    report.table([dict(zip(COLUMNS, row_cells(r))) for r in records])
+    records = run_cases(cases(size), out=report.results / "robustness.json", echo=lambda line: print(line, flush=True))
     report.heading("Summary")
     report.text(summary_note(records))
     report.table(summary(records), formats=SUMMARY_FORMATS)
@@ -658,6 +663,11 @@ def run(report, quick: bool) -> None:
         report.table(failures(records), caption="The cases that did not converge")
     if not_read(records):
         report.table(not_read(records), caption="FEMNET's files the reader refuses")
+    if BASELINE.exists():
+        report.heading("Against the baseline")
+        comparison = compare(read_records(BASELINE), records)
+        report.text("Per family, over the cases in both runs (" + BASELINE.name + ": before this set's first solver "
+                    "change):\n\n" + comparison.split("Summary over the cases in both, before and after:\n\n")[-1])
 
 
 def main(argv=None):
