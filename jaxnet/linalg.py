@@ -6,8 +6,8 @@ preconditioners do not converge on it (measured: ../shared/notes/solvers.md), so
 host: by oneMKL's PARDISO where MKL is installed (:class:`PardisoSolver`, :mod:`jaxnet.pardiso` says why),
 else by SuperLU (scipy, :class:`HostSolver`), which is also PARDISO's fallback; :func:`direct_solver`
 picks. Jitted code calls them through ``jax.pure_callback``, on a Python thread of this module's
-(:func:`on_solver_thread`: SuperLU's memory is freed only there). What follows is SuperLU's. The structure (indptr,
-indices) is passed as arguments, so one compiled program serves every scene of the same shape. The
+(:func:`on_solver_thread`: SuperLU's memory is freed only there). What follows is SuperLU's. The structure
+(indptr, indices) is passed as arguments, so one compiled program serves every scene of the same shape. The
 minimum-degree ordering on A^T + A suits the structurally symmetric pattern of finite elements (about
 half the fill of COLAMD on these matrices).
 
@@ -419,8 +419,9 @@ class PardisoSolver(HostSolver):
     """:class:`HostSolver` with its factorisations made by PARDISO (:mod:`jaxnet.pardiso`) instead of SuperLU:
     the same interface, the same check of every solution's backward error, the same iterative refinement,
     and the same fallback, to SuperLU with partial pivoting (counted in ``fallbacks``), when a solution stays
-    inaccurate, PARDISO fails, or it perturbs a pivot (the matrix is singular or nearly so). Its structure is analysed (ordered) at its first factorisation. ``order`` is
-    None: PARDISO keeps its ordering to itself."""
+    inaccurate, PARDISO fails, or it perturbs a pivot (the matrix is singular or nearly so). Its structure
+    is analysed (ordered) at its first factorisation. ``order`` is None: PARDISO keeps its ordering to
+    itself."""
 
     def __init__(self, indptr, indices, tolerance=TOLERANCE, refinements=REFINEMENTS):
         super().__init__(indptr, indices, tolerance=tolerance, refinements=refinements)

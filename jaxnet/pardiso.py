@@ -6,11 +6,11 @@ nonsymmetric matrices (``mtype`` 11: the tangents are structurally symmetric and
 drag making them slightly nonsymmetric) with MKL's defaults except: indices from zero; no maximum weighted
 matching (``iparm[12] = 0``, "iparm(13)" in MKL's one-based numbering), which on these tangents doubles the
 fill and leaves solutions inaccurate (backward errors 1e-7 to 1e-3); no refinement of its own (jaxnet checks
-and refines); no matrix check. Pivots too small are
-perturbed (MKL's default for ``mtype`` 11, 1e-13 relative) instead of exchanged, so the factor keeps the
-ordering's fill whatever the pivots: what makes it fast on the cage's tangents, where SuperLU's threshold
-pivoting leaves the symmetric ordering and fills several times more. A perturbed factor is only
-approximate: :class:`jaxnet.linalg.PardisoSolver` checks every solution and refines it, as it does SuperLU's.
+and refines); no matrix check. Pivots too small are perturbed (MKL's default for ``mtype`` 11, 1e-13
+relative) instead of exchanged, so the factor keeps the ordering's fill whatever the pivots: what makes it
+fast on the cage's tangents, where SuperLU's threshold pivoting leaves the symmetric ordering and fills
+several times more. A perturbed factor is of a nearby matrix: :class:`jaxnet.linalg.PardisoSolver` hands
+such a matrix to SuperLU with partial pivoting, and checks and refines every solution, as it does SuperLU's.
 
 Why it. Measured side by side on the static solver's own tangents (``validation/bench_factorisation.py``):
 against SuperLU with a minimum-degree ordering, PARDISO factorises as fast on FEMNET's cod-end (10³ nodes)

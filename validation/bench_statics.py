@@ -35,7 +35,7 @@ import sys
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 #: FEMNET's cases timed by default (``--scene femnet``)
-FEMNET_CASES = (str(ROOT / "tests" / "data" / "femnet" / "c2.don"), str(ROOT / "tests" / "data" / "femnet" / "nr_netting.don"))
+FEMNET_CASES = tuple(str(ROOT / "tests" / "data" / "femnet" / name) for name in ("c2.don", "nr_netting.don"))
 #: the cage's meshing step (m) and node count it gives: nodes grow as 1/step²
 CAGE_STEP, CAGE_NODES = 0.5, 1161
 
@@ -128,14 +128,16 @@ def main():
     for size in sizes:
         extra = [] if args.ea_compression is None else ["--ea-compression", str(args.ea_compression)]
         out = subprocess.run([sys.executable, __file__, "--one", size, "--scene", args.scene, "--current",
-                              str(args.current), "--max-iter", str(args.max_iter), *extra], capture_output=True, text=True)
+                              str(args.current), "--max-iter", str(args.max_iter), *extra],
+                             capture_output=True, text=True)
         if out.returncode != 0:
             print(f"| {size} | failed: {out.stderr.strip().splitlines()[-1] if out.stderr else out.returncode} |")
             continue
         r = json.loads(out.stdout.strip().splitlines()[-1])
         rows.append(r)
         stop = "" if r["reason"] == "converged" else f" ({r['reason']})"
-        print(f"| {r['case']}{stop} | {r['nodes']} | {r['dof']} | {r['nnz']} | {r['compile_s']:.2f} | {r['iterations']} | "
+        print(f"| {r['case']}{stop} | {r['nodes']} | {r['dof']} | {r['nnz']} | {r['compile_s']:.2f} | "
+              f"{r['iterations']} | "
               f"{r['factorisations']} | {r['assembly_s']:.4f} | {r['factor_s']:.4f} | {r['iteration_s']:.4f} | "
               f"{r['per_iteration']:.2f} | {r['ratio']:.2f} | {r['residual_N']:.2e} | {r['peak_MB']:.0f} |", flush=True)
     if len(rows) >= 2 and args.scene != "femnet":
