@@ -14,7 +14,7 @@ such a matrix to SuperLU with partial pivoting, and checks and refines every sol
 
 Why it. Measured side by side on the static solver's own tangents (``validation/bench_factorisation.py``):
 against SuperLU with a minimum-degree ordering, PARDISO factorises as fast on FEMNET's cod-end (10³ nodes)
-and several to tens of times faster on the cage from 10⁴ to 10⁵ nodes, with half the fill or less;
+and several to tens of times faster on the cage from 10⁴ to 10⁵ nodes, with less fill;
 SuperLU with METIS's ordering, UMFPACK, KLU and MUMPS are slower than PARDISO at every size there, and the
 symmetric factorisations (CHOLMOD, LDLᵀ) give inaccurate solutions once drag makes the tangent
 nonsymmetric. PARDISO solves with A or with Aᵀ on one factor (``iparm[11]``), which the implicit function
