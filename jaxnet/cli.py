@@ -120,7 +120,7 @@ def _run(args):
         failed, eq = err, err.equilibrium
     result = figures.summary(scene, eq)
     if "symmetry_axes" in case.info:  # a FEMNET case: its own figures, and what the reader decided
-        result["femnet"] = femnet.femnet_figures(scene, eq, case.info["symmetry_axes"])
+        result["femnet"] = femnet.femnet_figures(scene, eq, case.info["symmetry_axes"], case.info.get("fixity"))
         result["femnet_case"] = case.info
     (out / "result.json").write_text(json.dumps(result, indent=2))
     vtk.write_vtu(out / "net.vtu", scene, eq.x)

@@ -109,11 +109,6 @@ def _line_of(text, needle):
     ("Traction stiffness (N):\t\t\t6000.000000", "Traction stiffness (N):\t\t\t-6000.000000", "-6000", "must be >= 0"),
     ("L: 1.97", "L: 0.0", "L: 0.0", "must be > 0"),
     # (waves and dynamic settings are read: test_dynamic_settings_and_waves_are_read checks their errors)
-    # a node box with a volume floats in FEMNET (flotteur2.c: buoyancy of its immersed part), which jaxnet does
-    # not model: refused (a box with a zero length is read: drag only, tests/test_femnet_nodes.py)
-    ("Length X,Y,Z (m):        0.000000  0.000000  0.000000\nDrag coefficient X,Y,Z:        1.200000  1.200000  1.200000\nExternal forces X,Y,Z (N):    0.000000  0.000000  0.000000\nDisplacement X,Y,Z:        0 0 0",
-     "Length X,Y,Z (m):        0.300000  0.300000  0.300000\nDrag coefficient X,Y,Z:        1.200000  1.200000  1.200000\nExternal forces X,Y,Z (N):    0.000000  0.000000  0.000000\nDisplacement X,Y,Z:        0 0 0",
-     "0.300000\nDrag", "length [0.3, 0.3, 0.3] m is not supported"),
     # a limit's sense is -1 (ceiling), 0 (none) or 1 (floor, fond.c's sea bed): anything else is refused
     ("Limits sens X,Y,Z:        0  0  0\nSymetry X,Y,Z:            0  0  0\n\nNUMERIC", "Limits sens X,Y,Z:        0  0  2\nSymetry X,Y,Z:            0  0  0\n\nNUMERIC",
      "0  0  2\nSymetry X,Y,Z:            0  0  0\n\nNUMERIC", "limits sense must be"),

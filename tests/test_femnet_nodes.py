@@ -196,11 +196,7 @@ def test_a_floor_holds_the_sinker_rope_no_deeper_than_its_load_over_the_stiffnes
 
 @pytest.mark.parametrize("changes, needle, words", [
     (dict(length=(-0.1, 0.5, 0)), "Length X,Y,Z", "length X must be >= 0"),
-    # a box with a volume floats in FEMNET (flotteur2.c): no buoyancy term in jaxnet, refused
-    (dict(length=(0.1, 0.2, 0.3)), "Length X,Y,Z", "flotteur2.c"),
     (dict(length=(0, 0.5, 1e6)), "Length X,Y,Z", "out of range"),
-    # nodes at z = -1 m: a 1.5 m float would reach above FEMNET's water surface z = 0
-    (dict(length=(0, 0.5, 1.5)), "Length X,Y,Z", "above FEMNET's water surface"),
     (dict(sense=(0, 0, 2)), "Limits sens X,Y,Z", "limits sense must be -1"),
     (dict(limit=(0, 0, -2e5)), "Limits X,Y,Z", "out of range"),
     # a floor without a stiffness does nothing in FEMNET (fond.c): refused at the stiffness's line

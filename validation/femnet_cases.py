@@ -58,7 +58,7 @@ def one(case, data, mesh, stiffness="autodiff"):
         solve(scene, solver, throw=False, stiffness=stiffness)
         warm_times.append(time.perf_counter() - t1)
     warm = float(np.median(warm_times))
-    fig = femnet.femnet_figures(scene, eq, info["symmetry_axes"])
+    fig = femnet.femnet_figures(scene, eq, info["symmetry_axes"], info.get("fixity"))
     positions, _, _, summary = femnet.read_sta(data / f"{case}.sta", *_mdg_counts(data, case))
     rows = []
 

@@ -55,6 +55,7 @@ class Field:
     values: tuple = ()
     one_line: bool = False
     then: Callable | None = None
+    unset: float | None = None    # FEMNET's value when the file leaves it out (None: refused)
 
     def value_names(self, prefix=""):
         """How messages name its several values, after the part's ``prefix``."""
@@ -73,6 +74,12 @@ def read(r: Reader, f: Field, prefix=""):
     what = prefix + f.what
     r.label(f.label, what)
     if not f.values:
+        if f.unset is not None and r.missing():
+            # FEMNET's fscanf fails on the next label and leaves the value unset (zeroed memory): a drag coefficient
+            # left out of a line (the seines' "Normal Cd:" of panel 26) is 0
+            r.warnings.append(f"{r.path}:{r.last[1]}: '{what}' has no value: FEMNET leaves it unset, taken as "
+                              f"{f.unset!r}")
+            return Value(f.unset, r.last[1])
         v = r.integer(what, f.minimum) if f.integer else r.number(what, f.check)
         if f.then is not None:
             f.then(r, v, f, prefix)
@@ -94,10 +101,12 @@ def read_all(r: Reader, fields, prefix=""):
     return {f.key: read(r, f, prefix) for f in fields}
 
 
-def _only_design_plane_3(r, v, f, prefix):
-    """FEMNET's design plane 3 takes x y z as written; 1 and 2 permute them (not supported)."""
-    if v.value != 3:
-        raise r.error(f"{prefix}{f.what} {v.value}: only 3 (x y z as written) is supported", v.line)
+def _design_plane_axis(r, v, f, prefix):
+    """FEMNET's design plane is the plane its mesher draws a panel in (1, 2, 3: normal to x, y, z): the mesher
+    permutes the coordinates to draw and writes its mesh back in the file's order, so x y z are world
+    coordinates whatever the axis, and jaxnet's mesher, which meshes in 3-D, needs nothing of it."""
+    if v.value not in (1, 2, 3):
+        raise r.error(f"{prefix}{f.what} {v.value}: an axis is 1, 2 or 3 (x, y or z)", v.line)
 
 
 def _only_zero(reason):
@@ -119,48 +128,63 @@ LMN = ("l", "m", "n")
 
 # -- the counts of the file's parts, in the file's order ------------------------------------------------------
 DESIGN_PLANE = field("orientation", "design in the plane normal to axis", r"design in the plane normal to axis",
-                     integer=True, then=_only_design_plane_3)
-PANELS_NUMBER = field("panels", "panels number", r"panels number", integer=True, minimum=0)
-HEXAGONAL_PANELS_NUMBER = field("hexa", "hexagonal panels number", r"hexagonal panels number", integer=True,
+                     r"plane normal (to|yo) [xyz] axis",
+                     r"calcul dans le plan perpendiculaire a [xyz] cad coordonnees [xyz] cstes",
+                     integer=True, then=_design_plane_axis)
+PANELS_NUMBER = field("panels", "panels number", r"panels number", r"diamond panel nb", r"nombre de panneaux", integer=True, minimum=0)
+HEXAGONAL_PANELS_NUMBER = field("hexa", "hexagonal panels number", r"hexagonal panels number",
+                                r"nombre de panneaux hexagonaux", integer=True,
                                 minimum=0)
-CABLES_NUMBER = field("cables", "cables number", r"cables number", integer=True, minimum=0)
-SLIDING_CABLES_NUMBER = field("sliding", "sliding cables number", r"sliding cables number", integer=True, minimum=0,
+CABLES_NUMBER = field("cables", "cables number", r"cables number", r"cable nb", r"nombre d ?elements", integer=True, minimum=0)
+SLIDING_CABLES_NUMBER = field("sliding", "sliding cables number", r"sliding cables number", r"nombre de coulisses?",
+                              r"nb sliding ropes", integer=True, minimum=0,
                               then=_only_zero("sliding cables are not supported by this reader"))
-LINKS_NUMBER = field("links", "links number", r"links number", integer=True, minimum=0)
-NODE_TYPES_NUMBER = field("types", "number of types of nodes", r"number of types of nodes", integer=True, minimum=1)
+LINKS_NUMBER = field("links", "links number", r"links number", r"nombre de liaisons?", r"links nb", integer=True, minimum=0)
+NODE_TYPES_NUMBER = field("types", "number of types of nodes", r"number of types of nodes",
+                          r"type of node in the structure", r"node types nb", r"nombre de types de noeuds? dans la structure", integer=True, minimum=1)
 
 #: how messages name the parts of each kind (links and the meshing order name them by these keys)
 PART_NAMES = {"pa": "panel", "ha": "hexagonal panel", "el": "cable"}
 
 #: labels that open a part, or an entry of a list, read by that part's parser (messages name the part)
 HEADINGS = {
-    "panel": spelled(r"panel"),                                   # then its number
-    "contour": spelled(r"nodes of the contour.*"),                # then the corners: no x y z U V type side-type
-    "cable": spelled(r"cable"),                                   # then its number
-    "cable ends": spelled(r"extremities no x y z type"),          # then the two ends: no x y z type
-    "link": spelled(r"nb_? ?pts?", r"number of (points|corners)", r"link( \d+)?"),  # then its number of points
+    "panel": spelled(r"p?panel", r"panneau"),                                   # then its number
+    "contour": spelled(r"nodes of the contour.*", r"nb x y z u v ty ty", r"points du contour.*"),                # then the corners: no x y z U V type side-type
+    "cable": spelled(r"cable", r"element", r"el", r"ca", r"e"),                                   # then its number
+    "cable ends": spelled(r"extremities no x y z type", r"description des extremites( no x y z no_type)?", r"no x y z no_type", r"d",
+                          r"desc", r"ex", r"e"),          # then the two ends: no x y z type
+    "link": spelled(r"nb_? ?pts?", r"number of (points|corners)", r"link( \d+)?", r"nb"),  # then its number of points
     "link structure": spelled(r"pa", r"panel", r"ha", r"he", r"hexa", r"el", r"element", r"co", r"wi", r"winch"),
     "link corner": spelled(r"nd", r"no", r"node", r"corner", r"extremity"),
-    "meshing order": spelled(r"meshing order"),
+    "meshing order": spelled(r"meshing order", r"ordre de maillage", r"numerical meshing ordering"),
     "meshing order entry": spelled(r"el", r"pa", r"ha", r"he"),
-    "node type": spelled(r"no du type", r"type"),                 # then its number
+    "node type": spelled(r"no du type", r"type", r"type nb"),                 # then its number
 }
 
 # -- materials (prefixed by the part's name: "panel 1: ", "hexagonal panel 1: ", "cable 1: ") ----------------
-PANEL_CORNERS = field("corners", "number of nodes around", r"number of nodes around", integer=True, minimum=3)
-TRACTION_STIFFNESS = field("ea", "traction stiffness", r"traction stiffness( \(n\))?", r"kt", check=">=0")
-COMPRESSION_STIFFNESS = field("eac", "compression stiffness", r"compression stiffness( \(n\))?", r"kc", check=">=0")
-OPENING_STIFFNESS = field("opening", "mesh opening stiffness", r"mesh opening stiffness( \(n\.m/rad\))?", check=">=0")
-UNSTRETCHED_LENGTH = field("l0", "unstretched length", r"unstretched length( \(m\))?", r"l", check=">0")
-VOLUMIC_MASS = field("density", "volumic mass", r"volumic mass( \(kg/m3\))?", r"vm", check=">=0")
-DIAMETER = field("diameter", "hydrodynamic diameter", r"hydrodynamic diameter( \(m\))?", r"d", check=">=0")
-KNOT_SIZE = field("knot", "knot size", r"knot size( \(m\))?", check=">=0")
-NORMAL_CD = field("cd", "normal Cd", r"normal cd", r"cd", check=">=0")
-TANGENTIAL_CD = field("f", "tangential Cd", r"tangential cd", r"f", check=">=0")
-MESHING_STEP = field("step", "meshing step", r"meshing step( \(m\))?", check=">0")
-INTERNAL_NODES_TYPE = field("inner_type", "type of internal nodes", r"type of internal nodes", r"ty", integer=True,
+PANEL_CORNERS = field("corners", "number of nodes around", r"number of nodes around", r"nombre de points du contour", integer=True, minimum=3)
+TRACTION_STIFFNESS = field("ea", "traction stiffness", r"traction stiffness( \(n\))?", r"kt( \(n\))?", r"rt",
+                           r"raideur traction( \(n\))?", check=">=0")
+COMPRESSION_STIFFNESS = field("eac", "compression stiffness", r"compression stiffness( \(n\))?", r"kc( \(n\))?",
+                              r"rc", r"raideur compression( \(n\))?", check=">=0")
+OPENING_STIFFNESS = field("opening", "mesh opening stiffness", r"mesh opening stiffness( \(n\.m/rad\))?",
+                          r"raideur ouverture( \(n\.m/rad\))?", check=">=0")
+UNSTRETCHED_LENGTH = field("l0", "unstretched length", r"unstretched length( \(m\))?", r"l", r"le", r"l0 \(m\)",
+                           r"(maille|longueur) au repos( \(m\))?", check=">0")
+VOLUMIC_MASS = field("density", "volumic mass", r"volumic mass( \(kg/m3\))?", r"vm", r"mv", r"de", r"m", r"rho \(kg/m3\)",
+                     r"masse volumique( \(kg/m3\))?", check=">=0")
+DIAMETER = field("diameter", "hydrodynamic diameter", r"hydrodynamic diameter( \(m\))?", r"d", r"di", r"d0 \(m\)",
+                 r"diametre hydrodynamique( \(m\))?", check=">=0")
+KNOT_SIZE = field("knot", "knot size", r"knot size( \(m\))?", r"largeur noeud", check=">=0")
+NORMAL_CD = field("cd", "normal Cd", r"normal cd", r"cd", r"cd normal", r"coefficient de trainee normal", r"k_train_norm",
+                  check=">=0", unset=0.0)
+TANGENTIAL_CD = field("f", "tangential Cd", r"tangential cd", r"f", r"cf", r"cd tangentiel", r"k_train_tang",
+                      r"coefficient de trainee tangent", check=">=0", unset=0.0)
+MESHING_STEP = field("step", "meshing step", r"meshing step( \(m\))?", r"pas du maillage( \(m\))?", check=">0")
+INTERNAL_NODES_TYPE = field("inner_type", "type of internal nodes", r"type of internal nodes", r"ty", r"t", r"type n",
+                            r"type des noeuds interieurs", integer=True,
                             minimum=1)
-MESHING_TYPE = field("mesh_type", "meshing type", r"meshing type", integer=True)
+MESHING_TYPE = field("mesh_type", "meshing type", r"meshing type", r"type de maillage", integer=True)
 
 #: a diamond panel's material, after its corners
 PANEL_MATERIAL = (TRACTION_STIFFNESS, COMPRESSION_STIFFNESS, OPENING_STIFFNESS, UNSTRETCHED_LENGTH, VOLUMIC_MASS,
@@ -180,81 +204,140 @@ HEXAGONAL_PANEL_MATERIAL = (
 #: a cable's material, after its ends
 CABLE_MATERIAL = (TRACTION_STIFFNESS, COMPRESSION_STIFFNESS, UNSTRETCHED_LENGTH, VOLUMIC_MASS, DIAMETER, NORMAL_CD,
                   TANGENTIAL_CD,
-                  field("n_bars", "number of bars", r"bars number", r"nb", integer=True, minimum=1,
+                  field("n_bars", "number of bars", r"bars number", r"nb", r"n", r"bn", r"b", r"nb barres?", integer=True, minimum=1,
                         then=_at_most_max_bars),
                   INTERNAL_NODES_TYPE)
 
 #: a node type, after its number (prefixed "node type N: "); keys are :class:`DonNodeType`'s attributes.
 #: The X Y Z of numbers are on one line; the flags and senses are not checked so
 NODE_TYPE = (
-    field("mass", "mass", r"mass x,y,z( \(kg\))?", check=">=0", values=XYZ, one_line=True),
-    field("added_mass", "added mass", r"added mass x,y,z( \(kg\))?", check=">=0", values=XYZ, one_line=True),
-    field("length", "length", r"length x,y,z( \(m\))?", values=XYZ, one_line=True),
-    field("drag_coefficient", "drag coefficient", r"drag coefficient x,y,z", check=">=0", values=XYZ, one_line=True),
-    field("force", "external force", r"external forces? x,y,z( \(n\))?", values=XYZ, one_line=True),
-    field("fixed", "displacement", r"displacement x,y,z", check="0 or 1", integer=True, values=XYZ),
-    field("limit", "limits", r"limits x,y,z( \(m\))?", values=XYZ, one_line=True),
-    field("sense", "limits sense", r"limits sens(e)? x,y,z", integer=True, values=XYZ),
-    field("symmetry", "symmetry", r"sym(m)?etry x,y,z", check="0 or 1", integer=True, values=XYZ),
+    field("mass", "mass", r"mass(es)?( x[,.]y[,.]z)?( \(kg\))?", check=">=0", values=XYZ, one_line=True),
+    field("added_mass", "added mass", r"added mass( x[,.]y[,.]z)?( \(kg\))?", r"masses ajoutees x[,.]y[,.]z( \(kg\))?",
+           check=">=0", values=XYZ, one_line=True),
+    field("length", "length", r"length x[,.]y[,.]z( \(m\))?", r"size( \(m\))?", r"longueurs x[,.]y[,.]z( \(m\))?",
+          values=XYZ, one_line=True),
+    field("drag_coefficient", "drag coefficient", r"drag coefficient x[,.]y[,.]z", r"drag coef\.",
+          r"coef\. trainee x[,.]y[,.]z", check=">=0", values=XYZ, one_line=True),
+    field("force", "external force", r"external forces?( x[,.]y[,.]z)?( \(n\))?",
+          r"efforts exterieurs x[,.]y[,.]z( \(n\))?", values=XYZ, one_line=True),
+    field("fixed", "displacement", r"displacement( x[,.]y[,.]z)?", r"deplacement x[,.]y[,.]z", check="0 or 1", integer=True, values=XYZ),
+    field("limit", "limits", r"limits x[,.]y[,.]z( \(m\))?", r"limit( \(m\))?", r"limites x[,.]y[,.]z( \(m\))?",
+          values=XYZ, one_line=True),
+    field("sense", "limits sense", r"limits sens(e)? x[,.]y[,.]z", r"sens of limit", r"sens des limites x[,.]y[,.]z",
+          integer=True, values=XYZ),
+    field("symmetry", "symmetry", r"sym(m)?etry( x[,.]y[,.]z)?", r"symetrie x[,.]y[,.]z", check="0 or 1", integer=True, values=XYZ),
 )
 
 #: FEMNET's solver settings (statics, then dynamics; ``lectureDo4.c``)
 NUMERICS = (
-    field("divisor", "divisor", r"divisor( \(s\))?"),
-    field("threshold", "convergence threshold", r"convergence threshold( \(n\))?", check=">0"),
+    field("divisor", "divisor", r"divisor( \(s\))?", r"diviseur( \(s\))?"),
+    field("threshold", "convergence threshold", r"convergence threshold( \(n\))?",
+          r"seuil ?(de )?convergence( \(n\))?", check=">0"),
     field("max_step", "displacement limit for each iteration", r"displacement limit for each iteration( \(m\))?",
-          check=">0"),
-    field("max_iter", "maximal number of iterations", r"maximal number of iterations", integer=True, minimum=1),
-    field("dt", "dynamic time step", r"dynamic: time step( \(s\))?"),
-    field("record_dt", "dynamic record time step", r"dynamic: record time step( \(s\))?"),
-    field("record_start", "dynamic beginning time of record", r"dynamic: beginning time of record( \(s\))?"),
+          r"limite de deplacement a chaque iteration( \(m\))?", check=">0"),
+    field("max_iter", "maximal number of iterations", r"maximal number of iterations",
+          r"(nombre )?maximum d'iterations", integer=True, minimum=1),
+    field("dt", "dynamic time step", r"dynamic: time step( \(s\))?", r"dynamic: pas de temps du calcul( \(s\))?"),
+    field("record_dt", "dynamic record time step", r"dynamic: record time step( \(s\))?",
+          r"dynamic: pas de temps de stockage( \(s\))?"),
+    field("record_start", "dynamic beginning time of record", r"dynamic: beginning time of record( \(s\))?",
+          r"dynamic: temps de debut du stockage( \(s\))?"),
     field("record_end", "dynamic end time of record and calculation",
-          r"dynamic: end time of record and calculation( \(s\))?"),
+          r"dynamic: end time of record and calculation( \(s\))?",
+          r"dynamic: temps de fin du calcul et du stockage( \(s\))?"),
 )
 
 #: the current (direction in deg from x towards y, speed in m/s) and the waves (s, m, deg, depth m)
 OCEAN = (
-    field("current_direction", "current direction", r"current direction( \(deg\))?"),
-    field("current_speed", "current speed", r"current speed( \(m/s\))?", check=">=0"),
-    field("wave_period", "wave period", r"wave period( \(s\))?"),
-    field("wave_height", "wave height", r"wave height( \(m\))?", check=">=0"),
-    field("wave_direction", "wave direction", r"wave direction relatively x( \(deg\))?"),
-    field("depth", "depth", r"depth( \(m\))?", check=">=0"),
+    field("current_direction", "current direction", r"current direction( \(deg\))?", r"direction( \(deg\))?"),
+    field("current_speed", "current speed", r"current speed( \(m/s\))?", r"vitesse( \(m/s\))?", check=">=0"),
+    field("wave_period", "wave period", r"wave period( \(s\))?", r"periode( \(s\))?"),
+    field("wave_height", "wave height", r"wave height( \(m\))?", r"hauteur( \(m\))?", check=">=0"),
+    field("wave_direction", "wave direction", r"wave direction relatively x( \(deg\))?",
+          r"direction par rapport a x( \(deg\))?"),
+    field("depth", "depth", r"depth( \(m\))?", r"hauteur d'eau( \(m\))?", check=">=0"),
 )
 
 #: the catch: the modelled part's volume (m³), its accuracy, its drag coefficient
 CATCH = (
     field("catch_volume", "catch volume", r"volume( \(m3\))?", check=">=0"),
-    field("catch_accuracy", "accuracy on the catch volume", r"accuracy on this volume", check=">=0"),
-    field("catch_cd", "drag coefficient of the catch", r"drag coefficient on this volume", check=">=0"),
+    field("catch_accuracy", "accuracy on the catch volume", r"accuracy on this volume( \(m3\))?",
+          r"precision sur ce volume", check=">=0"),
+    field("catch_cd", "drag coefficient of the catch", r"drag coefficient on this volume",
+          r"coefficient de trainee sur ce volume", check=">=0"),
 )
 
 #: the sea bed (``fond.c``), kept with the ocean: friction coefficient, penalty stiffness (N/m)
 SEA_BED = (
-    field("bottom_friction", "wearing coefficient on the bottom", r"wearing coefficient on the bottom", check=">=0"),
+    field("bottom_friction", "wearing coefficient on the bottom", r"wearing coefficient on the bottom",
+          r"coefficient de frottement du sol", check=">=0"),
     field("bottom_stiffness", "stiffness of the insertion in the sea bottom",
-          r"stiffness of the insertion in the sea bottom( \(n/m\))?", check=">=0"),
+          r"stiffness of the insertion in the sea bottom( \(n/m\))?",
+          r"raideur d'enfoncement dans le sol( \(n/m\))?", check=">=0"),
 )
 
-_NO_TEXT_OUTPUTS = _only_zero("text outputs of {} are not supported (only 0)")
-#: FEMNET's text outputs: the counts of the lists that follow, none supported (only 0)
+#: FEMNET's text outputs: the counts of its lists of figures to print after the solve, each count followed by its
+#: entries (:data:`TEXT_OUTPUT_ENTRIES`)
 TEXT_OUTPUTS = (
-    field("distances", "distances number", r"distances number", integer=True, minimum=0, then=_NO_TEXT_OUTPUTS),
-    field("forces", "forces number", r"forces number", integer=True, minimum=0, then=_NO_TEXT_OUTPUTS),
-    field("tensions", "tensions number", r"tensions number", integer=True, minimum=0, then=_NO_TEXT_OUTPUTS),
-    field("sliding_tensions", "sliding tensions number", r"sliding tensions number", integer=True, minimum=0,
-          then=_NO_TEXT_OUTPUTS),
-    field("positions", "positions number", r"positions number", integer=True, minimum=0, then=_NO_TEXT_OUTPUTS),
+    field("distances", "distances number", r"distances number", r"nombre de distances?", integer=True, minimum=0),
+    field("forces", "forces number", r"forces number", r"nombre d ?efforts?", integer=True, minimum=0),
+    field("tensions", "tensions number", r"tensions number", r"nombre de tensions?", integer=True, minimum=0),
+    field("sliding_tensions", "sliding tensions number", r"sliding tensions number",
+          r"nombre de tensions? coulisses?", integer=True, minimum=0),
+    field("positions", "positions number", r"positions number", r"nombre de positions?", integer=True, minimum=0),
 )
+
+
+def _after_comment(*alternatives):
+    """A label that follows a text output's comment (``comment: #words#``): the comment's text may come first on the
+    label's line."""
+    return spelled(*(rf"(#.*#)? ?(?:{a})" for a in alternatives))
+
+
+#: the heading of a text output's entry and its comment (``Distance: 1 comment: #Boat to door#``), which FEMNET
+#: prints beside the figure
+TEXT_OUTPUT_HEADING = spelled(r"(distance|force|effort|tension|sliding tension|tension coulisse|position)( numero)?",
+                              r"numero")
+TEXT_OUTPUT_COMMENT = spelled(r"comment(aire)?")
+#: the fields of each kind of text output's entries, after its comment: (key, label, what)
+TEXT_OUTPUT_ENTRIES = {
+    "distances": (("node_1", _after_comment(r"no (noeud )?global 1"), "first global node"),
+                  ("node_2", _after_comment(r"no (noeud )?global 2"), "second global node")),
+    "forces": (("node", _after_comment(r"no (noeud )?global"), "global node"),
+               ("axis", _after_comment(r"axe", r"axis"), "axis")),
+    "tensions": (("cable", _after_comment(r"cable", r"element"), "cable"),
+                 ("node", _after_comment(r"extremity node", r"no (noeud )?extremite"), "extremity node")),
+    "sliding_tensions": (("cable", _after_comment(r"(sliding )?cable", r"coulisse"), "sliding cable"),
+                         ("node", _after_comment(r"extremity node", r"no (noeud )?extremite"), "extremity node")),
+    "positions": (("node", _after_comment(r"no (noeud )?global"), "global node"),
+                  ("axis", _after_comment(r"axe", r"axis"), "axis")),
+}
+TEXT_OUTPUT_DECIMALS = _after_comment(r"decimal nb", r"nombre de decimales?")
+
+
+@dataclasses.dataclass
+class TextOutput:
+    """One of FEMNET's text outputs: a figure it prints after the solve. ``kind``: "distances" (between two of its
+    global nodes, m), "forces" (the force on a global node along an axis, N), "tensions" (of a cable at one of its
+    extremity nodes, N), "sliding_tensions", "positions" (of a global node along an axis, m); ``values``: its
+    fields (:data:`TEXT_OUTPUT_ENTRIES`, integers: FEMNET's global node numbers, axes 1-3, cable numbers);
+    ``comment``: the words FEMNET prints beside it; ``decimals``; ``line``."""
+
+    kind: str
+    values: dict
+    comment: str
+    decimals: int
+    line: int
+
 
 #: FEMNET's display switches (integers, read and unused)
 DISPLAYS = (
-    field("show_forces", "structure forces display", r"structure forces display", integer=True),
-    field("show_diameter", "catch diameter display", r"catch diameter display", integer=True),
-    field("show_thickness", "catch thickness display", r"catch thickness display", integer=True),
-    field("show_volume", "catch volume display", r"catch volume display", integer=True),
-    field("show_surface", "filtrated surface display", r"filt(e|ra)ted surface display", integer=True),
-    field("show_speed", "speed display", r"speed display", integer=True),
+    field("show_forces", "structure forces display", r"structure forces display", r"affichage de l ?effort sur la structure", integer=True),
+    field("show_diameter", "catch diameter display", r"catch diameter display", r"affichage du diametre de la prise", integer=True),
+    field("show_thickness", "catch thickness display", r"catch thickness display", r"affichage de l ?epaisseur de la prise", integer=True),
+    field("show_volume", "catch volume display", r"catch volume display", r"affichage du volume de la prise", integer=True),
+    field("show_surface", "filtrated surface display", r"filt(e|ra)ted surface display", r"affichage de la surface filtree", integer=True),
+    field("show_speed", "speed display", r"speed display", r"affichage de la vitesse", integer=True),
 )
 
 
@@ -263,20 +346,63 @@ DISPLAYS = (
 
 @dataclasses.dataclass(frozen=True)
 class Command:
-    """A line ``input NAME v1 ... vN`` (it changes the case) or ``output NAME`` (it only prints figures).
+    """A line ``input NAME v1 ... vN`` (it changes the case) or ``output NAME ...`` (it only prints or draws).
 
-    ``n_values``: the numbers that follow the name; ``check``: None, or check(values) giving the message that
-    refuses them (None when they are accepted)."""
+    ``n_values``: the numbers that follow the name (an int, or a tuple of the counts allowed); ``check``: None, or
+    check(values) giving the message that refuses them (None when they are accepted); ``use``: what a static
+    run does with it: "model" (the reader maps it), "dynamic" (it acts in FEMNET's dynamics only: kept in the
+    case, left out of a static run, which says so), "ignored" (FEMNET itself does nothing with it), or
+    "unsupported" (refused, ``reason`` saying why)."""
 
     kind: str
     name: str
-    n_values: int = 0
+    n_values: int | tuple = 0
     check: Callable | None = None
+    use: str = "model"
+    reason: str = ""
+    table: tuple | None = None    # (rows, index of the value giving each row's length): a table on the next lines
+
+    @property
+    def counts(self):
+        return self.n_values if isinstance(self.n_values, tuple) else (self.n_values,)
 
 
 def _positive_water_density(values):
     return None if values[0] > 0 else f"'input water_density' must be > 0, got {values[0]!r}"
 
+
+def _sphere_element(values):
+    cable, count, diameter, buoyancy = values
+    if cable != int(cable) or cable < 1 or count != int(count) or count < 1:
+        return f"'input sphere_element CABLE COUNT D B': cable and count must be integers >= 1, got {values[:2]}"
+    if not diameter > 0:
+        return f"'input sphere_element': the spheres' diameter must be > 0 m, got {diameter!r}"
+    return None
+
+
+def _window(values):
+    mode, new_type = values[0], values[-1]
+    # FEMNET's modes (manual, index): 1-6 one bound on one axis, 7-9 an interval on one axis, 10-12 on two, 13
+    # on the three; the values between are the bounds
+    bounds = {1: 1, 2: 1, 3: 1, 4: 1, 5: 1, 6: 1, 7: 2, 8: 2, 9: 2, 10: 4, 11: 4, 12: 4, 13: 6}
+    if mode not in bounds:
+        return f"'input type_noeud_XYZ_SUPINF': mode {mode!r} is not one of FEMNET's 1-13"
+    if len(values) != bounds[mode] + 2:
+        return (f"'input type_noeud_XYZ_SUPINF {int(mode)}' takes {bounds[mode]} bound(s) then a node type, got "
+                f"{len(values) - 2} bound(s)")
+    if new_type != int(new_type) or new_type < 1:
+        return f"'input type_noeud_XYZ_SUPINF': the node type must be an integer >= 1, got {new_type!r}"
+    return None
+
+
+def _translation(values):
+    first, last = values[1], values[2]
+    if first != int(first) or last != int(last) or not 1 <= first <= last:
+        return f"a translation's parts FIRST LAST must be integers with 1 <= FIRST <= LAST, got {values[1:]}"
+    return None
+
+
+_UNSUPPORTED = "a FEMNET feature jaxnet does not model yet"
 
 COMMANDS = (
     Command("input", "auto_convergence"),
@@ -284,11 +410,35 @@ COMMANDS = (
     Command("input", "link", 1),            # FEMNET's automatic links: points closer than this (m) are one node
     Command("input", "moving_bottom"),      # the bottom slides at the current's speed: its friction acts (fond.c)
     Command("input", "water_density", 1, _positive_water_density),   # kg/m³
-    *(Command("output", name) for name in ("element_drag", "surface_drag", "catch_drag", "no_visible_symmetry",
-                                           "panel_drag", "cable_drag", "node_drag", "energy", "tension", "tensions")),
+    # spherical floats along a cable: CABLE COUNT DIAMETER (m) BUOYANCY (N each, net of their weight), Cd 0.6
+    Command("input", "sphere_element", 4, _sphere_element),
+    # re-type the nodes inside a window of coordinates: MODE BOUNDS... TYPE (manual, index)
+    Command("input", "type_noeud_xyz_supinf", (3, 4, 6, 8), _window),
+    # translations of the design: DISTANCE (m) FIRST LAST cables (ele) or panels (pan), along x, y or z
+    *(Command("input", f"add_{axis}_{part}", 3, _translation) for axis in "xyz" for part in ("ele", "pan")),
+    # FEMNET's dynamics only: winches, towing speeds, the wave model (kept for a dynamic run)
+    # (their time tables follow on the next lines: times, speeds, hauled ends; times, speeds along x, y, z)
+    Command("input", "hauling_cable4", 4, use="dynamic", table=(3, -1)),
+    Command("input", "hauling_cable6", 4, use="dynamic", table=(3, -1)),
+    Command("input", "speed_type_node2", 2, use="dynamic", table=(4, 1)),
+    Command("input", "wave_model", 1, use="dynamic"),
+    # FEMNET's current code has no handler for it (its reader skips the line)
+    Command("input", "node_position", 1, use="ignored"),
+    *(Command("input", name, tuple(range(0, 12)), use="unsupported", reason=reason) for name, reason in (
+        ("tarp", "an impermeable panel (a tarp): " + _UNSUPPORTED),
+        ("catch_gravity", "the gravity catch: " + _UNSUPPORTED),
+        ("catch2_volume", "extra catch volumes on listed panels: " + _UNSUPPORTED),
+        ("drag_forces_type", "FEMNET's other twine drag laws: " + _UNSUPPORTED),
+        ("meshing_uv", "FEMNET's meshing by U and V diagonals: " + _UNSUPPORTED),
+        ("sphere_element2", "spheres with a fifth value the manual does not describe: " + _UNSUPPORTED),
+        ("spheric_limit", "a spherical limit: " + _UNSUPPORTED),
+        ("deck", "a deck: " + _UNSUPPORTED))),
 )
 INPUTS = {c.name: c for c in COMMANDS if c.kind == "input"}
-OUTPUTS = {c.name: c for c in COMMANDS if c.kind == "output"}
+#: FEMNET's output commands (``output NAME ...``) print figures or draw: all are read and none changes the case;
+#: these are the ones whose figures jaxnet's result also gives (drags of the parts, the catch's)
+OUTPUTS = ("element_drag", "surface_drag", "catch_drag", "bottom_drag", "panel_drag", "cable_drag", "node_drag",
+           "energy", "tension", "tensions")
 
 
 # -- what a .don holds, as read (before mapping onto jaxnet) -----------------------------------------------------
@@ -344,6 +494,13 @@ class DonNodeType:
         return cx * ly * lz > 0 or cy * lx * lz > 0
 
     @property
+    def box_volume(self):
+        """The volume (m³) of the type's box, |L_x L_y L_z|: FEMNET floats it (``flotteur2.c``: rho g L_x L_y times
+        its immersed height, along z), so wholly immersed it is a buoyancy rho g V."""
+        lx, ly, lz = (v.value for v in self.length)
+        return abs(lx * ly * lz)
+
+    @property
     def has_limit(self):
         return any(v.value != 0 for v in self.sense)
 
@@ -370,10 +527,14 @@ class DonFile:
     numeric: dict
     ocean: dict
     catch: dict
-    inputs: dict          # input command name -> Value (its number, or tuple of numbers; 1.0 without any)
-    outputs: list
+    inputs: dict          # input command name -> Value (its number, or tuple of numbers; 1.0 without any): the last
+    outputs: list         # output commands, as written (FEMNET's print and drawing commands)
     hexagonal: list = dataclasses.field(default_factory=list)   # hexagonal panels (DonPanel, hexagonal=True)
     links: list = dataclasses.field(default_factory=list)       # DonLink
+    orientation: int = 3                                        # the design plane's normal axis (drawing only)
+    text_outputs: list = dataclasses.field(default_factory=list)  # TextOutput
+    commands: list = dataclasses.field(default_factory=list)      # every input command: (name, values, line)
+    warnings: list = dataclasses.field(default_factory=list)      # read as FEMNET would, worth saying (file:LINE:)
 
 
 def twine_coordinates(UV):

@@ -14,10 +14,10 @@ import re
 import numpy as np
 
 from jaxnet import waves as waves_lib
-from jaxnet.io.femnet.grammar import DonCable, DonFile, DonPanel, twine_coordinates
+from jaxnet.io.femnet.grammar import INPUTS, DonCable, DonFile, DonPanel, twine_coordinates
 from jaxnet.io.femnet.links import MERGE_TOLERANCE, JoinPlan, all_panels, at_joined_positions, plan_joins
 from jaxnet.io.femnet.parse import parse_don
-from jaxnet.net import HexTwine, Net, Rope, Twine
+from jaxnet.net import CableRef, HexTwine, Net, Rope, Twine
 from jaxnet.scene import Environment, SceneError
 from jaxnet.case import Case, TimeSettings
 from jaxnet.solve.options import TIME_STEP, Implicit, Newton
@@ -98,23 +98,23 @@ def environment_of(case: DonFile) -> Environment:
 
 
 def node_type_fields(case: DonFile, position, node_type):
-    """The nodes' box bodies and limits from their types: {Nodes field: (N, 3) array}, a field pair absent when no
-    node has a body (or a limit), so that its term is not compiled. Checks that every body starts wholly under
-    FEMNET's water surface z = 0 when there is a current to drag it (see the package's docstring)."""
+    """The nodes' box bodies, float volumes and limits from their types: {Nodes field: array}, a field absent when
+    no node has a body (a float, a limit), so that its term is not compiled. FEMNET drags and floats the immersed
+    part of a box under its surface z = 0; jaxnet's FEMNET scenes have no free surface and take boxes wholly
+    immersed, which the equilibrium must bear out (``info["boxes"]``: the nodes with a box and the height of its top
+    above them; gear drawn above z = 0 is common, so the start is not checked)."""
     types = [case.types[t] for t in node_type]
     fields = {}
+    volume = np.array([nt.box_volume for nt in types])
+    if volume.any():
+        # a box with a volume floats: FEMNET's buoyancy rho g L_x L_y h (flotteur2.c), h its immersed height, is
+        # rho g V wholly under its surface z = 0, which jaxnet's FEMNET scenes (no free surface) take it to be.
+        # Not checked at the start: gear is often drawn above z = 0 and sinks to its equilibrium (a bottom trawl
+        # drawn at z > 0 rests on a sea bed at z = -depth): ``info["boxes"]`` tells where to check the equilibrium
+        fields["volume"] = volume
     if any(nt.has_body for nt in types):
         length = np.array([[v.value for v in nt.length] if nt.has_body else [0.0] * 3 for nt in types])
         cd = np.array([[v.value for v in nt.drag_coefficient] if nt.has_body else [0.0] * 3 for nt in types])
-        top = np.asarray(position)[:, 2] + np.maximum(length[:, 2], 0.0)
-        above = np.flatnonzero(top > 0.0) if case.ocean["current_speed"].value > 0 else np.zeros(0, int)
-        if above.size:
-            i = int(above[0])
-            nt = types[i]
-            raise SceneError(f"{case.path}:{nt.length[0].line}: node type {node_type[i]}: the box of length "
-                             f"{length[i].tolist()} m of the node at {np.round(position[i], 6).tolist()} reaches "
-                             f"z = {top[i]:.6g} m, above FEMNET's water surface z = 0: FEMNET then takes the drag of "
-                             "its immersed part only, jaxnet (no free surface here) of the whole box")
         fields.update(drag_length=length, drag_coefficient=cd)
     if any(nt.has_limit for nt in types):
         fields["limit"] = np.array([[v.value if s.value else 0.0 for v, s in zip(nt.limit, nt.sense)] for nt in types])
@@ -142,6 +142,72 @@ def check_types(case: DonFile):
         if t.value not in case.types:
             raise SceneError(f"{case.path}:{t.line}: {what}: node type {t.value} is not described (types: "
                              f"{sorted(case.types)})")
+
+
+#: FEMNET's drag coefficient of its spherical floats (manual: "the drag coefficient of sphere is expected to be 0.6")
+SPHERE_CD = 0.6
+
+
+def spheres(case: DonFile, net: Net):
+    """``input sphere_element CABLE COUNT D B``: COUNT spherical floats of diameter D (m), each pulling up with B
+    newtons net of its weight (the manual: B is below the buoyancy rho g pi D³/6 of its volume), spread evenly along
+    the cable: on jaxnet's Net, floats of COUNT B newtons and drag area COUNT Cd pi D²/4 (Cd 0.6, FEMNET's) shared
+    equally by the cable's nodes (its ends included: each node carries COUNT / (bars + 1) spheres)."""
+    for name, values, line in case.commands:
+        if name != "sphere_element":
+            continue
+        k, count, diameter, buoyancy = int(values[0]), int(values[1]), values[2], values[3]
+        if k > len(case.cables):
+            raise SceneError(f"{case.path}:{line}: 'input sphere_element {k}': there is no cable {k} (the case has "
+                             f"{len(case.cables)})")
+        net.float_(CableRef(f"cable {k}").nodes, buoyancy_N=count * buoyancy,
+                   drag_area=count * SPHERE_CD * math.pi * diameter ** 2 / 4.0)
+
+
+def translated(case: DonFile) -> DonFile:
+    """``input add_{x,y,z}_{ele,pan} D FIRST LAST``: cables (ele) or panels (pan) FIRST to LAST moved by D (m) along
+    the axis before they are meshed and joined (the manual: "in case cables/bars are translated in the design")."""
+    moves = [(name, values, line) for name, values, line in case.commands if name.startswith("add_")]
+    if not moves:
+        return case
+    panels = [dataclasses.replace(p, corners=p.corners.copy()) for p in case.panels]
+    cables = [dataclasses.replace(c, ends=c.ends.copy()) for c in case.cables]
+    for name, (distance, first, last), line in moves:
+        axis, parts = "xyz".index(name[4]), panels if name.endswith("pan") else cables
+        if last > len(parts):
+            raise SceneError(f"{case.path}:{line}: 'input {name}': there is no {'panel' if parts is panels else 'cable'} "
+                             f"{int(last)} (the case has {len(parts)})")
+        for part in parts[int(first) - 1:int(last)]:
+            (part.corners if parts is panels else part.ends)[:, axis] += distance
+    return dataclasses.replace(case, panels=panels, cables=cables)
+
+
+#: FEMNET's windows of ``input type_noeud_XYZ_SUPINF MODE BOUNDS... TYPE`` (its manual's index): per mode, the
+#: (axis, sense) of each bound in order: sense +1 "coordinate > bound", -1 "coordinate < bound"
+WINDOWS = {1: ((0, 1),), 2: ((0, -1),), 3: ((1, 1),), 4: ((1, -1),), 5: ((2, 1),), 6: ((2, -1),),
+           7: ((0, 1), (0, -1)), 8: ((1, 1), (1, -1)), 9: ((2, 1), (2, -1)),
+           10: ((0, 1), (0, -1), (1, 1), (1, -1)), 11: ((1, 1), (1, -1), (2, 1), (2, -1)),
+           12: ((2, 1), (2, -1), (0, 1), (0, -1)),
+           13: ((0, 1), (0, -1), (1, 1), (1, -1), (2, 1), (2, -1))}
+
+
+def retyped(case: DonFile, position, node_type):
+    """``input type_noeud_XYZ_SUPINF``: the nodes whose start position lies strictly inside the command's window take
+    its type (FEMNET applies it to its mesh's nodes, in the commands' order)."""
+    node_type = list(node_type)
+    for name, values, line in case.commands:
+        if name != "type_noeud_xyz_supinf":
+            continue
+        mode, bounds, new = int(values[0]), values[1:-1], int(values[-1])
+        if new not in case.types:
+            raise SceneError(f"{case.path}:{line}: 'input type_noeud_XYZ_SUPINF': node type {new} is not described "
+                             f"(types: {sorted(case.types)})")
+        inside = np.ones(len(position), bool)
+        for (axis, sense), bound in zip(WINDOWS[mode], bounds):
+            inside &= sense * (np.asarray(position)[:, axis] - bound) > 0
+        for i in np.flatnonzero(inside):
+            node_type[i] = new
+    return node_type
 
 
 def _check_supported(case: DonFile):
@@ -251,7 +317,7 @@ def read_don(path, femnet_laws=True):
     Raises:
       SceneError naming the file and line (see the package's docstring).
     """
-    case = parse_don(path)
+    case = translated(parse_don(path))
     check_types(case)
     _check_supported(case)
     env = environment_of(case)
@@ -269,22 +335,28 @@ def read_don(path, femnet_laws=True):
                 probe.fix(tuple(xyz))
         scene = probe.build()
         net = _describe(case, env, plan, femnet_laws)
-    node_type = _node_types(case, scene)
+    warnings = []
+    node_type = _node_types(case, scene, warnings)
     position = np.asarray(scene.nodes.position)
+    node_type = retyped(case, position, node_type)
     planes = symmetry_planes(case, position, node_type)
     for i, t in enumerate(node_type):
         nt = case.types[t]
         axes = "".join(a for j, a in enumerate("xyz") if nt.fixed[j].value or nt.symmetry[j].value)
         if axes:
             net.fix(tuple(position[i]), axes)
-        if nt.mass[0] > 0 or any(nt.force):
-            net.attach(tuple(position[i]), mass=nt.mass[0], force=nt.force)
     fields = node_type_fields(case, position, node_type)
+    volume = fields.pop("volume", np.zeros(len(position)))
+    for i, t in enumerate(node_type):
+        nt = case.types[t]
+        if nt.mass[0] > 0 or any(nt.force) or volume[i] > 0:
+            net.attach(tuple(position[i]), mass=nt.mass[0], force=nt.force, volume=volume[i])
     for i, t in enumerate(node_type):
         if "drag_length" in fields and case.types[t].has_body:
             net.body(tuple(position[i]), fields["drag_length"][i], fields["drag_coefficient"][i])
         if "limit" in fields and case.types[t].has_limit:
             net.limit(tuple(position[i]), fields["limit"][i], fields["limit_sense"][i])
+    spheres(case, net)
     netting_nodes = np.unique(np.asarray(scene.netting.vertices)) if scene.netting is not None else np.arange(len(position))
     catch = catch_of(case, position, netting_nodes, planes, env)
     with _located(case, "the net with its node types"):
@@ -292,17 +364,27 @@ def read_don(path, femnet_laws=True):
             volume, cd, copies, center, axis = catch
             net.catch(volume, drag_coefficient=cd, symmetry=copies, center=tuple(center), axis=tuple(axis))
         scene = net.build()
-    return result(case, scene, net, planes, catch, femnet_laws, plan, label=f"FEMNET case {case.path}")
+    return result(case, scene, net, planes, catch, femnet_laws, plan, label=f"FEMNET case {case.path}",
+                  warnings=warnings, node_type=node_type)
 
 
-def result(case: DonFile, scene, net, planes, catch, femnet_laws, plan: JoinPlan | None = None, label="") -> Case:
+def result(case: DonFile, scene, net, planes, catch, femnet_laws, plan: JoinPlan | None = None, label="",
+           warnings=(), node_type=None) -> Case:
     """What :func:`read_don` and :func:`~.mdg.read_mdg` return: the :class:`~jaxnet.case.Case` of ``scene``
     (built from ``net``, or read whole: None), with the Newton options of the case's numerics, its time settings
     (:func:`time_settings`) and ``info``, what the reader decided (:func:`_info`) and whether FEMNET's laws were
     used. ``planes``: the symmetry planes {axis: coordinate}; ``catch``: :func:`catch_of`'s tuple or None;
     ``plan``: the joins (None on FEMNET's mesh, which has its own)."""
     solver = _solver(case)
-    info = {**_info(case, planes, catch, plan), "femnet_laws": bool(femnet_laws)}
+    info = {**_info(case, planes, catch, plan), "femnet_laws": bool(femnet_laws), "warnings": case.warnings + list(warnings)}
+    if node_type is not None:
+        # the coordinates FEMNET holds by a node type's "Displacement" (not by its symmetry): its "forces along X Y
+        # and Z axes" sum the reactions there (femnet_figures)
+        info["fixity"] = [[int(i), j] for i, t in enumerate(node_type) for j in range(3) if case.types[t].fixed[j].value]
+        # FEMNET's node boxes (floats, bodies with drag) are taken wholly immersed: the nodes that have one and the
+        # height of its top above them (m), to check the equilibrium against FEMNET's surface z = 0
+        info["boxes"] = {int(i): max(case.types[t].length[2].value, 0.0) for i, t in enumerate(node_type)
+                         if case.types[t].box_volume > 0 or case.types[t].has_body}
     return Case(scene=scene, solver=solver, time=time_settings(case, solver), net=net, label=label, info=info)
 
 
@@ -343,6 +425,13 @@ def _info(case: DonFile, planes, catch, plan: JoinPlan | None = None):
         "water_density": environment_of(case).water_density,
         "inputs": {k: v.value for k, v in case.inputs.items()},
         "outputs": list(case.outputs),
+        # FEMNET's commands that act in its dynamics only, left out of a static run (winches, towing, wave model)
+        "dynamic_only": [f"input {name} (line {line})" for name, values, line in case.commands
+                         if INPUTS[name].use == "dynamic"],
+        # commands FEMNET itself does nothing with
+        "ignored": [f"input {name} (line {line})" for name, values, line in case.commands if INPUTS[name].use == "ignored"],
+        "design_plane_axis": case.orientation,
+        "text_outputs": [dataclasses.asdict(t) for t in case.text_outputs],
         "cables_sewn_along_sides": {f"cable {k + 1}": f"{side.panel} side {side.index + 1}"
                                     for k, (side, _) in sorted(along.items())},
         "seams": [] if plan is None else [f"{a.panel} side {a.index + 1} = {b.panel} side {b.index + 1}"
@@ -376,8 +465,10 @@ def _on_segment(points, a, b, tol):
     return (d <= tol) & (t > 1e-9) & (t < 1 - 1e-9)
 
 
-def _node_types(case: DonFile, scene):
-    """Node type of every scene node, from where it was created (see the package's docstring)."""
+def _node_types(case: DonFile, scene, warnings=None):
+    """Node type of every scene node, from where it was created (see the package's docstring). Points joined into one
+    node with different types of the same rank (two corners, two cable ends): FEMNET warns and keeps one; here the
+    first met (panels before cables, in the file's order) is kept and the conflict appended to ``warnings``."""
     pos = np.asarray(scene.nodes.position)
     n = len(pos)
     tol = 1e-7 * max(1.0, float(np.abs(pos).max()))
@@ -388,8 +479,13 @@ def _node_types(case: DonFile, scene):
         for i in np.atleast_1d(nodes):
             have = claims[i].get(priority)
             if have is not None and have[0].value != t.value:
-                raise SceneError(f"{case.path}:{t.line}: node at {pos[i].round(6).tolist()} is given type {t.value} "
-                                 f"({what}) and type {have[0].value} ({have[1]}, line {have[0].line})")
+                message = (f"{case.path}:{t.line}: node at {pos[i].round(6).tolist()} is given type {t.value} "
+                           f"({what}) and type {have[0].value} ({have[1]}, line {have[0].line}): type "
+                           f"{have[0].value} kept")
+                if warnings is None:
+                    raise SceneError(message.removesuffix(f": type {have[0].value} kept"))
+                warnings.append(message)
+                continue
             claims[i][priority] = (t, what)
 
     def at(point):

@@ -91,8 +91,9 @@ def read_mdg(path, don=None, femnet_laws=True):
                       for t in node_type], dtype=bool)
     mass = np.array([case.types[t].mass[0] for t in node_type])
     force = np.array([case.types[t].force for t in node_type], dtype=float)
-    nodes = Nodes(position=position, fixed=fixed, mass=mass, volume=np.zeros(n_nodes), force=force,
-                  drag_area=np.zeros(n_nodes), size=np.zeros(n_nodes), **node_type_fields(case, position, node_type))
+    fields = node_type_fields(case, position, node_type)
+    nodes = Nodes(position=position, fixed=fixed, mass=mass, volume=fields.pop("volume", np.zeros(n_nodes)), force=force,
+                  drag_area=np.zeros(n_nodes), size=np.zeros(n_nodes), **fields)
 
     def node_index(value, line):
         i = int(value) - 1
@@ -137,4 +138,5 @@ def read_mdg(path, don=None, femnet_laws=True):
                   panel_names=tuple(f"panel {k + 1}" for k in range(len(case.panels))),
                   cable_names=tuple(f"cable {k + 1}" for k in range(len(case.cables))))
     validate(scene)
-    return result(case, scene, None, planes, catch_spec, femnet_laws, label=f"FEMNET case {don} on FEMNET's mesh {path}")
+    return result(case, scene, None, planes, catch_spec, femnet_laws, label=f"FEMNET case {don} on FEMNET's mesh {path}",
+                  node_type=node_type)

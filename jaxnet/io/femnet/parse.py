@@ -16,8 +16,8 @@ import numpy as np
 from jaxnet.io.femnet.grammar import (
     CABLE_MATERIAL, CABLES_NUMBER, CATCH, DESIGN_PLANE, DISPLAYS, HEADINGS, HEXAGONAL_PANEL_MATERIAL,
     HEXAGONAL_PANELS_NUMBER, INPUTS, LINKS_NUMBER, MAX_PANEL_NODES, NODE_TYPE, NODE_TYPES_NUMBER, NUMERICS, OCEAN,
-    OUTPUTS, PANEL_CORNERS, PANEL_MATERIAL, PANELS_NUMBER, PART_NAMES, SEA_BED, SLIDING_CABLES_NUMBER, TEXT_OUTPUTS,
-    DonCable, DonFile, DonLink, DonNodeType, DonPanel, read, read_all, twine_coordinates)
+    PANEL_CORNERS, PANEL_MATERIAL, PANELS_NUMBER, PART_NAMES, SEA_BED, SLIDING_CABLES_NUMBER, TEXT_OUTPUT_COMMENT,
+    TEXT_OUTPUT_DECIMALS, TEXT_OUTPUT_ENTRIES, TEXT_OUTPUT_HEADING, TEXT_OUTPUTS, DonCable, DonFile, DonLink, DonNodeType, DonPanel, TextOutput, read, read_all, twine_coordinates)
 from jaxnet.io.femnet.reader import MAX_COORDINATE, Reader, Value
 from jaxnet.scene import SceneError
 
@@ -32,7 +32,7 @@ def parse_don(path) -> DonFile:
     first = r.text.lstrip().split(None, 1)[0] if r.text.strip() else ""
     if first.lower().startswith("version"):
         raise r.error(f"FEMNET file format {first!r} is not supported (only the original format)")
-    read(r, DESIGN_PLANE)
+    orientation = read(r, DESIGN_PLANE)
     n_panels = read(r, PANELS_NUMBER)
     panels = [_parse_panel(r, k, hexagonal=False) for k in range(n_panels.value)]
     n_hexa = read(r, HEXAGONAL_PANELS_NUMBER)
@@ -73,10 +73,40 @@ def parse_don(path) -> DonFile:
                       f"limits (sense {[v.value for v in nt.sense]}, line {nt.sense[0].line}): FEMNET's floor or "
                       "ceiling pushes with this stiffness, so with 0 it does nothing; give a stiffness > 0 N/m (or the "
                       "senses 0)", stiffness.line)
-    read_all(r, TEXT_OUTPUTS)
+    text_outputs = _parse_text_outputs(r)
     read_all(r, DISPLAYS)
-    inputs, outputs = _commands(r)
-    return DonFile(str(path), panels, cables, order, types, numeric, ocean, catch, inputs, outputs, hexagonal, links)
+    inputs, outputs, commands = _commands(r)
+    return DonFile(str(path), panels, cables, order, types, numeric, ocean, catch, inputs, outputs, hexagonal, links,
+                   orientation.value, text_outputs, commands, r.warnings)
+
+
+def _parse_text_outputs(r):
+    """FEMNET's text outputs (``lectureDo4.c``): per kind, its count, then per entry a heading and its number, a
+    comment (``#words#``, what FEMNET prints beside the figure), the entry's fields
+    (:data:`~.grammar.TEXT_OUTPUT_ENTRIES`) and its number of decimals. Returns [:class:`~.grammar.TextOutput`]."""
+    out = []
+    for f in TEXT_OUTPUTS:
+        count = read(r, f)
+        for i in range(count.value):
+            what = f"{f.what.removesuffix(' number')} {i + 1}"
+            r.label(TEXT_OUTPUT_HEADING, f"{what}: heading")
+            r.integer(f"{what} number")
+            r.label(TEXT_OUTPUT_COMMENT, f"{what}: comment")
+            # the comment is written between two '#', and may hold a colon itself ("#z_max (m) : #")
+            opening = re.compile(r"[ \t]*#").match(r.text, r.pos)
+            closing = r.text.find("#", opening.end()) if opening else -1
+            comment = ""
+            if closing >= 0 and "\n" not in r.text[r.pos:closing]:
+                comment = r.text[opening.end():closing]
+                r.pos = closing + 1
+            values = {}
+            for key, label, name in TEXT_OUTPUT_ENTRIES[f.key]:
+                r.label(label, f"{what}: {name}")
+                values[key] = r.integer(f"{what}: {name}", 0).value
+            r.label(TEXT_OUTPUT_DECIMALS, f"{what}: decimal nb")
+            decimals = r.integer(f"{what}: decimal nb", 0)
+            out.append(TextOutput(f.key, values, comment.strip().strip("#").strip(), decimals.value, count.line))
+    return out
 
 
 def _parse_panel(r, k, hexagonal):
@@ -157,16 +187,22 @@ def _parse_cable(r, k):
     r.label(HEADINGS["cable"], f"cable {k + 1}")
     r.integer(f"cable {k + 1} number")
     r.label(HEADINGS["cable ends"], f"cable {k + 1}: extremities")
-    ends, etype = [], []
-    previous = None
+    ends, etype, rows = [], [], []
     for e in range(2):
         what = f"cable {k + 1} end {e + 1}"
         number = r.integer(f"{what} number")
         row = [r.number(f"{what} {name}", "position") for name in "xyz"]
         etype.append(r.integer(f"{what} node type", 1))
-        r.one_line([number, *row, etype[-1]], number.line, what, "no x y z type", previous)
+        rows.append((what, [number, *row, etype[-1]]))
         ends.append([v.value for v in row])
-        previous = (what, number.line)
+    # one end per line, or FEMNET's short syntax: both ends on one line (``Ca: 1 D: 1 x y z type 2 x y z type
+    # Kt: ...``, the cable's whole description on its line)
+    (what1, first), (what2, second) = rows
+    if second[0].line == first[0].line:
+        r.one_line(first + second, first[0].line, f"cable {k + 1}: extremities", "no x y z type no x y z type")
+    else:
+        r.one_line(first, first[0].line, what1, "no x y z type")
+        r.one_line(second, second[0].line, what2, "no x y z type", (what1, first[0].line))
     mat = read_all(r, CABLE_MATERIAL, f"cable {k + 1}: ")
     return DonCable(np.array(ends), etype, mat, etype[0].line)
 
@@ -200,8 +236,8 @@ def _parse_node_type(r, t):
 def _check_body(r, t, length):
     """A node type's box (FEMNET's "Length X,Y,Z"): widths X, Y >= 0 (FEMNET's drag takes them signed, a negative
     one would be a drag against the current), a height Z of either sign (< 0: the box hangs below its node, a
-    sinker), sizes in range, and no volume: FEMNET floats a box (``flotteur2.c``: rho g L_x L_y times its
-    immersed height, along z), a buoyancy jaxnet's node box does not have (see the package's docstring)."""
+    sinker), sizes in range. A box with a volume floats (``flotteur2.c``: rho g L_x L_y times its immersed height,
+    along z): see :func:`~.mapping.node_type_fields`."""
     for a, v in enumerate(length):
         if a < 2 and v.value < 0:
             raise r.error(f"node type {t}: length {'XYZ'[a]} must be >= 0 m (a width of its box), got {v.value!r}",
@@ -209,12 +245,6 @@ def _check_body(r, t, length):
         if not abs(v.value) <= MAX_COORDINATE:
             raise r.error(f"node type {t}: length {'XYZ'[a]} {v.value!r} m is out of range (at most "
                           f"{MAX_COORDINATE:g} m)", v.line)
-    lx, ly, lz = (v.value for v in length)
-    if lx != 0 and ly != 0 and lz != 0:
-        raise r.error(f"node type {t}: length {[lx, ly, lz]} m is not supported: FEMNET's box of "
-                      f"{abs(lx * ly * lz):.6g} m³ floats (flotteur2.c: buoyancy rho g L_x L_y times its immersed "
-                      "height), which jaxnet's node box does not model; only boxes without volume (one length 0: "
-                      "drag without buoyancy)", length[0].line)
 
 
 def _parse_link(r, k, counts):
@@ -274,39 +304,90 @@ def _parse_order(r, counts):
 
 
 def _commands(r):
-    """The free-order tail: ``input NAME values`` and ``output NAME`` lines (:data:`~.grammar.COMMANDS`),
-    comments (# or //). Returns ({input name: Value}, [output names as written])."""
-    inputs, outputs = {}, []
+    """The free-order tail: ``input NAME values`` and ``output NAME ...`` lines (:data:`~.grammar.COMMANDS`),
+    comments (# or //). Every ``output`` is read (FEMNET's print and drawing commands change nothing); an ``input``
+    must be one of :data:`~.grammar.INPUTS`, with its number of values and their checks, and is refused when
+    jaxnet does not model it. Returns ({input name: Value of its last occurrence}, [output lines as written],
+    [(input name, values, line) of every input])."""
+    inputs, outputs, commands = {}, [], []
     start = r.line(r.pos)
     rest = r.text[r.pos:].split("\n")
+    table_lines = set()
     for i, raw in enumerate(rest):
         line_no = start + i
         words = raw.split()
+        if i in table_lines:
+            continue
         if i == 0 and words:  # the remainder of the last field's line: the display flag was read already
             raise r.error(f"unexpected text {raw.strip()!r} after the last field", line_no)
-        if not words or words[0].startswith("#") or words[0].startswith("//"):
+        if not words:
+            continue
+        if words[0].startswith("#") or words[0].startswith("//"):
+            # a command commented out: its time table, if it has one, is commented out with it (FEMNET's reader
+            # skips the numbers that follow no command)
+            commented = raw.strip().lstrip("#/").split()
+            command = INPUTS.get(commented[1].lower()) if len(commented) >= 2 and commented[0] == "input" else None
+            if command is not None and command.table is not None:
+                try:
+                    values = [float(w) for w in commented[2:]]
+                    if len(values) in command.counts:
+                        _table(r, rest, i, start, command, values, table_lines)
+                except (ValueError, SceneError):
+                    pass
             continue
         kind = words[0].lower()
         if kind not in ("input", "output") or len(words) < 2:
             raise r.error(f"expected 'input NAME ...' or 'output NAME', found {raw.strip()!r}", line_no)
         name = words[1]
         if kind == "output":
-            if name.lower() not in OUTPUTS:
-                raise r.error(f"'output {name}': not known to be a print-only output; not supported", line_no)
-            outputs.append(name)
+            outputs.append(" ".join(words[1:]))
             continue
         if name.lower() not in INPUTS:
             raise r.error(f"'input {name}': unknown input command, not supported (known: {sorted(INPUTS)})", line_no)
         command = INPUTS[name.lower()]
-        n = command.n_values
+        if command.use == "unsupported":
+            raise r.error(f"'input {name}': {command.reason}", line_no)
         try:
-            values = [float(w) for w in words[2:2 + n]]
+            values = [float(w) for w in words[2:]]
         except ValueError:
-            raise r.error(f"'input {name}': expected {n} number(s), found {' '.join(words[2:])!r}", line_no) from None
-        if len(values) != n or len(words) > 2 + n or not all(math.isfinite(v) for v in values):
-            raise r.error(f"'input {name}': expected {n} finite number(s), found {' '.join(words[2:])!r}", line_no)
+            raise r.error(f"'input {name}': expected {' or '.join(map(str, command.counts))} number(s), found "
+                          f"{' '.join(words[2:])!r}", line_no) from None
+        if len(values) not in command.counts or not all(math.isfinite(v) for v in values):
+            raise r.error(f"'input {name}': expected {' or '.join(map(str, command.counts))} finite number(s), found "
+                          f"{' '.join(words[2:])!r}", line_no)
         refused = command.check(values) if command.check is not None else None
         if refused is not None:
             raise r.error(refused, line_no)
+        n = len(values)
+        if command.table is not None:
+            values += _table(r, rest, i, start, command, values, table_lines)
         inputs[name.lower()] = Value(values[0] if n == 1 else tuple(values), line_no) if n else Value(1.0, line_no)
-    return inputs, outputs
+        commands.append((name.lower(), tuple(values), line_no))
+    return inputs, outputs, commands
+
+
+def _table(r, rest, i, start, command, values, table_lines):
+    """The time table that follows an input command on its next non-blank lines (``command.table``: its rows, and
+    which of the command's values gives their length): its rows' numbers, in order; their lines are marked
+    read in ``table_lines`` (indices into ``rest``, the tail's lines from ``start``)."""
+    rows, length_at = command.table
+    length = values[length_at]
+    if length != int(length) or length < 1:
+        raise r.error(f"'input {command.name}': its table's length must be an integer >= 1, got {length!r}", start + i)
+    numbers, j = [], i + 1
+    for row in range(rows):
+        while j < len(rest) and not rest[j].split():
+            j += 1
+        if j >= len(rest):
+            raise r.error(f"'input {command.name}': the file ends inside its table (row {row + 1} of {rows})", start + j)
+        try:
+            got = [float(w) for w in rest[j].split()]
+        except ValueError:
+            got = []
+        if len(got) != int(length) or not all(math.isfinite(v) for v in got):
+            raise r.error(f"'input {command.name}': row {row + 1} of its table must hold {int(length)} numbers, found "
+                          f"{rest[j].strip()!r}", start + j)
+        numbers += got
+        table_lines.add(j)
+        j += 1
+    return numbers

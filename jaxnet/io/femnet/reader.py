@@ -47,6 +47,7 @@ class Reader:
         self.pos = 0
         self.starts = [0] + [m.end() for m in re.finditer("\n", text)]
         self.last = None
+        self.warnings = []   # what was read as FEMNET would, with a difference worth saying (file:LINE: ...)
 
     def line(self, pos=None):
         """The 1-based line of the offset ``pos`` (default: the offset reached)."""
@@ -80,7 +81,7 @@ class Reader:
         self.pos = colon + 1
         self.last = (f"the label {label.strip()!r}", self.line(colon))
         norm = " ".join(label.lower().split())
-        if norm == "dynamic":  # "Dynamic: Time step (s):" has two colons
+        if norm in ("dynamic", "dynamique"):  # "Dynamic: Time step (s):" has two colons
             colon = self.text.find(":", self.pos)
             if colon >= 0 and "\n" not in self.text[self.pos:colon]:
                 norm = "dynamic: " + " ".join(self.text[self.pos:colon].lower().split())
@@ -96,6 +97,13 @@ class Reader:
             raise self.error(f"the file ends before the value of '{what}' (truncated file?)", self.line(len(self.text)))
         self.pos = m.end()
         return m.group(0), self.line(m.start())
+
+    def missing(self):
+        """Whether the value expected next is missing: the line of the last label ends without one, and the next
+        word, on a later line, is not a number."""
+        m = re.compile(r"\S+").search(self.text, self.pos)
+        return (m is not None and self.last is not None and self.line(m.start()) > self.last[1]
+                and not _NUMBER.fullmatch(m.group(0)))
 
     def number(self, what, check=None):
         """The next word as a finite number (a :class:`Value`), which passes ``check``: None, ">=0", ">0",

@@ -9,22 +9,30 @@ import pathlib
 import numpy as np
 
 
-def femnet_figures(scene, eq, symmetry_axes=()):
+def femnet_figures(scene, eq, symmetry_axes=(), fixity=None):
     """FEMNET's summary figures of an equilibrium (N, m, m³), computed by jaxnet.
 
     drag_netting_N, drag_cables_N, catch_drag_N: x components (along the current when it is along x) and
     norms of the total drag on the netting, on the cables, and of the catch; total_force_N: the force the
     net exerts on its fixings (sum of the out-of-balance force at the held coordinates = minus jaxnet's
-    reaction), with the components along symmetry axes set to zero as FEMNET prints them;
+    reaction) as FEMNET prints it: at the coordinates ``fixity`` names ([node, axis] pairs: those FEMNET's node
+    types hold by "Displacement", the reader's ``info["fixity"]``), or else at every held coordinate less the
+    ``symmetry_axes`` (FEMNET gives no reaction at a node held by a symmetry plane);
     catch: thickness, largest diameter, volume of the modelled part (FEMNET's convention).
     """
     from jaxnet import figures
 
     groups = figures.force_breakdown(scene, eq.x)
-    fixed = np.asarray(scene.nodes.fixed)
-    total = np.where(fixed, np.asarray(eq.force), 0.0).sum(axis=0)
-    for a in symmetry_axes:
-        total["xyz".index(a)] = 0.0
+    if fixity is not None:
+        # FEMNET's sum: the reactions at the coordinates its node types hold by "Displacement" only
+        held = np.zeros(np.asarray(scene.nodes.fixed).shape, bool)
+        for i, j in fixity:
+            held[i, j] = True
+    else:
+        held = np.asarray(scene.nodes.fixed).copy()
+        for a in symmetry_axes:
+            held[:, "xyz".index(a)] = False
+    total = np.where(held, np.asarray(eq.force), 0.0).sum(axis=0)
     out = {
         "drag_netting_N": np.asarray(groups["drag_netting_N"]).tolist(),
         "drag_cables_N": np.asarray(groups["drag_cables_N"]).tolist(),

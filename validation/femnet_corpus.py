@@ -1,0 +1,210 @@
+"""FEMNET's whole corpus of worked cases, read and solved by jaxnet from their ``.don``, against FEMNET's answers.
+
+    python validation/femnet_corpus.py [--corpus ../shared/femnet-corpus] [--only 1pelagic_trawl/s2 ...]
+                                       [--timeout 600] [--out validation/results/femnet_corpus.json] [--resume]
+                                       [--table FILE]
+
+Per case (each in its own process, so that its time is cold: reading, meshing, tracing, compilation and the solve
+from the drawn shape; then a second, warm solve of the same scene in that process): whether it reads (else the
+reader's first refusal, ``file:LINE: message``), nodes and unknowns, Newton iterations, converged and why not,
+FEMNET's "forces along X Y and Z axes" against jaxnet's (the reactions at the coordinates FEMNET's node types hold by
+"Displacement"), with the relative difference of each component to the norm of FEMNET's force, whether the node
+boxes (floats, bodies) that jaxnet takes wholly immersed are under FEMNET's surface z = 0 at the equilibrium,
+and the cold and warm wall times against FEMNET's own (``ANSWERS.md``: its current code on this kind of machine,
+from the start its job file uses, which may be an earlier case's equilibrium where jaxnet starts from the drawn
+shape). FEMNET's target is its current code's answer where ``ANSWERS.md`` has one, else its stored ``.sta``.
+
+The records are JSON lines, written as each case ends (``--resume`` skips the cases already in ``--out``); the
+table is printed at the end (``--table`` prints it from a records file without running anything). This is a
+benchmark, not a test: the suite holds one representative case per family (``tests/test_femnet_corpus.py``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import pathlib
+import re
+import subprocess
+import sys
+import time
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+CORPUS = ROOT.parent / "shared" / "femnet-corpus"
+
+
+def femnet_answers(corpus):
+    """FEMNET's answers per case from ``ANSWERS.md``: {family/case: {"iterations", "converged", "wall_s", "force"
+    (its current code's X Y Z, N, or None), "stored" (the .sta's), "start"}}."""
+    answers = {}
+    for line in (pathlib.Path(corpus) / "ANSWERS.md").read_text().splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) < 8 or "/" not in cells[0] or cells[0].startswith("case"):
+            continue
+
+        def floats(text):
+            try:
+                values = [float(v) for v in text.split()]
+            except ValueError:
+                return None
+            return values if len(values) == 3 else None
+
+        iterations = re.match(r"(\d+)", cells[2])
+        try:
+            wall = float(cells[4])
+        except ValueError:
+            wall = None
+        answers[cells[0]] = {"start": cells[1], "iterations": int(iterations.group(1)) if iterations else None,
+                             "converged": cells[3], "wall_s": wall, "force": floats(cells[5]),
+                             "stored": floats(cells[6])}
+    return answers
+
+
+def one(don):
+    """Read and solve one case in this process: its record (see the module docstring)."""
+    t0 = time.perf_counter()
+    import numpy as np
+
+    from jaxnet.io import femnet
+    from jaxnet.scene import SceneError
+    from jaxnet.solve.statics import solve
+
+    try:
+        case = femnet.read_don(don)
+    except SceneError as e:
+        return {"reads": False, "refusal": str(e).split("\n")[0], "cold_s": time.perf_counter() - t0}
+    scene, info = case.scene, case.info
+    eq = solve(scene, case.solver, throw=False)
+    cold = time.perf_counter() - t0
+    t1 = time.perf_counter()
+    solve(scene, case.solver, throw=False)
+    warm = time.perf_counter() - t1
+    x = np.asarray(eq.x)
+    boxes = info.get("boxes", {})
+    tops = [x[int(i), 2] + h for i, h in boxes.items()]
+    figures = femnet.femnet_figures(scene, eq, info["symmetry_axes"], info.get("fixity"))
+    return {"reads": True, "nodes": scene.n_nodes, "dof": scene.n_dof, "iterations": int(eq.iterations),
+            "converged": bool(eq.converged), "reason": str(getattr(eq, "reason", "")),
+            "largest_residual_N": float(np.abs(np.where(np.asarray(scene.nodes.fixed), 0.0, np.asarray(eq.force))).max()),
+            "total_force_N": figures["total_force_N"], "boxes": len(boxes),
+            "highest_box_top_m": float(max(tops)) if tops else None,
+            "warnings": len(info.get("warnings", [])), "dynamic_only": len(info.get("dynamic_only", [])),
+            "cold_s": cold, "warm_s": warm}
+
+
+def run(don, timeout):
+    """One case in a fresh process (cold), with a wall-clock limit (s)."""
+    t0 = time.perf_counter()
+    try:
+        # a plain process: no persistent compilation cache (only the CLI turns it on), so the time is cold
+        done = subprocess.run([sys.executable, __file__, "--one", str(don)], capture_output=True, text=True,
+                              timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return {"reads": True, "converged": False, "reason": f"timeout after {timeout} s", "cold_s": timeout}
+    lines = [line for line in done.stdout.splitlines() if line.startswith("{")]
+    if done.returncode != 0 or not lines:
+        tail = (done.stderr or done.stdout).strip().splitlines()[-1:] or ["no output"]
+        return {"reads": None, "error": tail[0][:300], "cold_s": time.perf_counter() - t0}
+    return json.loads(lines[-1])
+
+
+def ratio(femnet_s, jaxnet_s):
+    """FEMNET's time over jaxnet's, as "12x" (empty when either is missing)."""
+    return f"{femnet_s / jaxnet_s:.2g}x" if femnet_s and jaxnet_s else ""
+
+
+def table(records, answers):
+    """The corpus table (markdown) and its summary lines."""
+    head = ("| case | reads | nodes | it | conv | jaxnet X Y Z (N) | FEMNET X Y Z (N) | max rel diff | boxes under z=0 "
+            "| cold s | warm s | FEMNET s (it) | cold ratio | warm ratio |")
+    rows = [head, "|" + "---|" * 14]
+    stats = {"cases": 0, "read": 0, "converged": 0, "within_1pct": 0, "compared": 0, "iterations": []}
+    for name, r in records.items():
+        a = answers.get(name, {})
+        stats["cases"] += 1
+        if not r.get("reads"):
+            why = r.get("refusal") or r.get("error") or ""
+            rows.append(f"| {name} | no: {why.split(': ', 1)[-1][:110]} |" + " |" * 12)
+            continue
+        stats["read"] += 1
+        target = a.get("force") or a.get("stored")
+        force = r.get("total_force_N")
+        diff = ""
+        if target is not None and force is not None and r.get("converged"):
+            scale = max(sum(v * v for v in target) ** 0.5, 1e-9)
+            rel = max(abs(f - t) for f, t in zip(force, target)) / scale
+            diff = f"{rel:.2%}"
+            stats["compared"] += 1
+            stats["within_1pct"] += rel <= 0.01
+        if r.get("converged"):
+            stats["converged"] += 1
+            stats["iterations"].append(r["iterations"])
+        femnet_s = a.get("wall_s")
+        top = r.get("highest_box_top_m")
+        under = "" if not r.get("boxes") else ("yes" if top is not None and top <= 0 else f"no ({top:.2f} m)")
+        fmt = (lambda v: " ".join(f"{x:.1f}" for x in v)) if force else (lambda v: "")
+        rows.append(
+            f"| {name} | yes | {r.get('nodes', '')} | {r.get('iterations', '')} | "
+            f"{'yes' if r.get('converged') else 'no: ' + str(r.get('reason', ''))[:40]} | {fmt(force) if force else ''} | "
+            f"{fmt(target) if target else ''} | {diff} | {under} | {r.get('cold_s', 0):.1f} | "
+            f"{r.get('warm_s', 0) or 0:.2f} | {'' if femnet_s is None else f'{femnet_s:.2f}'} ({a.get('iterations', '')}) | "
+            f"{ratio(femnet_s, r.get('cold_s'))} | {ratio(femnet_s, r.get('warm_s'))} |")
+    its = sorted(stats["iterations"])
+    median = its[len(its) // 2] if its else None
+    summary = (f"{stats['cases']} cases: {stats['read']} read, {stats['converged']} converged (median "
+               f"{median} Newton iterations, largest {its[-1] if its else None}); total force within 1 % of FEMNET's "
+               f"answer in {stats['within_1pct']} of the {stats['compared']} converged cases with an answer")
+    return "\n".join(rows), summary
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--corpus", default=str(CORPUS))
+    parser.add_argument("--only", nargs="*", help="family/case names (e.g. 1pelagic_trawl/s2)")
+    parser.add_argument("--timeout", type=float, default=600.0, help="wall-clock limit per case (s)")
+    parser.add_argument("--out", default=str(ROOT / "validation" / "results" / "femnet_corpus.json"))
+    parser.add_argument("--resume", action="store_true", help="skip the cases already recorded in --out")
+    parser.add_argument("--table", help="print the table of this records file and stop")
+    parser.add_argument("--one", help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.one:
+        print(json.dumps(one(args.one)), flush=True)
+        return
+    corpus = pathlib.Path(args.corpus)
+    answers = femnet_answers(corpus)
+    if args.table:
+        records = {}
+        for line in pathlib.Path(args.table).read_text().splitlines():
+            record = json.loads(line)
+            records[record["case"]] = record
+        text, summary = table(records, answers)
+        print(text + "\n\n" + summary)
+        return
+    cases = sorted(str(p.relative_to(corpus).with_suffix("")) for p in corpus.rglob("*.don"))
+    if args.only:
+        cases = [c for c in cases if c in args.only]
+    out = pathlib.Path(args.out)
+    records = {}
+    if args.resume and out.exists():
+        for line in out.read_text().splitlines():
+            record = json.loads(line)
+            records[record["case"]] = record
+    elif out.exists():
+        out.unlink()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    for k, name in enumerate(cases):
+        if name in records:
+            continue
+        record = {"case": name, **run(corpus / f"{name}.don", args.timeout)}
+        records[name] = record
+        with out.open("a") as f:
+            f.write(json.dumps(record) + "\n")
+        state = ("refused" if record.get("reads") is False else
+                 f"{record.get('iterations')} it, {'converged' if record.get('converged') else 'not converged'}")
+        print(f"[{k + 1}/{len(cases)}] {name}: {state}, {record.get('cold_s', 0):.1f} s", flush=True)
+    text, summary = table({c: records[c] for c in cases if c in records}, answers)
+    print(text + "\n\n" + summary)
+
+
+if __name__ == "__main__":
+    main()
