@@ -111,6 +111,10 @@ def _run(args):
     scene = case.scene
     print(f"jaxnet: {label}")
     print(f"  {scene.n_nodes} nodes, {scene.n_elements} elements, {scene.n_dof} unknowns")
+    for line in case.info.get("warnings", []):       # a FEMNET case read as FEMNET would, with a difference said
+        print(f"  note: {line}")
+    if case.info.get("dynamic_only"):
+        print(f"  left out of this static run (FEMNET's dynamics only): {', '.join(case.info['dynamic_only'])}")
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     failed = None

@@ -161,3 +161,20 @@ def test_pelagic_trawl_matches_femnet():
     total = femnet.femnet_figures(case.scene, eq, case.info["symmetry_axes"], case.info["fixity"])["total_force_N"]
     target = np.array([33247.94314, 6375.49291, -20424.09454])
     assert np.abs(np.array(total) - target).max() <= 0.01 * np.linalg.norm(target), total
+
+
+def test_a_static_run_says_what_it_leaves_out(tmp_path, capsys):
+    """`jaxnet run` of the seine s4_fixe names its winch, which acts in FEMNET's dynamics only, and writes the
+    reader's decisions into result.json."""
+    import json
+
+    from jaxnet import cli
+
+    out = tmp_path / "out"
+    cli.main(["run", str(_don("11bottom_seine/s4_fixe")), "--out", str(out), "--max-iter", "3", "--quiet",
+              "--no-cache"])
+    printed = capsys.readouterr().out
+    assert "left out of this static run (FEMNET's dynamics only): input hauling_cable4 (line 722)" in printed
+    assert "note: " in printed and "normal Cd' has no value" in printed
+    info = json.loads((out / "result.json").read_text())["femnet_case"]
+    assert info["dynamic_only"] == ["input hauling_cable4 (line 722)"] and info["design_plane_axis"] == 2

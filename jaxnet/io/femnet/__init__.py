@@ -49,8 +49,10 @@ Conventions established from the files (see ``tests/test_femnet.py``):
   sit where its twines cross the side: jaxnet's mesher differs from FEMNET's anyway). FEMNET does not
   sew a panel to itself; the reader refuses a panel (or cable) two of whose corners (ends) are joined,
   a point in two links, and a cable joined at both ends to a cable of several bars (FEMNET threads it
-  on that cable's nodes). A joined node whose points have different node types is refused (FEMNET
-  warns and keeps one).
+  on that cable's nodes). A joined node whose points have different node types of the same rank (two
+  corners, two cable ends) takes the first met (panels before cables, in the file's order): FEMNET warns
+  and keeps one; ``info["warnings"]`` says which. Points at one place that no link joins are refused
+  (FEMNET keeps them apart; jaxnet's Net joins points at one place).
 * **Hexagonal panels** ("hexagonal panels number"; ``chargement_don.c``): laid out as diamond panels,
   but after the corners FEMNET skips one whole line (a field written there is lost to FEMNET; refused
   here), then reads three values (twine families l, m, n) for traction stiffness (N), compression
@@ -71,13 +73,41 @@ Conventions established from the files (see ``tests/test_femnet.py``):
   (``Net.body``: ``Nodes.drag_length``, ``Nodes.drag_coefficient``; :func:`jaxnet.terms.drag.box_drag`).
   FEMNET's statics (``traineecourant2.c``) drags a box along x by ½ ρ Cd_x L_y h U² cos θ and along y by
   ½ ρ Cd_y L_x h U² sin θ, h its immersed height (the box stands above its node for L_z > 0, below it for
-  L_z < 0, FEMNET's "lest"), which is jaxnet's box drag for a horizontal current. FEMNET's water surface
-  is z = 0 and jaxnet's scenes from FEMNET have none (h = |L_z|), so a box must start wholly below z = 0
-  (refused otherwise; the equilibrium is not checked). FEMNET also *floats* a box (``flotteur2.c``:
-  rho g L_x L_y times its immersed height, along z, stiffness rho g L_x L_y while it crosses z = 0), which
-  jaxnet's node box has no term for: a length whose three values are all non-zero (a box with a volume) is
-  refused; one with a zero length (a plate: drag without buoyancy) is read. Widths X, Y must be >= 0
-  (FEMNET takes them signed: a negative one would drag against the current).
+  L_z < 0, FEMNET's "lest"), which is jaxnet's box drag for a horizontal current. FEMNET also *floats* a
+  box (``flotteur2.c``: rho g L_x L_y times its immersed height, along z): a box with a volume displaces
+  V = |L_x L_y L_z| (``Nodes.volume``). FEMNET's water surface is z = 0 and jaxnet's scenes from FEMNET have
+  none: boxes are taken wholly immersed (h = |L_z|, buoyancy rho g V). Gear is often drawn above z = 0 and
+  sinks to its equilibrium (bottom trawls drawn at z > 0 rest on a sea bed at z = -depth), so the start is
+  not checked; ``info["boxes"]`` lists the nodes with a box and the height of its top above them, and
+  ``validation/femnet_corpus.py`` checks the equilibrium against z = 0. Widths X, Y must be >= 0 (FEMNET
+  takes them signed: a negative one would drag against the current).
+* **Spheres** (``input sphere_element CABLE COUNT D B``; manual, index): COUNT spherical floats of diameter
+  D (m) along the cable, each pulling up with B newtons net of its weight, Cd 0.6: floats of COUNT B newtons
+  and drag area COUNT 0.6 pi D²/4 shared equally by the cable's nodes (``Net.float_``).
+* **Node re-typing** (``input type_noeud_XYZ_SUPINF MODE BOUNDS... TYPE``): the nodes whose start position
+  lies strictly inside FEMNET's window (modes 1-13: one bound, an interval on one, two or three axes) take
+  the type. **Translations** (``input add_{x,y,z}_{ele,pan} D FIRST LAST``) move cables or panels FIRST to
+  LAST by D (m) before they are meshed and joined.
+* **Design plane** ("design in the plane normal to axis": 1, 2 or 3): the plane FEMNET's mesher draws a
+  panel in; it permutes the coordinates to draw and writes its mesh back in the file's order, so x y z are
+  world coordinates whatever the axis, and jaxnet's mesher (in 3-D) needs nothing of it
+  (``info["design_plane_axis"]``).
+* **Labels.** FEMNET reads a value after the next colon, whatever the text before it; its cases are written
+  with long English labels, short ones (``Kt: Kc: L: Vm: D: Cd: f: Nb: Ty:``, ``Rt: Rc: Le: De: Di: Cf:``, ...)
+  and French ones (``Raideur traction (N) :``, ``Seuil de convergence (N) :``, ...): every spelling found in
+  the corpus is a pattern of its field in :mod:`.grammar`. A cable may be written on one line, both ends
+  and its material (FEMNET's short syntax ``Ca: 1 D: 1 x y z type 2 x y z type Kt: ...``).
+* **Text outputs** (``Distances number``, ``Forces number``, ``Tensions number``, ``Positions number``): the
+  figures FEMNET prints after its solve (distance between two of its global nodes, force on one along an
+  axis, tension of a cable at an end, position of a node), each with its comment: read into
+  ``info["text_outputs"]``. ``output NAME ...`` commands (prints and drawings) are read and listed in
+  ``info["outputs"]``; they change nothing.
+* **Commands of the tail.** FEMNET's dynamics-only commands (winches ``hauling_cable4``/``6`` and towing
+  speeds ``speed_type_node2`` with the time tables on their next lines, ``wave_model``) are read and kept:
+  ``info["dynamic_only"]`` names them, left out of a static run; ``node_position``, which FEMNET's current
+  code has no handler for, is read and ignored (``info["ignored"]``); the table of a command commented out
+  is skipped with it. A drag coefficient left out of its line (``Normal Cd:`` then the next label) is
+  FEMNET's unset value, 0, said in ``info["warnings"]``.
 * **Sea bed** (``fond.c``). Where a node type's **limits sense** is 1 (a floor) or -1 (a ceiling) along an
   axis, its **limit** (m) along that axis is read (``Net.limit``: ``Nodes.limit``, ``Nodes.limit_sense``):
   FEMNET pushes a node beyond it back by k (limit - x), k the "stiffness of the insertion in the sea bottom"
@@ -106,9 +136,9 @@ NaN/inf, a negative stiffness or length (a node box's height excepted: it hangs 
 zero-length cable, a panel whose (U, V) contour has no area, positions, limits and node box sizes beyond
 1e5 m, meshes of more than 50000 nodes per panel or cables of more than 5000 bars (FEMNET's own limits are
 20000 nodes and 5000 bars in all), a link to a part that does not exist, and every FEMNET feature it does
-not model when it is used (node boxes with a volume or reaching above z = 0, sea-bed limits without a
-stiffness, hexagonal netting in a current, twines meshed as bars, sliding cables, winches, anisotropic node
-mass, unknown ``input`` commands, ...). Dynamic cases (an end time > 0) and waves are read: the time settings
+not model when it is used (sea-bed limits without a stiffness, hexagonal netting in a current, twines
+meshed as bars, sliding cables, anisotropic node mass, the tarp, the gravity catch, extra catch volumes,
+FEMNET's other drag laws, meshing by U and V diagonals, unknown ``input`` commands, ...). Dynamic cases (an end time > 0) and waves are read: the time settings
 go to ``info["dynamic"]`` (``jaxnet run CASE.don --dynamic``), the waves to ``Environment.waves`` (linear
 waves on FEMNET's surface z = 0, a depth of 0 taken as deep water); the node types' added masses are read
 into ``info["added_mass"]``, and a dynamic run of a case that has any stops with an error (not yet mapped).
