@@ -266,16 +266,35 @@ class Command:
     """A line ``input NAME v1 ... vN`` (it changes the case) or ``output NAME`` (it only prints figures).
 
     ``n_values``: the numbers that follow the name; ``check``: None, or check(values) giving the message that
-    refuses them (None when they are accepted)."""
+    refuses them (None when they are accepted); ``per_panel``: the first value names a panel, the command may be
+    given once per panel and :attr:`DonFile.inputs` keeps it as "NAME PANEL"."""
 
     kind: str
     name: str
     n_values: int = 0
     check: Callable | None = None
+    per_panel: bool = False   # its first value is a panel: one line per panel, kept as "NAME PANEL"
 
 
 def _positive_water_density(values):
     return None if values[0] > 0 else f"'input water_density' must be > 0, got {values[0]!r}"
+
+
+def _netting2ropes_values(values):
+    """``input netting2ropes PANEL PERIOD GAP_U GAP_V ACCURACY BARS`` (phobos ``chargement_don.c``, which reads
+    PANEL, PERIOD and BARS as integers): a panel number, a period of >= 1 twines, two finite gaps (fractions of
+    the period), an accuracy >= 0 (twines) and >= 1 bars per period dividing the period (FEMNET spaces the nodes
+    int(PERIOD / BARS) twines apart but gives each bar PERIOD / BARS twines of rest length)."""
+    panel, period, _gap_u, _gap_v, accuracy, bars = values
+    for what, v in (("panel", panel), ("period", period), ("number of bars", bars)):
+        if v != int(v) or v < 1:
+            return f"'input netting2ropes': the {what} must be an integer >= 1, got {v!r}"
+    if accuracy < 0:
+        return f"'input netting2ropes': the accuracy must be >= 0 (twines), got {accuracy!r}"
+    if int(period) % int(bars):
+        return (f"'input netting2ropes': the period ({int(period)} twines) must be a multiple of the number of bars "
+                f"({int(bars)}): FEMNET spaces their nodes int(period / bars) twines apart")
+    return None
 
 
 COMMANDS = (
@@ -284,6 +303,8 @@ COMMANDS = (
     Command("input", "link", 1),            # FEMNET's automatic links: points closer than this (m) are one node
     Command("input", "moving_bottom"),      # the bottom slides at the current's speed: its friction acts (fond.c)
     Command("input", "water_density", 1, _positive_water_density),   # kg/m³
+    # a panel meshed as numerical twines (bars): PANEL PERIOD GAP_U GAP_V ACCURACY BARS (jaxnet.io.femnet.twines)
+    Command("input", "netting2ropes", 6, _netting2ropes_values, per_panel=True),
     *(Command("output", name) for name in ("element_drag", "surface_drag", "catch_drag", "no_visible_symmetry",
                                            "panel_drag", "cable_drag", "node_drag", "energy", "tension", "tensions")),
 )
