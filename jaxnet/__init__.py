@@ -21,7 +21,7 @@ from jaxnet.checks import validate  # noqa: E402
 from jaxnet.forcing import Loading  # noqa: E402
 from jaxnet.io.femnet import read_don, read_mdg  # noqa: E402
 from jaxnet.io.scene_file import read as read_scene  # noqa: E402
-from jaxnet.net import HexTwine, Net, Rope, Twine  # noqa: E402
+from jaxnet.net import HexTwine, Net, NumericalTwines, Rope, Twine  # noqa: E402
 from jaxnet.scene import Bars, Environment, Netting, Nodes, Scene, SceneError  # noqa: E402
 from jaxnet.solve.dynamics import DynamicsError, Trajectory, simulate  # noqa: E402
 from jaxnet.solve.options import Implicit, Newton  # noqa: E402
@@ -30,7 +30,7 @@ from jaxnet.solve.statics import solve as solve_static  # noqa: E402
 
 __all__ = [
     "Case", "TimeSettings", "Loading", "read_don", "read_mdg", "read_scene", "scenes",
-    "Net", "Twine", "Rope", "HexTwine",
+    "Net", "Twine", "Rope", "HexTwine", "NumericalTwines",
     "Bars", "Environment", "Netting", "Nodes", "Scene", "SceneError", "validate",
     "Newton", "Implicit", "Equilibrium", "SolveError", "solve_static", "Trajectory", "DynamicsError", "simulate",
 ]

@@ -11,6 +11,10 @@ U, V — as FEMNET's ``.don`` files describe them), cables, seams and what is at
     net.fix(p.side(2))
     scene = net.build()
 
+A panel may instead be meshed as numerical twines, chains of bars each standing for ``period`` real twines
+(``net.panel(..., twines=NumericalTwines(period=10, bars=2))``, :mod:`jaxnet.mesh.twines`; FEMNET's ``input
+netting2ropes``): then every side needs a cable along it, and no seam.
+
 Joining rules (decided in :meth:`Net.build`):
   * Panel corners and cable ends at the same start position (within ``merge_tolerance``) are one node.
   * ``net.seam(a.side(i), b.side(j))`` makes two panel borders share their nodes: both sides are divided
@@ -37,6 +41,7 @@ from jaxnet.mesh.hinges import netting_hinges
 from jaxnet.mesh.joining import NodeJoiner
 from jaxnet.mesh.panel import mesh_panel
 from jaxnet.mesh.polygon import PanelError, side_divisions
+from jaxnet.mesh.twines import NumericalTwines, mesh_twines, numerical_twine_rope
 from jaxnet.scene import Bars, Environment, Netting, Nodes, Scene, SceneError
 
 
@@ -149,6 +154,7 @@ class _Panel:
     corners: np.ndarray  # (C, 5): x y z U V
     twine: Twine
     step: float
+    twines: NumericalTwines | None = None   # meshed as numerical twines (bars) rather than triangles
 
 
 @dataclasses.dataclass
@@ -189,14 +195,37 @@ class Net:
 
     # -- description ------------------------------------------------------------------------------
 
-    def panel(self, name, corners, twine: Twine | HexTwine, step: float) -> PanelRef:
+    def panel(self, name, corners, twine: Twine | HexTwine, step: float | None = None,
+              twines: NumericalTwines | None = None) -> PanelRef:
         """Add a panel. corners: (C, 5) rows x, y, z (m), U, V (twines of a diamond mesh, or base meshes of a
-        hexagonal mesh when ``twine`` is a :class:`HexTwine`); step: meshing step (m)."""
+        hexagonal mesh when ``twine`` is a :class:`HexTwine`); step: meshing step (m) of its triangles.
+
+        twines: a :class:`~jaxnet.mesh.twines.NumericalTwines` to mesh the (diamond) panel as numerical twines,
+        chains of bars along its twines, each standing for ``period`` real twines (book 4.1.2; FEMNET's ``input
+        netting2ropes``), instead of triangles; ``step`` is then unused. Their bars are the scene's bars of a
+        cable named "<name> twines" (after the net's cables), of :func:`~jaxnet.mesh.twines.numerical_twine_rope`
+        material. The twines end on the panel's border, where only a rope holds them: every side of such a
+        panel needs a cable sewn along it (``Net.cable(along=...)``, as FEMNET requires), and it cannot be
+        seamed to another panel."""
         if name in self._panels or name in self._cables:
             raise SceneError(f"panel '{name}': the name is already used")
         corners = np.asarray(corners, dtype=float)
         if corners.ndim != 2 or corners.shape[1] != 5:
             raise SceneError(f"panel '{name}': corners must be rows of x y z U V, got shape {corners.shape}")
+        if twines is not None:
+            if not isinstance(twines, NumericalTwines):
+                raise SceneError(f"panel '{name}': twines must be a NumericalTwines, got {twines!r}")
+            if not isinstance(twine, Twine):
+                raise SceneError(f"panel '{name}': numerical twines need a diamond-mesh Twine, got {twine!r}")
+            bad = twines.check(f"panel '{name}'")
+            if bad:
+                raise SceneError(bad)
+            check_material(twine, f"panel '{name}'", ("l0", "ea", "ea_compression", "diameter", "density",
+                                                      "cd_normal", "tangential_ratio"), positive=("l0",))
+            self._panels[name] = _Panel(name, corners, twine, float("nan") if step is None else float(step), twines)
+            return PanelRef(name)
+        if step is None:
+            raise SceneError(f"panel '{name}': give its meshing step (m), or twines= to mesh it as numerical twines")
         if isinstance(twine, HexTwine):
             for field in ("l0", "ea", "ea_compression"):
                 v = twine.per_family(field)
@@ -345,7 +374,11 @@ class Net:
         meshes = {}
         for p in self._panels.values():
             try:
-                m = mesh_panel(p.corners[:, 3:5], p.corners[:, 0:3], p.step, _mesh_length(p.twine), divisions=divisions[p.name], name=p.name)
+                if p.twines is not None:
+                    m = mesh_twines(p.corners[:, 3:5], p.corners[:, 0:3], p.twines, divisions=divisions[p.name],
+                                    name=p.name)
+                else:
+                    m = mesh_panel(p.corners[:, 3:5], p.corners[:, 0:3], p.step, _mesh_length(p.twine), divisions=divisions[p.name], name=p.name)
             except PanelError as err:
                 raise SceneError(str(err)) from err
             offset = builder.add_nodes(m.xyz)
@@ -373,7 +406,7 @@ class Net:
 
         hexagonal = self._hexagonal(meshes, ids)
         netting = self._netting(meshes, ids)
-        bars = self._bars(cable_nodes, ids, position)
+        bars = self._bars(cable_nodes, ids, position, meshes)
         environment = _normalised(self.environment)
         catch, enclosure = self._catch_and_enclosure(environment)
         if netting is not None and (catch is not None or enclosure is not None):
@@ -417,7 +450,7 @@ class Net:
             enclosure=enclosure,
             environment=environment,
             panel_names=tuple(self._panels),
-            cable_names=tuple(self._cables),
+            cable_names=tuple(self._cables) + tuple(f"{p.name} twines" for p in self._twine_panels()),
         )
         from jaxnet.checks import validate
 
@@ -462,6 +495,11 @@ class Net:
         """Number of segments of every panel side; seams and sewn cables make sides agree."""
         div = {}
         for p in self._panels.values():
+            if p.twines is not None:
+                # a side of numerical twines has the nodes where they cross it, and those of a cable of a given
+                # number of bars sewn along it (mesh_twines' divisions; 0: none)
+                div[p.name] = np.zeros(len(p.corners), dtype=int)
+                continue
             try:
                 div[p.name] = np.array(side_divisions(p.corners[:, 3:5], p.step, _mesh_length(p.twine)), dtype=int)
             except PanelError as err:
@@ -471,6 +509,15 @@ class Net:
         sides = [s for seam in self._seams for s in seam]
         for s in sides:
             self._check_side(s, "seam")
+            if self._panels[s.panel].twines is not None:
+                raise SceneError(f"seam: panel '{s.panel}' is meshed as numerical twines: sew a cable along its "
+                                 f"side {s.index} instead (its twines end on the rope)")
+        sewn = {c.along for c in self._cables.values() if c.along is not None}
+        for p in self._twine_panels():
+            for k in range(len(p.corners)):
+                if Side(p.name, k) not in sewn:
+                    raise SceneError(f"panel '{p.name}': side {k} has no cable sewn along it: a panel of numerical "
+                                     "twines must be surrounded by ropes (their twines end on them), as in FEMNET")
         # Sides joined by seams (possibly in chains) form groups that all take the largest division.
         parent = {}
 
@@ -581,7 +628,8 @@ class Net:
     def _netting(self, meshes, ids):
         rows = {k: [] for k in ("vertices", "uv", "panel")}
         twines = []
-        for p, e in self._panel_triangles(meshes, ids, rows, lambda p: not isinstance(p.twine, HexTwine)):
+        for p, e in self._panel_triangles(meshes, ids, rows,
+                                          lambda p: not isinstance(p.twine, HexTwine) and p.twines is None):
             twines.append(p.twine)
         if not rows["vertices"]:
             return None
@@ -615,8 +663,15 @@ class Net:
             return None
         return HexagonalNetting(**{key: np.concatenate(v) for key, v in rows.items()})
 
-    def _bars(self, cable_nodes, ids, position):
-        if not cable_nodes:
+    def _twine_panels(self):
+        """The panels meshed as numerical twines, in the net's order."""
+        return [p for p in self._panels.values() if p.twines is not None]
+
+    def _bars(self, cable_nodes, ids, position, meshes=None):
+        """The cables' bars (a cable's rest length shared by its bars' start lengths), then those of each panel of
+        numerical twines (rest length l0 times the twines a bar spans, cable index after the net's cables)."""
+        twine_panels = self._twine_panels()
+        if not cable_nodes and not twine_panels:
             return None
         rows = {k: [] for k in ("ends", "rest_length", "ea_traction", "ea_compression", "diameter", "density", "cable",
                                 "cd_normal", "tangential_ratio")}
@@ -632,6 +687,14 @@ class Net:
             for key, value in bar_columns(c.rope).items():
                 rows[key].append(np.full(len(ends), value))
             rows["cable"].append(np.full(len(ends), k))
+        for j, p in enumerate(twine_panels):
+            m, offset = meshes[p.name]
+            ends = ids[offset + m.bars]
+            rows["ends"].append(ends)
+            rows["rest_length"].append(p.twine.l0 * np.asarray(m.twines))
+            for key, value in bar_columns(numerical_twine_rope(p.twine, p.twines)).items():
+                rows[key].append(np.full(len(ends), value))
+            rows["cable"].append(np.full(len(ends), len(self._cables) + j))
         return Bars(**{k: np.concatenate(v) for k, v in rows.items()})
 
 

@@ -67,6 +67,11 @@ Conventions established from the files (see ``tests/test_femnet.py``):
   (T_l - T_m, -T_n) on (U, V) as jaxnet's. jaxnet's hexagonal netting has one twine diameter and no
   drag: the diameter D with FEMNET's three's weight, D² sum l0_i = sum d_i² l0_i, and a current with
   hexagonal panels is refused. jaxnet meshes a hexagonal panel with step / (3 mean l0) base meshes.
+* **Numerical twines** (``input netting2ropes PANEL PERIOD GAP_U GAP_V ACCURACY BARS``, FEMNET's meshing type 4,
+  which that line sets; :mod:`.twines`): the panel is meshed as bars along its twines
+  (:mod:`jaxnet.mesh.twines`), of its material scaled by PERIOD, as FEMNET's mesher and solver do, and read
+  from FEMNET's ``.mdg`` too (its bars of type -PANEL). FEMNET's mesher doubles a rope meshed before such a
+  panel (:mod:`.twines` says how); jaxnet's is single.
 * **Added mass** acts in dynamics only (``lectureDo4.c``: "n'intervient qu'en dynamique"): read, kept
   in ``info["added_mass"]`` per node type, without effect here.
 * **Node bodies.** A node type's **length** X,Y,Z (m) and **drag coefficient** X,Y,Z make its nodes boxes
@@ -137,7 +142,7 @@ zero-length cable, a panel whose (U, V) contour has no area, positions, limits a
 1e5 m, meshes of more than 50000 nodes per panel or cables of more than 5000 bars (FEMNET's own limits are
 20000 nodes and 5000 bars in all), a link to a part that does not exist, and every FEMNET feature it does
 not model when it is used (sea-bed limits without a stiffness, hexagonal netting in a current, twines
-meshed as bars, sliding cables, anisotropic node mass, the tarp, the gravity catch, extra catch volumes,
+meshed as bars (meshing type 3), sliding cables, anisotropic node mass, the tarp, the gravity catch, extra catch volumes,
 FEMNET's other drag laws, meshing by U and V diagonals, unknown ``input`` commands, ...). Dynamic cases (an end time > 0) and waves are read: the time settings
 go to ``info["dynamic"]`` (``jaxnet run CASE.don --dynamic``), the waves to ``Environment.waves`` (linear
 waves on FEMNET's surface z = 0, a depth of 0 taken as deep water); the node types' added masses are read
@@ -148,7 +153,8 @@ then hexagonal panels) or ``b`` (panels, hexagonal panels, cables).
 
 Modules: :mod:`.reader` (FEMNET's way of reading, strict: labels, numbers, ``file:LINE:`` errors),
 :mod:`.grammar` (the ``.don``'s fields and commands as tables; :class:`DonFile`, the file as read),
-:mod:`.parse` (:func:`parse_don`), :mod:`.links` (links and seams planned before meshing), :mod:`.mapping`
+:mod:`.parse` (:func:`parse_don`), :mod:`.links` (links and seams planned before meshing), :mod:`.twines`
+(numerical twines), :mod:`.mapping`
 (onto jaxnet's :class:`~jaxnet.net.Net`: :func:`read_don`), :mod:`.mdg` (:func:`read_mdg`), :mod:`.results`
 (:func:`femnet_figures`, :func:`read_sta`).
 """

@@ -352,7 +352,8 @@ class Command:
     check(values) giving the message that refuses them (None when they are accepted); ``use``: what a static
     run does with it: "model" (the reader maps it), "dynamic" (it acts in FEMNET's dynamics only: kept in the
     case, left out of a static run, which says so), "ignored" (FEMNET itself does nothing with it), or
-    "unsupported" (refused, ``reason`` saying why)."""
+    "unsupported" (refused, ``reason`` saying why); ``per_panel``: the first value names a panel, the command
+    may be given once per panel and :attr:`DonFile.inputs` keeps it as "NAME PANEL"."""
 
     kind: str
     name: str
@@ -361,6 +362,7 @@ class Command:
     use: str = "model"
     reason: str = ""
     table: tuple | None = None    # (rows, index of the value giving each row's length): a table on the next lines
+    per_panel: bool = False   # its first value is a panel: one line per panel, kept as "NAME PANEL"
 
     @property
     def counts(self):
@@ -404,6 +406,23 @@ def _translation(values):
 
 _UNSUPPORTED = "a FEMNET feature jaxnet does not model yet"
 
+def _netting2ropes_values(values):
+    """``input netting2ropes PANEL PERIOD GAP_U GAP_V ACCURACY BARS`` (phobos ``chargement_don.c``, which reads
+    PANEL, PERIOD and BARS as integers): a panel number, a period of >= 1 twines, two finite gaps (fractions of
+    the period), an accuracy >= 0 (twines) and >= 1 bars per period dividing the period (FEMNET spaces the nodes
+    int(PERIOD / BARS) twines apart but gives each bar PERIOD / BARS twines of rest length)."""
+    panel, period, _gap_u, _gap_v, accuracy, bars = values
+    for what, v in (("panel", panel), ("period", period), ("number of bars", bars)):
+        if v != int(v) or v < 1:
+            return f"'input netting2ropes': the {what} must be an integer >= 1, got {v!r}"
+    if accuracy < 0:
+        return f"'input netting2ropes': the accuracy must be >= 0 (twines), got {accuracy!r}"
+    if int(period) % int(bars):
+        return (f"'input netting2ropes': the period ({int(period)} twines) must be a multiple of the number of bars "
+                f"({int(bars)}): FEMNET spaces their nodes int(period / bars) twines apart")
+    return None
+
+
 COMMANDS = (
     Command("input", "auto_convergence"),
     Command("input", "convergence_parameters", 3),
@@ -433,6 +452,8 @@ COMMANDS = (
         ("sphere_element2", "spheres with a fifth value the manual does not describe: " + _UNSUPPORTED),
         ("spheric_limit", "a spherical limit: " + _UNSUPPORTED),
         ("deck", "a deck: " + _UNSUPPORTED))),
+    # a panel meshed as numerical twines (bars): PANEL PERIOD GAP_U GAP_V ACCURACY BARS (jaxnet.io.femnet.twines)
+    Command("input", "netting2ropes", 6, _netting2ropes_values, per_panel=True),
 )
 INPUTS = {c.name: c for c in COMMANDS if c.kind == "input"}
 #: FEMNET's output commands (``output NAME ...``) print figures or draw: all are read and none changes the case;

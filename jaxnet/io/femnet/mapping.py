@@ -17,6 +17,7 @@ from jaxnet import waves as waves_lib
 from jaxnet.io.femnet.grammar import INPUTS, DonCable, DonFile, DonPanel, twine_coordinates
 from jaxnet.io.femnet.links import MERGE_TOLERANCE, JoinPlan, all_panels, at_joined_positions, plan_joins
 from jaxnet.io.femnet.parse import parse_don
+from jaxnet.io.femnet.twines import numerical_twines
 from jaxnet.net import CableRef, HexTwine, Net, Rope, Twine
 from jaxnet.scene import Environment, SceneError
 from jaxnet.case import Case, TimeSettings
@@ -257,10 +258,11 @@ def catch_of(case: DonFile, position, netting_nodes, planes, env: Environment):
 def _describe(case: DonFile, env: Environment, plan: JoinPlan, femnet_laws: bool = True) -> Net:
     """The panels and cables of the (joined) case on a new Net, sewn as ``plan`` says."""
     net = Net(environment=env, merge_tolerance=MERGE_TOLERANCE)
+    twines = numerical_twines(case, femnet_laws)
     for kind, k, p, name in all_panels(case):
         if kind == "pa":
             corners = np.concatenate([p.corners[:, :3], twine_coordinates(p.corners[:, 3:5])], axis=1)
-            net.panel(name, corners, twine_of(p, case, femnet_laws), p.material["step"].value)
+            net.panel(name, corners, twine_of(p, case, femnet_laws), p.material["step"].value, twines=twines.get(k))
         else:
             # hexagonal: FEMNET's (U, V) count base meshes, as jaxnet's (see the package's docstring)
             net.panel(name, p.corners, _hextwine(p), p.material["step"].value)
@@ -465,6 +467,14 @@ def _on_segment(points, a, b, tol):
     return (d <= tol) & (t > 1e-9) & (t < 1 - 1e-9)
 
 
+def _twine_nodes(scene, name):
+    """The nodes of the numerical twines of panel ``name`` (the bars of its cable "<name> twines"), or none."""
+    label = f"{name} twines"
+    if scene.bars is None or label not in scene.cable_names:
+        return np.zeros(0, dtype=np.int64)
+    return np.unique(np.asarray(scene.bars.ends)[np.asarray(scene.bars.cable) == scene.cable_names.index(label)])
+
+
 def _node_types(case: DonFile, scene, warnings=None):
     """Node type of every scene node, from where it was created (see the package's docstring). Points joined into one
     node with different types of the same rank (two corners, two cable ends): FEMNET warns and keeps one; here the
@@ -495,7 +505,7 @@ def _node_types(case: DonFile, scene, warnings=None):
     panel_of = np.concatenate([np.asarray(f.panel) for f in nettings]) if nettings else np.zeros(0, int)
     tri = np.concatenate([np.asarray(f.vertices) for f in nettings]) if nettings else np.zeros((0, 3), int)
     for j, (kind, k, p, name) in enumerate(all_panels(case)):
-        nodes = np.unique(tri[panel_of == j])
+        nodes = np.union1d(np.unique(tri[panel_of == j]), _twine_nodes(scene, name))
         claim(nodes, 0, p.material["inner_type"], f"{name} internal nodes")
         C = len(p.corners)
         for c in range(C):

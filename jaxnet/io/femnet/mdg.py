@@ -15,6 +15,7 @@ from jaxnet.io.femnet.grammar import twine_coordinates
 from jaxnet.io.femnet.mapping import (catch_of, check_types, environment_of, node_type_fields, result, rope_of,
                                       symmetry_planes, twine_of)
 from jaxnet.io.femnet.parse import parse_don
+from jaxnet.io.femnet.twines import mdg_twine_bars, numerical_twines
 from jaxnet.materials import bar_rows, netting_rows
 from jaxnet.net import outward
 from jaxnet.checks import validate
@@ -112,6 +113,12 @@ def read_mdg(path, don=None, femnet_laws=True):
         twines = [twine_of(p, case, femnet_laws) for p in case.panels]
         netting = Netting(vertices=vertices, uv=uv, panel=panel, **netting_rows(twines, panel))
     bars = None
+    # FEMNET's numerical twines (input netting2ropes): bars of type -PANEL, kept apart (jaxnet.io.femnet.twines)
+    twines = numerical_twines(case, femnet_laws)
+    twine_lines = [r for r in bar_lines if r[5] < 0]
+    bar_lines = [r for r in bar_lines if r[5] >= 0]
+    n_bars = len(bar_lines)
+    twine_bars, twine_names = mdg_twine_bars(case, twines, twine_lines, node_index, where, femnet_laws)
     if n_bars:
         ends = np.array([[node_index(v, r[-1]) for v in r[1:3]] for r in bar_lines])
         cable = np.array([int(r[5]) - 1 for r in bar_lines])
@@ -127,6 +134,11 @@ def read_mdg(path, don=None, femnet_laws=True):
         ropes = [rope_of(c) for c in case.cables]
         rest = share * np.array([case.cables[c].material["l0"].value for c in cable])
         bars = Bars(ends=ends, rest_length=rest, cable=cable, **bar_rows(ropes, cable))
+    if twine_bars is not None:
+        bars = twine_bars if bars is None else Bars(**{f: np.concatenate([getattr(bars, f), getattr(twine_bars, f)])
+                                                       for f in ("ends", "rest_length", "ea_traction", "ea_compression",
+                                                                 "diameter", "density", "cable", "cd_normal",
+                                                                 "tangential_ratio")})
     netting_nodes = np.unique(netting.vertices) if netting is not None else np.arange(n_nodes)
     catch_spec = catch_of(case, position, netting_nodes, planes, env)
     catch = None
@@ -136,7 +148,7 @@ def read_mdg(path, don=None, femnet_laws=True):
         netting = dataclasses.replace(netting, outward=outward(position, np.asarray(netting.vertices), center))
     scene = Scene(nodes=nodes, netting=netting, bars=bars, environment=env, catch=catch,
                   panel_names=tuple(f"panel {k + 1}" for k in range(len(case.panels))),
-                  cable_names=tuple(f"cable {k + 1}" for k in range(len(case.cables))))
+                  cable_names=tuple(f"cable {k + 1}" for k in range(len(case.cables))) + twine_names)
     validate(scene)
     return result(case, scene, None, planes, catch_spec, femnet_laws, label=f"FEMNET case {don} on FEMNET's mesh {path}",
                   node_type=node_type)

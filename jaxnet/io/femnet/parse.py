@@ -142,13 +142,15 @@ def _parse_panel(r, k, hexagonal):
     mat = read_all(r, HEXAGONAL_PANEL_MATERIAL if hexagonal else PANEL_MATERIAL, f"{name}: ")
     t = mat["mesh_type"]
     # FEMNET meshes netting into triangles with types 1 and 2; higher types model the twines as bars
-    # (maillage.c: 3 and 4 for diamond panels, 3 for hexagonal ones), another model
-    bars = (3,) if hexagonal else (3, 4)
-    if t.value in bars:
+    # (maillage.c: 3 and 4 for diamond panels, 3 for hexagonal ones), another model. Type 4 is numerical twines,
+    # the type 'input netting2ropes' gives its panel (with its parameters: jaxnet.io.femnet.twines checks that
+    # a panel of type 4 has them); type 3 (maillage_interne5: a bar per twine of a rectangular panel) is refused
+    if t.value == 3:
         raise r.error(f"{name}: meshing type {t.value} (twines as bar elements) is not supported (only 1 or 2: "
-                      "triangular netting elements)", t.line)
-    if t.value not in (1, 2):
-        raise r.error(f"{name}: meshing type must be 1 or 2, got {t.value}", t.line)
+                      "triangular netting elements, or numerical twines with 'input netting2ropes')", t.line)
+    if t.value not in ((1, 2) if hexagonal else (1, 2, 4)):
+        raise r.error(f"{name}: meshing type must be 1 or 2{'' if hexagonal else ' (4: numerical twines)'}, got "
+                      f"{t.value}", t.line)
     corners = np.array(rows)
     _check_contour(r, corners, lines, name)
     # jaxnet meshes with a step of h twines (base meshes for hexagonal netting): refuse a mesh too large to be
@@ -361,7 +363,10 @@ def _commands(r):
         n = len(values)
         if command.table is not None:
             values += _table(r, rest, i, start, command, values, table_lines)
-        inputs[name.lower()] = Value(values[0] if n == 1 else tuple(values), line_no) if n else Value(1.0, line_no)
+        key = f"{name.lower()} {int(values[0])}" if command.per_panel else name.lower()
+        if command.per_panel and key in inputs:
+            raise r.error(f"'input {name}' for panel {int(values[0])} is given twice (line {inputs[key].line})", line_no)
+        inputs[key] = Value(values[0] if n == 1 else tuple(values), line_no) if n else Value(1.0, line_no)
         commands.append((name.lower(), tuple(values), line_no))
     return inputs, outputs, commands
 
