@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import re
-from typing import Callable
+from typing import Callable, NamedTuple
 
 import numpy as np
 
@@ -266,16 +266,51 @@ class Command:
     """A line ``input NAME v1 ... vN`` (it changes the case) or ``output NAME`` (it only prints figures).
 
     ``n_values``: the numbers that follow the name; ``check``: None, or check(values) giving the message that
-    refuses them (None when they are accepted)."""
+    refuses them (None when they are accepted); ``repeatable``: the command may be given on several lines (one
+    per cable, per pair of cables), each an :class:`Occurrence`, kept in the file's order (the parsed file's
+    ``inputs[name]`` is then a Value of the tuple of them, at the first one's line)."""
 
     kind: str
     name: str
     n_values: int = 0
     check: Callable | None = None
+    repeatable: bool = False
+
+
+class Occurrence(NamedTuple):
+    """One line of a repeatable command: its numbers and its line."""
+
+    values: tuple
+    line: int
 
 
 def _positive_water_density(values):
     return None if values[0] > 0 else f"'input water_density' must be > 0, got {values[0]!r}"
+
+
+def _cable_number(value, what):
+    """The message refusing a cable number that is not a whole number >= 1 (None when it is one)."""
+    return None if value == int(value) and value >= 1 else f"{what}: the cable number must be a whole number >= 1, got {value!r}"
+
+
+def _ei_flexion_cable(values):
+    """``input EI_flexion_cable K EI``: cable K's flexural stiffness EI >= 0 (N·m²)."""
+    return (_cable_number(values[0], "'input EI_flexion_cable'")
+            or (None if values[1] >= 0 else f"'input EI_flexion_cable' {values[0]:g}: EI must be >= 0 (N·m²), got {values[1]!r}"))
+
+
+def _link_flexion_elem2(values):
+    """``input link_flexion_elem2 A B angle``: two different cables, welded at the angle (degrees, 180 when they are
+    aligned) in [0, 180]."""
+    what = "'input link_flexion_elem2'"
+    refused = _cable_number(values[0], what) or _cable_number(values[1], what)
+    if refused:
+        return refused
+    if values[0] == values[1]:
+        return f"{what}: cable {values[0]:g} is linked to itself"
+    if not 0.0 <= values[2] <= 180.0:
+        return f"{what} {values[0]:g} {values[1]:g}: the angle between the cables must be in [0, 180] degrees (180: aligned), got {values[2]!r}"
+    return None
 
 
 COMMANDS = (
@@ -284,6 +319,10 @@ COMMANDS = (
     Command("input", "link", 1),            # FEMNET's automatic links: points closer than this (m) are one node
     Command("input", "moving_bottom"),      # the bottom slides at the current's speed: its friction acts (fond.c)
     Command("input", "water_density", 1, _positive_water_density),   # kg/m³
+    # cable bending (jaxnet.terms.cable_bending): EI (N·m²) of a cable; two cables welded at an angle (degrees)
+    Command("input", "ei_flexion_cable", 2, _ei_flexion_cable, repeatable=True),
+    Command("input", "link_flexion_elem2", 3, _link_flexion_elem2, repeatable=True),
+    Command("output", "color_element"),     # the colour batz draws a cable in (display only; 6flexion/c1)
     *(Command("output", name) for name in ("element_drag", "surface_drag", "catch_drag", "no_visible_symmetry",
                                            "panel_drag", "cable_drag", "node_drag", "energy", "tension", "tensions")),
 )

@@ -18,6 +18,7 @@ from jaxnet.io.femnet.grammar import (
     HEXAGONAL_PANELS_NUMBER, INPUTS, LINKS_NUMBER, MAX_PANEL_NODES, NODE_TYPE, NODE_TYPES_NUMBER, NUMERICS, OCEAN,
     OUTPUTS, PANEL_CORNERS, PANEL_MATERIAL, PANELS_NUMBER, PART_NAMES, SEA_BED, SLIDING_CABLES_NUMBER, TEXT_OUTPUTS,
     DonCable, DonFile, DonLink, DonNodeType, DonPanel, read, read_all, twine_coordinates)
+from jaxnet.io.femnet.grammar import Occurrence
 from jaxnet.io.femnet.reader import MAX_COORDINATE, Reader, Value
 from jaxnet.scene import SceneError
 
@@ -308,5 +309,9 @@ def _commands(r):
         refused = command.check(values) if command.check is not None else None
         if refused is not None:
             raise r.error(refused, line_no)
+        if command.repeatable:
+            before = inputs.get(name.lower(), Value((), line_no))
+            inputs[name.lower()] = Value(before.value + (Occurrence(tuple(values), line_no),), before.line)
+            continue
         inputs[name.lower()] = Value(values[0] if n == 1 else tuple(values), line_no) if n else Value(1.0, line_no)
     return inputs, outputs
