@@ -235,6 +235,39 @@ def _check_enclosure(enclosure):
         raise SceneError(f"enclosure: axis must be a unit vector, got {enclosure.axis!r}")
 
 
+def _check_cable_joints(scene, n):
+    """Joints of stiff cables (:class:`~jaxnet.scene.CableJoints`): three distinct nodes, unstretched bar lengths
+    > 0, EI >= 0 and a neutral turning angle in [0, pi]; a joint is named by its cables."""
+    joints = scene.cable_joints
+    vertices = np.asarray(joints.vertices)
+    if vertices.ndim != 2 or vertices.shape[1] != 3:
+        raise SceneError(f"cable joints: vertices must have shape (J, 3), got {vertices.shape}")
+    _check_indices(vertices, "cable joints: vertices")
+    count = len(vertices)
+    _check_shapes(joints, "cable joints", {"rest_length": (count, 2), "stiffness": (count,), "rest_angle": (count,),
+                                           "cable": (count, 2)})
+
+    def culprit(j):
+        names = [scene.cable_names[c] if c < len(scene.cable_names) else f"cable {c}"
+                 for c in np.asarray(joints.cable)[j].tolist()]
+        where = f"of '{names[0]}'" if names[0] == names[1] else f"between '{names[0]}' and '{names[1]}'"
+        return f"cable joint {j} {where}"
+
+    if vertices.size and (vertices.min() < 0 or vertices.max() >= n):
+        j = int(np.argwhere((vertices < 0) | (vertices >= n))[0][0])
+        raise SceneError(f"{culprit(j)}: node index outside 0..{n - 1}")
+    repeated = np.flatnonzero((vertices[:, 0] == vertices[:, 1]) | (vertices[:, 1] == vertices[:, 2])
+                              | (vertices[:, 0] == vertices[:, 2]))
+    if repeated.size:
+        raise SceneError(f"{culprit(int(repeated[0]))}: nodes {vertices[repeated[0]].tolist()} are not three distinct nodes")
+    _check_positive(np.asarray(joints.rest_length, dtype=float).min(axis=1), "unstretched bar length", culprit)
+    _check_positive(joints.stiffness, "bending stiffness EI", culprit, strict=False)
+    angle = np.asarray(joints.rest_angle, dtype=float)
+    bad = np.flatnonzero(~((angle >= 0.0) & (angle <= np.pi)))
+    if bad.size:
+        raise SceneError(f"{culprit(int(bad[0]))}: neutral turning angle must be in [0, pi] rad, got {angle[bad[0]]!r}")
+
+
 def validate(scene: Scene) -> None:
     """Raise :class:`SceneError` if the scene cannot be solved; the message names the culprit."""
     nodes = scene.nodes
@@ -340,6 +373,9 @@ def validate(scene: Scene) -> None:
             raise SceneError(f"{culprit(int(same[0]))}: both ends on node {ends[same[0], 0]}")
         used[ends.ravel()] = True
         edges.append(ends)
+
+    if scene.cable_joints is not None:
+        _check_cable_joints(scene, n)
 
     if scene.catch is not None:
         _check_catch(scene)

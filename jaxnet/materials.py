@@ -64,7 +64,13 @@ class Twine:
 @dataclasses.dataclass(frozen=True)
 class Rope:
     """Cable material: ea, ea_compression (N), diameter (m), density (kg/m³); Morison drag coefficients
-    cd_normal and tangential_ratio f (tangential drag f x Cd; FEMNET's usual 1.2 and 0.08)."""
+    cd_normal and tangential_ratio f (tangential drag f x Cd; FEMNET's usual 1.2 and 0.08).
+
+    bending_stiffness: flexural stiffness EI (N·m²) of the cable: a cable with EI > 0 resists the turn of its
+      direction at every joint between two of its bars, straight at rest (FEMNET's ``EI_flexion_cable``;
+      :mod:`jaxnet.terms.cable_bending`); 0 (the default) for a rope whose joints are free hinges. A polyamide
+      rod 0.2 m in diameter has about 3e5 N·m², an 18 mm steel bar about 1e3 N·m².
+    """
 
     ea: float
     diameter: float
@@ -72,6 +78,7 @@ class Rope:
     density: float = 1140.0
     cd_normal: float = 1.2
     tangential_ratio: float = 0.08
+    bending_stiffness: float = 0.0
 
 
 @dataclasses.dataclass(frozen=True)

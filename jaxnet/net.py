@@ -23,6 +23,10 @@ Joining rules (decided in :meth:`Net.build`):
     own twine coordinates at the shared nodes. The direction is matched from the start positions.
   * ``net.cable(..., along=p.side(k))`` sews a rope along a border: one bar per border segment, rest
     length of each bar its share of the rope length (by default the border's start length).
+  * A cable whose rope has a bending stiffness (``Rope(bending_stiffness=EI)``) is straight at rest: every
+    node between two of its bars is a bending joint. ``net.cable_joint(a, b, neutral_angle)`` welds two cables
+    where they share a node: the angle between them resists change from ``neutral_angle``
+    (:mod:`jaxnet.terms.cable_bending`).
 
 What is attached to nodes: ``attach`` (and ``sinker``, ``float_``) *shares* a mass, volume, force or drag
 area among the nodes of a reference and adds up over calls; ``body`` (a box-shaped body with a drag per
@@ -42,7 +46,7 @@ from jaxnet.mesh.joining import NodeJoiner
 from jaxnet.mesh.panel import mesh_panel
 from jaxnet.mesh.polygon import PanelError, side_divisions
 from jaxnet.mesh.twines import NumericalTwines, mesh_twines, numerical_twine_rope
-from jaxnet.scene import Bars, Environment, Netting, Nodes, Scene, SceneError
+from jaxnet.scene import Bars, CableJoints, Environment, Netting, Nodes, Scene, SceneError
 
 
 @dataclasses.dataclass(frozen=True)
@@ -182,6 +186,7 @@ class Net:
         self._panels: dict[str, _Panel] = {}
         self._cables: dict[str, _Cable] = {}
         self._seams: list[tuple[Side, Side]] = []
+        self._cable_joints: list[tuple[str, str, float, float | None]] = []   # (cable a, cable b, angle rad, EI)
         self._fixed: list[tuple[object, tuple[bool, bool, bool]]] = []
         self._attached: list[tuple[object, float, float, np.ndarray, float, float]] = []
         self._bodies: list[tuple[object, np.ndarray, np.ndarray]] = []   # (where, sizes m, Cd), in call order
@@ -255,7 +260,8 @@ class Net:
             raise SceneError(f"cable '{name}': the name is already used")
         if rope is None:
             raise SceneError(f"cable '{name}': no rope material given")
-        check_material(rope, f"cable '{name}'", ("ea", "ea_compression", "diameter", "density", "cd_normal", "tangential_ratio"))
+        check_material(rope, f"cable '{name}'", ("ea", "ea_compression", "diameter", "density", "cd_normal", "tangential_ratio",
+                                                 "bending_stiffness"))
         if along is None and (start is None or end is None):
             raise SceneError(f"cable '{name}': give both ends (start=, end=) or a panel side (along=)")
         if n_bars is not None and (int(n_bars) != n_bars or n_bars < 1):
@@ -264,6 +270,34 @@ class Net:
             raise SceneError(f"cable '{name}': length must be > 0, got {length!r}")
         self._cables[name] = _Cable(name, start, end, rope, length, n_bars, along)
         return CableRef(name)
+
+    def cable_joint(self, a, b, neutral_angle=float(np.pi), stiffness=None):
+        """Weld cable ``a`` to cable ``b`` where they share a node (an end of one on a node of the other, as
+        built): the angle between them there resists bending away from ``neutral_angle`` (FEMNET's
+        ``link_flexion_elem2``; :mod:`jaxnet.terms.cable_bending`).
+
+        a, b: the cables (:class:`CableRef` or names), which must share at least one node once built (each shared
+          node makes a joint between each bar of ``a`` and each bar of ``b`` meeting there).
+        neutral_angle: the angle between the two cables at rest (rad, in [0, pi]), measured inside the corner
+          they make: pi when b continues a straight on, pi/2 for a square corner (FEMNET's angle, in radians).
+        stiffness: EI of the joint (N·m², >= 0); None for the smaller of the two ropes' ``bending_stiffness``,
+          FEMNET's rule (a joint with a rope without bending stiffness then does nothing).
+        """
+        names = []
+        for ref in (a, b):
+            name = ref.name if isinstance(ref, CableRef) else ref
+            if not isinstance(name, str) or name not in self._cables:
+                raise SceneError(f"cable joint: no cable named {name!r} (cables: {sorted(self._cables)})")
+            names.append(name)
+        if names[0] == names[1]:
+            raise SceneError(f"cable joint: cable '{names[0]}' is joined to itself (its own joints bend with its "
+                             "rope's bending_stiffness)")
+        what = f"cable joint '{names[0]}'-'{names[1]}'"
+        if not (np.isfinite(neutral_angle) and 0.0 <= neutral_angle <= np.pi):
+            raise SceneError(f"{what}: neutral_angle must be in [0, pi] rad (pi: aligned), got {neutral_angle!r}")
+        if stiffness is not None and not (np.isfinite(stiffness) and stiffness >= 0):
+            raise SceneError(f"{what}: stiffness EI must be >= 0 (N·m²), got {stiffness!r}")
+        self._cable_joints.append((names[0], names[1], float(neutral_angle), None if stiffness is None else float(stiffness)))
 
     def seam(self, a: Side, b: Side):
         """Sew panel side ``a`` to panel side ``b``: they share their border nodes."""
@@ -407,6 +441,7 @@ class Net:
         hexagonal = self._hexagonal(meshes, ids)
         netting = self._netting(meshes, ids)
         bars = self._bars(cable_nodes, ids, position, meshes)
+        cable_joints = self._joints(bars)
         environment = _normalised(self.environment)
         catch, enclosure = self._catch_and_enclosure(environment)
         if netting is not None and (catch is not None or enclosure is not None):
@@ -445,6 +480,7 @@ class Net:
             netting=netting,
             bars=bars,
             hinges=netting_hinges(netting),
+            cable_joints=cable_joints,
             hexagonal=hexagonal,
             catch=catch,
             enclosure=enclosure,
@@ -696,6 +732,43 @@ class Net:
                 rows[key].append(np.full(len(ends), value))
             rows["cable"].append(np.full(len(ends), len(self._cables) + j))
         return Bars(**{k: np.concatenate(v) for k, v in rows.items()})
+
+    def _joints(self, bars):
+        """The bending joints of the stiff cables and of the welded pairs (:class:`CableJoints`), or None."""
+        if bars is None:
+            return None
+        ends, rest, cable_of = np.asarray(bars.ends), np.asarray(bars.rest_length), np.asarray(bars.cable)
+        names = list(self._cables)
+        rows = []   # (first bar, second bar, joint node, EI, neutral turning angle)
+        for k, c in enumerate(self._cables.values()):
+            ei = float(c.rope.bending_stiffness)
+            own = np.flatnonzero(cable_of == k)   # the cable's bars, from its start to its end
+            if ei <= 0:
+                continue
+            rows += [(i, j, ends[i, 1], ei, 0.0) for i, j in zip(own[:-1], own[1:])]
+            if len(own) > 2 and ends[own[-1], 1] == ends[own[0], 0]:   # a closed cable bends where it closes too
+                rows.append((own[-1], own[0], ends[own[0], 0], ei, 0.0))
+        for a, b, angle, stiffness in self._cable_joints:
+            ka, kb = names.index(a), names.index(b)
+            ei = stiffness if stiffness is not None else min(self._cables[a].rope.bending_stiffness,
+                                                             self._cables[b].rope.bending_stiffness)
+            bars_a, bars_b = np.flatnonzero(cable_of == ka), np.flatnonzero(cable_of == kb)
+            shared = np.intersect1d(ends[bars_a], ends[bars_b])
+            if shared.size == 0:
+                raise SceneError(f"cable joint '{a}'-'{b}': the cables share no node (a joint needs an end of one "
+                                 "on a node of the other)")
+            for node in shared:
+                for i in bars_a[np.any(ends[bars_a] == node, axis=1)]:
+                    for j in bars_b[np.any(ends[bars_b] == node, axis=1)]:
+                        rows.append((i, j, node, float(ei), float(np.pi) - angle))
+        if not rows:
+            return None
+        first, second, node, ei, beta = (np.array(col) for col in zip(*rows))
+        far = lambda bar: np.where(ends[bar, 0] == node, ends[bar, 1], ends[bar, 0])  # noqa: E731
+        return CableJoints(vertices=np.stack([far(first), node, far(second)], axis=1).astype(np.int64),
+                           rest_length=np.stack([rest[first], rest[second]], axis=1),
+                           stiffness=ei.astype(float), rest_angle=beta.astype(float),
+                           cable=np.stack([cable_of[first], cable_of[second]], axis=1))
 
 
 def _mesh_length(twine):

@@ -12,6 +12,8 @@ Element families:
     parameter an array so that panels of different netting share one vmapped family.
   * :class:`Bars` — straight cable bars (ropes), one row per bar.
   * :class:`Hinges` — pairs of neighbouring triangles, for twine bending (built from the netting).
+  * :class:`CableJoints` — pairs of consecutive bars of stiff cables, for cable bending (built from the
+    cables' bending stiffness and their joints).
 Nodes carry fixity per axis, lumped mass and displaced volume (sinkers, floats) and an external force;
 optionally the box-shaped body of FEMNET's node types (anisotropic node drag) and limits per axis (the
 sea bed, a ceiling).
@@ -177,6 +179,28 @@ class Hinges(eqx.Module):
     panel: np.ndarray
 
 
+class CableJoints(eqx.Module):
+    """Joints where a cable bends: two bars meeting at a node, one row per joint (cable bending,
+    :mod:`jaxnet.terms.cable_bending`).
+
+    vertices: (J, 3) node indices (the far end of the first bar, the joint node, the far end of the second
+      bar): the bars are vertices[0] -> vertices[1] and vertices[1] -> vertices[2].
+    rest_length: (J, 2) unstretched lengths (m) of the two bars (the cables' own bars).
+    stiffness: (J,) flexural stiffness EI of the joint (N·m²).
+    rest_angle: (J,) the neutral turning angle β (rad, in [0, pi]): the angle between the two bars' directions
+      at which the joint carries no couple; 0 for a cable that is straight at rest (FEMNET's neutral angle
+      between linked cables, 180° when aligned, is pi - β).
+    cable: (J, 2) index of the cable of each bar (for messages and reports): equal inside one cable,
+      different at a joint between two cables.
+    """
+
+    vertices: np.ndarray
+    rest_length: np.ndarray
+    stiffness: np.ndarray
+    rest_angle: np.ndarray
+    cable: np.ndarray
+
+
 class Catch(eqx.Module):
     """Fish catch in a cod-end (eqs 4.246-4.264): the netting behind the catch front, placed so that the
     enclosed volume is ``volume``, carries the pressure ½ ρ Cd v² (v: the current speed).
@@ -255,6 +279,7 @@ class Scene(eqx.Module):
     bars: Bars | None = None
     environment: Environment = dataclasses.field(default_factory=Environment)
     hinges: Hinges | None = None
+    cable_joints: CableJoints | None = None
     hexagonal: HexagonalNetting | None = None
     catch: Catch | None = None
     enclosure: Enclosure | None = None

@@ -150,6 +150,7 @@ ON_OFF = {
     "mesh_opening": (lambda: small_scene(twine(opening_stiffness=0.01)), lambda: small_scene()),
     "knot_contact": (lambda: small_scene(twine(knot_size=0.01)), lambda: small_scene()),
     "twine_bending": (lambda: small_scene(twine(bending_stiffness=1e-4)), lambda: small_scene()),
+    "cable_bending": (lambda: small_scene(rope=rope(bending_stiffness=1.0)), lambda: small_scene(rope=rope())),
     "netting_drag": (lambda: small_scene(current=0.5), lambda: small_scene()),
     "bar_drag": (lambda: small_scene(twine(cd_normal=0.0), rope=rope(), current=0.5),
                  lambda: small_scene(twine(cd_normal=0.0), rope=rope(cd_normal=0.0), current=0.5)),

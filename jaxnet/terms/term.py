@@ -53,7 +53,7 @@ from typing import Callable
 import numpy as np
 
 #: element families, as fields of :class:`jaxnet.scene.Scene` ("nodes": every node is its own element)
-FAMILIES = ("netting", "bars", "hexagonal", "hinges", "nodes")
+FAMILIES = ("netting", "bars", "hexagonal", "hinges", "cable_joints", "nodes")
 #: kinds of terms (module docstring)
 ENERGY, LOAD, FORCE = "energy", "load", "force"
 KINDS = (ENERGY, LOAD, FORCE)

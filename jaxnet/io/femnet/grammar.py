@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import re
-from typing import Callable
+from typing import Callable, NamedTuple
 
 import numpy as np
 
@@ -353,7 +353,9 @@ class Command:
     run does with it: "model" (the reader maps it), "dynamic" (it acts in FEMNET's dynamics only: kept in the
     case, left out of a static run, which says so), "ignored" (FEMNET itself does nothing with it), or
     "unsupported" (refused, ``reason`` saying why); ``per_panel``: the first value names a panel, the command
-    may be given once per panel and :attr:`DonFile.inputs` keeps it as "NAME PANEL"."""
+    may be given once per panel and :attr:`DonFile.inputs` keeps it as "NAME PANEL"; ``repeatable``: the command may
+    be given on several lines (one per cable, per pair of cables), each an :class:`Occurrence`, kept in the file's
+    order (the parsed file's ``inputs[name]`` is then a Value of the tuple of them, at the first one's line)."""
 
     kind: str
     name: str
@@ -362,11 +364,19 @@ class Command:
     use: str = "model"
     reason: str = ""
     table: tuple | None = None    # (rows, index of the value giving each row's length): a table on the next lines
+    repeatable: bool = False
     per_panel: bool = False   # its first value is a panel: one line per panel, kept as "NAME PANEL"
 
     @property
     def counts(self):
         return self.n_values if isinstance(self.n_values, tuple) else (self.n_values,)
+
+
+class Occurrence(NamedTuple):
+    """One line of a repeatable command: its numbers and its line."""
+
+    values: tuple
+    line: int
 
 
 def _positive_water_density(values):
@@ -406,6 +416,7 @@ def _translation(values):
 
 _UNSUPPORTED = "a FEMNET feature jaxnet does not model yet"
 
+
 def _netting2ropes_values(values):
     """``input netting2ropes PANEL PERIOD GAP_U GAP_V ACCURACY BARS`` (phobos ``chargement_don.c``, which reads
     PANEL, PERIOD and BARS as integers): a panel number, a period of >= 1 twines, two finite gaps (fractions of
@@ -420,6 +431,31 @@ def _netting2ropes_values(values):
     if int(period) % int(bars):
         return (f"'input netting2ropes': the period ({int(period)} twines) must be a multiple of the number of bars "
                 f"({int(bars)}): FEMNET spaces their nodes int(period / bars) twines apart")
+    return None
+
+
+def _cable_number(value, what):
+    """The message refusing a cable number that is not a whole number >= 1 (None when it is one)."""
+    return None if value == int(value) and value >= 1 else f"{what}: the cable number must be a whole number >= 1, got {value!r}"
+
+
+def _ei_flexion_cable(values):
+    """``input EI_flexion_cable K EI``: cable K's flexural stiffness EI >= 0 (N·m²)."""
+    return (_cable_number(values[0], "'input EI_flexion_cable'")
+            or (None if values[1] >= 0 else f"'input EI_flexion_cable' {values[0]:g}: EI must be >= 0 (N·m²), got {values[1]!r}"))
+
+
+def _link_flexion_elem2(values):
+    """``input link_flexion_elem2 A B angle``: two different cables, welded at the angle (degrees, 180 when they are
+    aligned) in [0, 180]."""
+    what = "'input link_flexion_elem2'"
+    refused = _cable_number(values[0], what) or _cable_number(values[1], what)
+    if refused:
+        return refused
+    if values[0] == values[1]:
+        return f"{what}: cable {values[0]:g} is linked to itself"
+    if not 0.0 <= values[2] <= 180.0:
+        return f"{what} {values[0]:g} {values[1]:g}: the angle between the cables must be in [0, 180] degrees (180: aligned), got {values[2]!r}"
     return None
 
 
@@ -454,6 +490,9 @@ COMMANDS = (
         ("deck", "a deck: " + _UNSUPPORTED))),
     # a panel meshed as numerical twines (bars): PANEL PERIOD GAP_U GAP_V ACCURACY BARS (jaxnet.io.femnet.twines)
     Command("input", "netting2ropes", 6, _netting2ropes_values, per_panel=True),
+    # cable bending (jaxnet.terms.cable_bending): EI (N·m²) of a cable; two cables welded at an angle (degrees)
+    Command("input", "ei_flexion_cable", 2, _ei_flexion_cable, repeatable=True),
+    Command("input", "link_flexion_elem2", 3, _link_flexion_elem2, repeatable=True),
 )
 INPUTS = {c.name: c for c in COMMANDS if c.kind == "input"}
 #: FEMNET's output commands (``output NAME ...``) print figures or draw: all are read and none changes the case;

@@ -17,6 +17,7 @@ from jaxnet import waves as waves_lib
 from jaxnet.io.femnet.grammar import INPUTS, DonCable, DonFile, DonPanel, twine_coordinates
 from jaxnet.io.femnet.links import MERGE_TOLERANCE, JoinPlan, all_panels, at_joined_positions, plan_joins
 from jaxnet.io.femnet.parse import parse_don
+from jaxnet.io.femnet.reader import Value
 from jaxnet.io.femnet.twines import numerical_twines
 from jaxnet.net import CableRef, HexTwine, Net, Rope, Twine
 from jaxnet.scene import Environment, SceneError
@@ -73,7 +74,7 @@ def rope_of(c: DonCable) -> Rope:
     """A cable's rope material (its unstretched length l0 is the cable's rest length, given with the cable)."""
     m = {k: v.value for k, v in c.material.items()}
     return Rope(ea=m["ea"], diameter=m["diameter"], ea_compression=m["eac"], density=m["density"], cd_normal=m["cd"],
-                tangential_ratio=m["f"])
+                tangential_ratio=m["f"], bending_stiffness=m.get("ei", 0.0))
 
 
 def environment_of(case: DonFile) -> Environment:
@@ -258,6 +259,7 @@ def catch_of(case: DonFile, position, netting_nodes, planes, env: Environment):
 def _describe(case: DonFile, env: Environment, plan: JoinPlan, femnet_laws: bool = True) -> Net:
     """The panels and cables of the (joined) case on a new Net, sewn as ``plan`` says."""
     net = Net(environment=env, merge_tolerance=MERGE_TOLERANCE)
+    case = _with_cable_bending(case)
     twines = numerical_twines(case, femnet_laws)
     for kind, k, p, name in all_panels(case):
         if kind == "pa":
@@ -276,7 +278,44 @@ def _describe(case: DonFile, env: Environment, plan: JoinPlan, femnet_laws: bool
         else:
             net.cable(name, start=tuple(c.ends[0]), end=tuple(c.ends[1]), rope=rope_of(c), length=length,
                       n_bars=plan.n_bars[k])
+    _weld_cables(case, net)
     return net
+
+
+def _with_cable_bending(case: DonFile) -> DonFile:
+    """The case with each cable's ``input EI_flexion_cable K EI`` (N·m²) in its material (key "ei", which
+    :func:`rope_of` makes the rope's bending stiffness); a later line for the same cable replaces an earlier
+    one, as in FEMNET. SceneError at the line naming a cable the case does not have."""
+    if "ei_flexion_cable" not in case.inputs:
+        return case
+    cables = [dataclasses.replace(c, material=dict(c.material)) for c in case.cables]
+    for occurrence in case.inputs["ei_flexion_cable"].value:
+        k, ei = int(occurrence.values[0]), occurrence.values[1]
+        if k > len(cables):
+            raise SceneError(f"{case.path}:{occurrence.line}: 'input EI_flexion_cable {k}': no cable {k} (the case has "
+                             f"{len(cables)} cable(s))")
+        cables[k - 1].material["ei"] = Value(ei, occurrence.line)
+    return dataclasses.replace(case, cables=cables)
+
+
+def _weld_cables(case: DonFile, net: Net):
+    """Each ``input link_flexion_elem2 A B angle`` as a joint between cables A and B (:meth:`Net.cable_joint`): the
+    neutral angle the file's (degrees, 180 when aligned), the stiffness the smaller of the two cables' EI
+    (FEMNET's ``pliage_barre_pardiso4.c``). The two cables must share an end (their ends are at FEMNET's joined
+    positions here); SceneError at the line otherwise."""
+    if "link_flexion_elem2" not in case.inputs:
+        return
+    for occurrence in case.inputs["link_flexion_elem2"].value:
+        a, b, angle = int(occurrence.values[0]), int(occurrence.values[1]), occurrence.values[2]
+        where = f"{case.path}:{occurrence.line}: 'input link_flexion_elem2 {a} {b}'"
+        for k in (a, b):
+            if k > len(case.cables):
+                raise SceneError(f"{where}: no cable {k} (the case has {len(case.cables)} cable(s))")
+        ends_a, ends_b = case.cables[a - 1].ends, case.cables[b - 1].ends
+        gap = np.linalg.norm(ends_a[:, None, :] - ends_b[None, :, :], axis=-1).min()
+        if gap > MERGE_TOLERANCE:
+            raise SceneError(f"{where}: the cables have no end in common (their nearest ends are {gap:.6g} m apart)")
+        net.cable_joint(f"cable {a}", f"cable {b}", math.radians(angle))
 
 
 @contextlib.contextmanager

@@ -18,6 +18,7 @@ from jaxnet.io.femnet.grammar import (
     HEXAGONAL_PANELS_NUMBER, INPUTS, LINKS_NUMBER, MAX_PANEL_NODES, NODE_TYPE, NODE_TYPES_NUMBER, NUMERICS, OCEAN,
     PANEL_CORNERS, PANEL_MATERIAL, PANELS_NUMBER, PART_NAMES, SEA_BED, SLIDING_CABLES_NUMBER, TEXT_OUTPUT_COMMENT,
     TEXT_OUTPUT_DECIMALS, TEXT_OUTPUT_ENTRIES, TEXT_OUTPUT_HEADING, TEXT_OUTPUTS, DonCable, DonFile, DonLink, DonNodeType, DonPanel, TextOutput, read, read_all, twine_coordinates)
+from jaxnet.io.femnet.grammar import Occurrence
 from jaxnet.io.femnet.reader import MAX_COORDINATE, Reader, Value
 from jaxnet.scene import SceneError
 
@@ -363,11 +364,15 @@ def _commands(r):
         n = len(values)
         if command.table is not None:
             values += _table(r, rest, i, start, command, values, table_lines)
+        commands.append((name.lower(), tuple(values), line_no))
+        if command.repeatable:
+            before = inputs.get(name.lower(), Value((), line_no))
+            inputs[name.lower()] = Value(before.value + (Occurrence(tuple(values), line_no),), before.line)
+            continue
         key = f"{name.lower()} {int(values[0])}" if command.per_panel else name.lower()
         if command.per_panel and key in inputs:
             raise r.error(f"'input {name}' for panel {int(values[0])} is given twice (line {inputs[key].line})", line_no)
         inputs[key] = Value(values[0] if n == 1 else tuple(values), line_no) if n else Value(1.0, line_no)
-        commands.append((name.lower(), tuple(values), line_no))
     return inputs, outputs, commands
 
 
