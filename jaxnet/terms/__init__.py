@@ -12,6 +12,7 @@ term's declaration (:mod:`jaxnet.terms.term` says what a declaration holds). The
   opening     mesh opening stiffness (4.211-4.219)
   knot        knot contact (4.278-4.280)
   bending     twine bending across hinges (4.220-4.245)
+  cable_bending  bending of cables at their joints and of welded cables (FEMNET's EI_flexion_cable)
   drag        hydrodynamic drag of netting, bars and node bodies (4.114-4.135; moving nets 4.272-4.276)
   screen      screen models of netting drag (used by ``drag``)
   bottom      sea-bed contact and friction
@@ -25,4 +26,4 @@ entry: modules not listed come after, by name.
 
 #: the modules of the package in registry order (module docstring)
 CONTENTS = ("tension", "cable", "gravity", "surface", "applied", "hexagonal", "opening", "knot", "bending", "drag",
-            "screen", "bottom", "pressure", "inertia")
+            "screen", "bottom", "pressure", "inertia", "cable_bending")
