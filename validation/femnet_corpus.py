@@ -12,7 +12,8 @@ FEMNET's "forces along X Y and Z axes" against jaxnet's (the reactions at the co
 boxes (floats, bodies) that jaxnet takes wholly immersed are under FEMNET's surface z = 0 at the equilibrium,
 and the cold and warm wall times against FEMNET's own (``ANSWERS.md``: its current code on this kind of machine,
 from the start its job file uses, which may be an earlier case's equilibrium where jaxnet starts from the drawn
-shape). FEMNET's target is its current code's answer where ``ANSWERS.md`` has one, else its stored ``.sta``.
+shape). FEMNET's target is its current code's answer where ``ANSWERS.md`` has one and FEMNET converged, else its stored
+``.sta`` (FEMNET stops on its mean nodal residual, or at its iteration cap, short of the equilibrium).
 
 The records are JSON lines, written as each case ends (``--resume`` skips the cases already in ``--out``); the
 table is printed at the end (``--table`` prints it from a records file without running anything). This is a
@@ -127,7 +128,9 @@ def table(records, answers):
             rows.append(f"| {name} | no: {why.split(': ', 1)[-1][:110]} |" + " |" * 12)
             continue
         stats["read"] += 1
-        target = a.get("force") or a.get("stored")
+        # FEMNET's current code's answer, unless it stopped unconverged (its cap, a timeout) and the .sta has one
+        converged = a.get("converged", "").startswith("yes")
+        target = a.get("force") if (a.get("force") and (converged or not a.get("stored"))) else a.get("stored")
         force = r.get("total_force_N")
         diff = ""
         if target is not None and force is not None and r.get("converged"):
