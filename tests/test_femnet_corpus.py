@@ -80,21 +80,33 @@ def test_text_outputs_are_read():
     assert warp.values == {"cable": 1, "node": 49} and warp.comment.startswith("Warp tension")
 
 
+def _bar_buoyancy(scene):
+    """The net upward force of a scene's cable bars (N): (rho_w - rho) g pi D²/4 L0 summed."""
+    bars = scene.bars
+    volume = np.pi * np.asarray(bars.diameter) ** 2 / 4 * np.asarray(bars.rest_length)
+    return float(np.sum((scene.environment.water_density - np.asarray(bars.density)) * 9.81 * volume))
+
+
 def test_floats_spheres_and_boxes_buoy_the_bottom_trawl():
-    """b1's floats: 19 spherical floats on cables 1 and 2 (``input sphere_element``: net buoyancy each) and the
-    0.448 m boxes of node type 6 (wholly immersed: rho g V each). The scene's buoyancy is their sum."""
-    case = femnet.read_don(_don("3bottom_trawl/b1"))
+    """b1's floats: 19 spherical floats on cables 1 and 2 (``input sphere_element``: B newtons net each) and the
+    0.448 m boxes of node type 6 (wholly immersed: rho g V each). Under FEMNET's laws the spheres are folded into
+    their cables (chargement_don.c), whose net buoyancy grows by n B; under jaxnet's they are node floats with
+    the spheres' drag area. Either way the buoyancy added is the same."""
     parsed = femnet.parse_don(_don("3bottom_trawl/b1"))
     spheres = sum(v[1] * v[3] for name, v, _ in parsed.commands if name == "sphere_element")
     assert spheres == pytest.approx(8 * 29.16 + 11 * 29.19)
-    floats = [i for i, top in case.info["boxes"].items() if top == pytest.approx(0.448)]
+    own = femnet.read_don(_don("3bottom_trawl/b1"), femnet_laws=False)
+    folded = femnet.read_don(_don("3bottom_trawl/b1"))
+    floats = [i for i, top in own.info["boxes"].items() if top == pytest.approx(0.448)]
     assert len(floats) > 0 and parsed.types[6].box_volume == pytest.approx(0.448 ** 3)
-    # B is the spheres' buoyancy net of their weight: the scene's displaced volume holds it and the boxes' volumes
-    buoyancy = RHO_G * float(np.sum(np.asarray(case.scene.nodes.volume)))
-    assert buoyancy == pytest.approx(spheres + len(floats) * RHO_G * 0.448 ** 3, rel=1e-9)
-    # their drag: Cd 0.6 on each sphere's section
-    area = float(np.sum(np.asarray(case.scene.nodes.drag_area)))
-    assert area == pytest.approx(19 * 0.6 * math.pi * 0.197 ** 2 / 4, rel=1e-12)
+    # jaxnet's laws: the nodes' displaced volume holds the spheres (net of their weight) and the boxes
+    node_buoyancy = RHO_G * float(np.sum(np.asarray(own.scene.nodes.volume)))
+    assert node_buoyancy == pytest.approx(spheres + len(floats) * RHO_G * 0.448 ** 3, rel=1e-9)
+    assert float(np.sum(np.asarray(own.scene.nodes.drag_area))) == pytest.approx(19 * 0.6 * math.pi * 0.197 ** 2 / 4)
+    # FEMNET's laws: the boxes alone at the nodes, the spheres in the cables' own buoyancy
+    assert RHO_G * float(np.sum(np.asarray(folded.scene.nodes.volume))) == pytest.approx(
+        len(floats) * RHO_G * 0.448 ** 3, rel=1e-9)
+    assert _bar_buoyancy(folded.scene) - _bar_buoyancy(own.scene) == pytest.approx(spheres, rel=1e-9)
 
 
 def test_node_retyping_window_and_missing_drag_coefficient():

@@ -56,6 +56,7 @@ class Field:
     one_line: bool = False
     then: Callable | None = None
     unset: float | None = None    # FEMNET's value when the file leaves it out (None: refused)
+    unused: bool = False          # FEMNET never uses it: a stray value after it is dropped, with a warning
 
     def value_names(self, prefix=""):
         """How messages name its several values, after the part's ``prefix``."""
@@ -81,6 +82,7 @@ def read(r: Reader, f: Field, prefix=""):
                               f"{f.unset!r}")
             return Value(f.unset, r.last[1])
         v = r.integer(what, f.minimum) if f.integer else r.number(what, f.check)
+        r.stray_ignored = f.unused
         if f.then is not None:
             f.then(r, v, f, prefix)
         return v
@@ -230,21 +232,26 @@ NODE_TYPE = (
 
 #: FEMNET's solver settings (statics, then dynamics; ``lectureDo4.c``)
 NUMERICS = (
-    field("divisor", "divisor", r"divisor( \(s\))?", r"diviseur( \(s\))?"),
+    field("divisor", "divisor", r"divisor( \(s\))?", r"diviseur( \(s\))?", unused=True),
     field("threshold", "convergence threshold", r"convergence threshold( \(n\))?",
           r"seuil ?(de )?convergence( \(n\))?", check=">0"),
     field("max_step", "displacement limit for each iteration", r"displacement limit for each iteration( \(m\))?",
-          r"limite de deplacement a chaque iteration( \(m\))?", check=">0"),
+          r"limite de deplacement a chaque iteration( \(m\))?",
+          r"deplacement", check=">0"),
     field("max_iter", "maximal number of iterations", r"maximal number of iterations",
-          r"(nombre )?maximum d'iterations", integer=True, minimum=1),
-    field("dt", "dynamic time step", r"dynamic: time step( \(s\))?", r"dynamic: pas de temps du calcul( \(s\))?"),
+          r"(nombre )?maximum d'iterations", r"nbmaxiterations", integer=True, minimum=1),
+    field("dt", "dynamic time step", r"dynamic: time step( \(s\))?", r"dynamic: pas de temps du calcul( \(s\))?",
+          r"dynamic: pascalcul"),
     field("record_dt", "dynamic record time step", r"dynamic: record time step( \(s\))?",
-          r"dynamic: pas de temps de stockage( \(s\))?"),
+          r"dynamic: pas de temps de stockage( \(s\))?",
+          r"dynamic: passtockage"),
     field("record_start", "dynamic beginning time of record", r"dynamic: beginning time of record( \(s\))?",
-          r"dynamic: temps de debut du stockage( \(s\))?"),
+          r"dynamic: temps de debut du stockage( \(s\))?",
+          r"dynamic: debutstockage"),
     field("record_end", "dynamic end time of record and calculation",
           r"dynamic: end time of record and calculation( \(s\))?",
-          r"dynamic: temps de fin du calcul et du stockage( \(s\))?"),
+          r"dynamic: temps de fin du calcul et du stockage( \(s\))?",
+          r"dynamic: finstockage"),
 )
 
 #: the current (direction in deg from x towards y, speed in m/s) and the waves (s, m, deg, depth m)
@@ -253,7 +260,7 @@ OCEAN = (
     field("current_speed", "current speed", r"current speed( \(m/s\))?", r"vitesse( \(m/s\))?", check=">=0"),
     field("wave_period", "wave period", r"wave period( \(s\))?", r"periode( \(s\))?"),
     field("wave_height", "wave height", r"wave height( \(m\))?", r"hauteur( \(m\))?", check=">=0"),
-    field("wave_direction", "wave direction", r"wave direction relatively x( \(deg\))?",
+    field("wave_direction", "wave direction", r"wave direction relatively x( \(deg\))?", r"direction",
           r"direction par rapport a x( \(deg\))?"),
     field("depth", "depth", r"depth( \(m\))?", r"hauteur d'eau( \(m\))?", check=">=0"),
 )
@@ -262,29 +269,30 @@ OCEAN = (
 CATCH = (
     field("catch_volume", "catch volume", r"volume( \(m3\))?", check=">=0"),
     field("catch_accuracy", "accuracy on the catch volume", r"accuracy on this volume( \(m3\))?",
-          r"precision sur ce volume", check=">=0"),
+          r"precision sur ce volume", r"seuil \(m3\)", check=">=0"),
     field("catch_cd", "drag coefficient of the catch", r"drag coefficient on this volume",
-          r"coefficient de trainee sur ce volume", check=">=0"),
+          r"coefficient de trainee sur ce volume", r"cd", check=">=0"),
 )
 
 #: the sea bed (``fond.c``), kept with the ocean: friction coefficient, penalty stiffness (N/m)
 SEA_BED = (
     field("bottom_friction", "wearing coefficient on the bottom", r"wearing coefficient on the bottom",
-          r"coefficient de frottement du sol", check=">=0"),
+          r"coefficient de frottement du sol", r"drag coef\.", check=">=0"),
     field("bottom_stiffness", "stiffness of the insertion in the sea bottom",
           r"stiffness of the insertion in the sea bottom( \(n/m\))?",
-          r"raideur d'enfoncement dans le sol( \(n/m\))?", check=">=0"),
+          r"raideur d'enfoncement dans le sol( \(n/m\))?",
+          r"stiffness \(n/m\)", check=">=0"),
 )
 
 #: FEMNET's text outputs: the counts of its lists of figures to print after the solve, each count followed by its
 #: entries (:data:`TEXT_OUTPUT_ENTRIES`)
 TEXT_OUTPUTS = (
-    field("distances", "distances number", r"distances number", r"nombre de distances?", integer=True, minimum=0),
-    field("forces", "forces number", r"forces number", r"nombre d ?efforts?", integer=True, minimum=0),
-    field("tensions", "tensions number", r"tensions number", r"nombre de tensions?", integer=True, minimum=0),
+    field("distances", "distances number", r"distances number", r"nombre de distances?", r"distance nb", integer=True, minimum=0),
+    field("forces", "forces number", r"forces number", r"nombre d ?efforts?", r"force nb", integer=True, minimum=0),
+    field("tensions", "tensions number", r"tensions number", r"nombre de tensions?", r"tension nb", integer=True, minimum=0),
     field("sliding_tensions", "sliding tensions number", r"sliding tensions number",
-          r"nombre de tensions? coulisses?", integer=True, minimum=0),
-    field("positions", "positions number", r"positions number", r"nombre de positions?", integer=True, minimum=0),
+          r"nombre de tensions? coulisses?", r"sliding rope tension nb", integer=True, minimum=0),
+    field("positions", "positions number", r"positions number", r"nombre de positions?", r"position nb", integer=True, minimum=0),
 )
 
 
@@ -384,7 +392,9 @@ def _positive_water_density(values):
 
 
 def _sphere_element(values):
-    cable, count, diameter, buoyancy = values
+    cable, count, diameter, buoyancy = values[:4]
+    if len(values) == 5 and not values[4] > 0:
+        return f"'input sphere_element2': the length the spheres are spread over must be > 0 m, got {values[4]!r}"
     if cable != int(cable) or cable < 1 or count != int(count) or count < 1:
         return f"'input sphere_element CABLE COUNT D B': cable and count must be integers >= 1, got {values[:2]}"
     if not diameter > 0:
@@ -467,6 +477,8 @@ COMMANDS = (
     Command("input", "water_density", 1, _positive_water_density),   # kg/m³
     # spherical floats along a cable: CABLE COUNT DIAMETER (m) BUOYANCY (N each, net of their weight), Cd 0.6
     Command("input", "sphere_element", 4, _sphere_element),
+    # the same spread over a length (m) of the cable, its fifth value (FEMNET's chargement_don.c; not in its manual)
+    Command("input", "sphere_element2", 5, _sphere_element),
     # re-type the nodes inside a window of coordinates: MODE BOUNDS... TYPE (manual, index)
     Command("input", "type_noeud_xyz_supinf", (3, 4, 6, 8), _window),
     # translations of the design: DISTANCE (m) FIRST LAST cables (ele) or panels (pan), along x, y or z
@@ -485,7 +497,6 @@ COMMANDS = (
         ("catch2_volume", "extra catch volumes on listed panels: " + _UNSUPPORTED),
         ("drag_forces_type", "FEMNET's other twine drag laws: " + _UNSUPPORTED),
         ("meshing_uv", "FEMNET's meshing by U and V diagonals: " + _UNSUPPORTED),
-        ("sphere_element2", "spheres with a fifth value the manual does not describe: " + _UNSUPPORTED),
         ("spheric_limit", "a spherical limit: " + _UNSUPPORTED),
         ("deck", "a deck: " + _UNSUPPORTED))),
     # a panel meshed as numerical twines (bars): PANEL PERIOD GAP_U GAP_V ACCURACY BARS (jaxnet.io.femnet.twines)

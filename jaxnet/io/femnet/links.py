@@ -24,6 +24,8 @@ def all_panels(case: DonFile):
 
 #: corners and cable ends closer than this (m) at the start are one node (jaxnet's Net joins them)
 MERGE_TOLERANCE = 1e-6
+#: how far (m) a point at the place of another that no link joins it to starts from it (at most 1 % of its side)
+APART = 1e-3
 
 
 @dataclasses.dataclass
@@ -37,6 +39,7 @@ class JoinPlan:
     along: dict          # cable index -> (Side, number of bars or None: the side's division)
     n_bars: list         # per cable: number of bars when it is not sewn along a side
     joined: list         # [[point names]]: the points made one node, groups of two or more
+    warnings: list = dataclasses.field(default_factory=list)   # points at one place kept apart (file:LINE: ...)
 
 
 def _point_names(case: DonFile):
@@ -110,14 +113,30 @@ def plan_joins(case: DonFile) -> JoinPlan:
     for ids in members.values():
         moved[ids] = xyz[ids].mean(axis=0)
     reps = list(members)
+    warnings = []
     if len(reps) > 1:
         from scipy.spatial import cKDTree
 
-        close = sorted(cKDTree(moved[reps]).query_pairs(MERGE_TOLERANCE))
-        if close:
-            a, b = points[reps[close[0][0]]], points[reps[close[0][1]]]
-            raise SceneError(f"{case.path}:{b[2]}: {b[1]} is not joined to {a[1]} but starts at the same place (after "
-                             "joining linked points at the mean of their positions): they would be one node")
+        # points at one place that no link joins are two nodes in FEMNET; jaxnet's Net joins points at one place,
+        # so the later one (with its group) starts APART metres away along its own side (a panel corner towards
+        # the next corner, a cable end towards the other end): the start shape only, not the equilibrium
+        for a_rep, b_rep in sorted(cKDTree(moved[reps]).query_pairs(MERGE_TOLERANCE)):
+            i, j = reps[a_rep], reps[b_rep]
+            key = points[j][0]
+            if key[0] == "el":
+                toward = xyz[index[("el", key[1], 1 - key[2])]]
+            else:
+                n = len(_panel_of(case, key).corners)
+                toward = xyz[index[(key[0], key[1], (key[2] + 1) % n)]]
+            direction = toward - moved[j]
+            length = float(np.linalg.norm(direction))
+            if length == 0.0:
+                raise SceneError(f"{case.path}:{points[j][2]}: {points[j][1]} is not joined to {points[i][1]} but starts "
+                                 "at the same place, and its part has no length to move it along")
+            moved[members[j]] += direction / length * min(APART, 0.01 * length)
+            warnings.append(f"{case.path}:{points[j][2]}: {points[j][1]} is not joined to {points[i][1]} but starts at "
+                            f"the same place: two nodes, as in FEMNET; it starts {min(APART, 0.01 * length):.3g} m away "
+                            "along its own side (jaxnet's Net would join points at one place)")
     # sides and cables by the pair of nodes at their ends
     rank = {item: i for i, item in enumerate(case.order)}
     ends = {}
@@ -159,7 +178,7 @@ def plan_joins(case: DonFile) -> JoinPlan:
         corners[(kind, k)] = moved[[index[(kind, k, c)] for c in range(len(p.corners))]]
     cable_ends = [moved[[index[("el", k, 0)], index[("el", k, 1)]]] for k in range(len(case.cables))]
     joined = [[points[i][1] for i in ids] for ids in members.values() if len(ids) > 1]
-    return JoinPlan(corners, cable_ends, seams, along, n_bars, joined)
+    return JoinPlan(corners, cable_ends, seams, along, n_bars, joined, warnings)
 
 
 def _panel_of(case: DonFile, key):

@@ -150,20 +150,62 @@ def check_types(case: DonFile):
 SPHERE_CD = 0.6
 
 
-def spheres(case: DonFile, net: Net):
-    """``input sphere_element CABLE COUNT D B``: COUNT spherical floats of diameter D (m), each pulling up with B
-    newtons net of its weight (the manual: B is below the buoyancy rho g pi D³/6 of its volume), spread evenly along
-    the cable: on jaxnet's Net, floats of COUNT B newtons and drag area COUNT Cd pi D²/4 (Cd 0.6, FEMNET's) shared
-    equally by the cable's nodes (its ends included: each node carries COUNT / (bars + 1) spheres)."""
+def _sphere_lines(case: DonFile):
+    """The case's ``sphere_element`` and ``sphere_element2`` lines: (cable index, count, diameter (m), net buoyancy of
+    one sphere (N), the length (m) FEMNET spreads them over or None for the cable's, line), checked as FEMNET does."""
+    out = []
     for name, values, line in case.commands:
-        if name != "sphere_element":
+        if name not in ("sphere_element", "sphere_element2"):
             continue
-        k, count, diameter, buoyancy = int(values[0]), int(values[1]), values[2], values[3]
+        k, count, diameter, buoyancy = int(values[0]), values[1], values[2], values[3]
         if k > len(case.cables):
-            raise SceneError(f"{case.path}:{line}: 'input sphere_element {k}': there is no cable {k} (the case has "
+            raise SceneError(f"{case.path}:{line}: 'input {name} {k}': there is no cable {k} (the case has "
                              f"{len(case.cables)})")
-        net.float_(CableRef(f"cable {k}").nodes, buoyancy_N=count * buoyancy,
+        limit = environment_of(case).water_density * GRAVITY * math.pi * diameter ** 3 / 6.0
+        if buoyancy > limit:
+            raise SceneError(f"{case.path}:{line}: 'input {name}': a sphere of {diameter!r} m cannot float {buoyancy!r} "
+                             f"N (its volume holds at most {limit:.6g} N; FEMNET stops there too)")
+        out.append((k - 1, count, diameter, buoyancy, values[4] if name == "sphere_element2" else None, line))
+    return out
+
+
+def spheres(case: DonFile, net: Net):
+    """jaxnet's laws for ``input sphere_element CABLE COUNT D B`` (``femnet_laws=False``): COUNT spheres of diameter D
+    (m), each pulling up with B newtons net of its weight, on the cable's nodes: floats of COUNT B newtons and a
+    drag area COUNT 0.6 pi D²/4 shared equally by the nodes (each carries COUNT / (bars + 1) spheres), a sphere's
+    drag acting along the flow whatever the cable's direction."""
+    for k, count, diameter, buoyancy, _, _ in _sphere_lines(case):
+        net.float_(CableRef(f"cable {k + 1}").nodes, buoyancy_N=count * buoyancy,
                    drag_area=count * SPHERE_CD * math.pi * diameter ** 2 / 4.0)
+
+
+def spheres_folded(case: DonFile) -> DonFile:
+    """FEMNET's laws for spheres (``chargement_don.c``): the spheres are folded into their cable, whose diameter,
+    volumic mass and normal Cd become those of the cable and its spheres together over a length L (the cable's
+    unstretched length; ``sphere_element2``'s fifth value):
+
+        V = L pi D_c²/4 + n pi D³/6,  M = V_c rho_c + n (rho pi D³/6 - B/g),  D_c' = sqrt(4 V / (L pi)),
+        rho_c' = M / V,  Cd' = (n 0.6 pi D²/4 + L D_c Cd) / (L D_c').
+
+    The cable's net buoyancy grows by n B exactly; the spheres' drag becomes a cross-flow drag of the cable."""
+    lines = _sphere_lines(case)
+    if not lines:
+        return case
+    cables = list(case.cables)
+    rho = environment_of(case).water_density
+    for k, count, diameter, buoyancy, length, line in lines:
+        m = dict(cables[k].material)
+        L = m["l0"].value if length is None else length
+        d, density, cd = m["diameter"].value, m["density"].value, m["cd"].value
+        sphere_volume = math.pi * diameter ** 3 / 6.0
+        volume = L * math.pi * d * d / 4.0 + count * sphere_volume
+        mass = L * math.pi * d * d / 4.0 * density + count * (sphere_volume * rho - buoyancy / GRAVITY)
+        folded = math.sqrt(4.0 * volume / (L * math.pi))
+        m["diameter"] = Value(folded, line)
+        m["density"] = Value(mass / volume, line)
+        m["cd"] = Value((count * SPHERE_CD * math.pi * diameter ** 2 / 4.0 + L * d * cd) / (L * folded), line)
+        cables[k] = dataclasses.replace(cables[k], material=m)
+    return dataclasses.replace(case, cables=cables)
 
 
 def translated(case: DonFile) -> DonFile:
@@ -359,6 +401,8 @@ def read_don(path, femnet_laws=True):
       SceneError naming the file and line (see the package's docstring).
     """
     case = translated(parse_don(path))
+    if femnet_laws:
+        case = spheres_folded(case)
     check_types(case)
     _check_supported(case)
     env = environment_of(case)
@@ -376,16 +420,21 @@ def read_don(path, femnet_laws=True):
                 probe.fix(tuple(xyz))
         scene = probe.build()
         net = _describe(case, env, plan, femnet_laws)
-    warnings = []
+    warnings = list(plan.warnings)
     node_type = _node_types(case, scene, warnings)
     position = np.asarray(scene.nodes.position)
     node_type = retyped(case, position, node_type)
     planes = symmetry_planes(case, position, node_type)
+    held = np.zeros(3, bool)
     for i, t in enumerate(node_type):
         nt = case.types[t]
         axes = "".join(a for j, a in enumerate("xyz") if nt.fixed[j].value or nt.symmetry[j].value)
+        held |= [a in axes for a in "xyz"]
         if axes:
             net.fix(tuple(position[i]), axes)
+    gauge = _gauge(case, position, held, warnings)
+    if gauge is not None:
+        net.fix(tuple(position[gauge[0]]), gauge[1])
     fields = node_type_fields(case, position, node_type)
     volume = fields.pop("volume", np.zeros(len(position)))
     for i, t in enumerate(node_type):
@@ -397,7 +446,8 @@ def read_don(path, femnet_laws=True):
             net.body(tuple(position[i]), fields["drag_length"][i], fields["drag_coefficient"][i])
         if "limit" in fields and case.types[t].has_limit:
             net.limit(tuple(position[i]), fields["limit"][i], fields["limit_sense"][i])
-    spheres(case, net)
+    if not femnet_laws:
+        spheres(case, net)
     netting_nodes = np.unique(np.asarray(scene.netting.vertices)) if scene.netting is not None else np.arange(len(position))
     catch = catch_of(case, position, netting_nodes, planes, env)
     with _located(case, "the net with its node types"):
@@ -405,8 +455,26 @@ def read_don(path, femnet_laws=True):
             volume, cd, copies, center, axis = catch
             net.catch(volume, drag_coefficient=cd, symmetry=copies, center=tuple(center), axis=tuple(axis))
         scene = net.build()
-    return result(case, scene, net, planes, catch, femnet_laws, plan, label=f"FEMNET case {case.path}",
-                  warnings=warnings, node_type=node_type)
+    out = result(case, scene, net, planes, catch, femnet_laws, plan, label=f"FEMNET case {case.path}",
+                 warnings=warnings, node_type=node_type)
+    if gauge is not None:
+        out.info["gauge"] = {"node": gauge[0], "axes": gauge[1]}
+    return out
+
+
+def _gauge(case: DonFile, position, held, warnings):
+    """A net that no node holds along some axis (but along another) is free to translate along it: FEMNET's solver
+    finds one of its equilibria (its added diagonal stiffness holds it), which exist when the loads along that axis
+    balance. jaxnet holds the node nearest the net's centre along those axes instead (the gauge: its reaction is
+    the loads' imbalance, zero at an equilibrium of the free net) and says so. (node, axes) or None."""
+    if held.all() or not held.any():
+        return None
+    axes = "".join(a for a, h in zip("xyz", held) if not h)
+    node = int(np.argmin(np.linalg.norm(position - position.mean(axis=0), axis=1)))
+    warnings.append(f"{case.path}: no node type holds the net along {axes}: FEMNET's net is free to translate along it; "
+                    f"jaxnet holds node {node} at {np.round(position[node], 6).tolist()} along {axes} (its reaction is "
+                    "zero at an equilibrium of the free net)")
+    return node, axes
 
 
 def result(case: DonFile, scene, net, planes, catch, femnet_laws, plan: JoinPlan | None = None, label="",

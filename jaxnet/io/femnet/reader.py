@@ -48,6 +48,7 @@ class Reader:
         self.starts = [0] + [m.end() for m in re.finditer("\n", text)]
         self.last = None
         self.warnings = []   # what was read as FEMNET would, with a difference worth saying (file:LINE: ...)
+        self.stray_ignored = False   # the last field read is one after which FEMNET's skipping drops stray values
 
     def line(self, pos=None):
         """The 1-based line of the offset ``pos`` (default: the offset reached)."""
@@ -74,11 +75,15 @@ class Reader:
         # line with more fields than its entry has), which FEMNET would drop silently
         for k, text in enumerate(before[:-1]):
             stray = [t for t in text.split() if _NUMBER.fullmatch(t) or t.lower().lstrip("+-") in ("nan", "inf")]
-            if stray:
+            if stray and self.stray_ignored:
+                self.warnings.append(f"{self.path}:{self.line(self.pos) + k}: value {stray[0]!r} after {self.last[0]} "
+                                     "ignored, as FEMNET's reader skips it (that field is unused)")
+            elif stray:
                 after = f" after {self.last[0]}" if self.last else ""
                 raise self.error(f"unexpected value {stray[0]!r}{after}, before the field '{what}': a line with more "
                                  "values than its entry has?", self.line(self.pos) + k)
         self.pos = colon + 1
+        self.stray_ignored = False
         self.last = (f"the label {label.strip()!r}", self.line(colon))
         norm = " ".join(label.lower().split())
         if norm in ("dynamic", "dynamique"):  # "Dynamic: Time step (s):" has two colons
