@@ -2,8 +2,9 @@
 the commands of the tail (spheres, node re-typing, translations, dynamic-only tables), data defects, and one
 representative case solved against FEMNET's answer.
 
-The cases are FEMNET's own (``../shared/femnet-corpus``, MIT licence, copyright 2026 dpriour); the figures asserted
-are FEMNET's (``ANSWERS.md``: its current code's answers) or read from the case files themselves.
+The cases are FEMNET's own, copied unchanged from its corpus into ``tests/data/femnet-corpus`` with its MIT licence
+(copyright 2026 dpriour); the figures asserted are FEMNET's (the corpus's ``ANSWERS.md``: its current code's answers)
+or read from the case files themselves.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from jaxnet.io import femnet
 from jaxnet.io.femnet import mapping
 from jaxnet.scene import SceneError
 
-CORPUS = pathlib.Path(__file__).resolve().parents[2] / "shared" / "femnet-corpus"
+CORPUS = pathlib.Path(__file__).resolve().parent / "data" / "femnet-corpus"
 RHO_G = 1025.0 * 9.81
 
 

@@ -17,7 +17,7 @@ import time
 import traceback
 
 #: the sections, in report order: module name in this package
-SECTIONS = ("convergence", "stability", "robustness", "experiments", "bad_input", "benchmarks")
+SECTIONS = ("convergence", "stability", "robustness", "femnet_corpus", "experiments", "bad_input", "benchmarks")
 
 
 def main(argv=None):

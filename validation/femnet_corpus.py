@@ -93,7 +93,7 @@ def one(don):
             "cold_s": cold, "warm_s": warm}
 
 
-def run(don, timeout):
+def run_case(don, timeout):
     """One case in a fresh process (cold), with a wall-clock limit (s)."""
     t0 = time.perf_counter()
     try:
@@ -160,10 +160,65 @@ def table(records, answers):
     return "\n".join(rows), summary
 
 
+#: the report section's title (``python -m validation``)
+TITLE = "FEMNET's corpus: the worked cases from their .don"
+#: the quick set: one case per family, the ones tests/test_femnet_corpus.py also reads
+QUICK = ("0simple/a1", "0simple/nr_20_0_0_3_2", "1pelagic_trawl/s2", "3bottom_trawl/b1", "5catch/d5a",
+         "6flexion/c1", "11bottom_seine/s1", "14tarp/s3", "15grid/nephrop_1")
+
+
+def read_records(path):
+    """{case: record} of a records file (JSON lines)."""
+    records = {}
+    for line in pathlib.Path(path).read_text().splitlines():
+        record = json.loads(line)
+        records[record["case"]] = record
+    return records
+
+
+def run_cases(cases, corpus, out, timeout, resume=False, echo=print):
+    """Run ``cases`` (family/case names), each in a fresh process, appending each record to ``out`` as it ends
+    (``resume``: keep those already there). Returns {case: record}."""
+    out = pathlib.Path(out)
+    records = read_records(out) if resume and out.exists() else {}
+    if out.exists() and not resume:
+        out.unlink()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    for k, name in enumerate(cases):
+        if name in records:
+            continue
+        record = {"case": name, **run_case(pathlib.Path(corpus) / f"{name}.don", timeout)}
+        records[name] = record
+        with out.open("a") as f:
+            f.write(json.dumps(record) + "\n")
+        state = ("refused" if record.get("reads") is False else
+                 f"{record.get('iterations')} it, {'converged' if record.get('converged') else 'not converged'}")
+        echo(f"[{k + 1}/{len(cases)}] {name}: {state}, {record.get('cold_s', 0):.1f} s")
+    return {c: records[c] for c in cases if c in records}
+
+
+def all_cases(corpus):
+    """Every case of the corpus, as family/case names."""
+    corpus = pathlib.Path(corpus)
+    return sorted(str(p.relative_to(corpus).with_suffix("")) for p in corpus.rglob("*.don"))
+
+
+def run(report, quick: bool) -> None:
+    """The report section (``python -m validation``): the whole corpus (quick: one case per family, :data:`QUICK`),
+    its table and summary."""
+    report.text(__doc__.split("\n\n", 2)[1].replace("\n", " ") + "\n")
+    cases = list(QUICK) if quick else all_cases(CORPUS)
+    records = run_cases(cases, CORPUS, report.results / "femnet_corpus.json", timeout=600.0,
+                        echo=lambda line: print(line, flush=True))
+    text, summary = table(records, femnet_answers(CORPUS))
+    report.text(summary + "\n\n" + text + "\n")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--corpus", default=str(CORPUS))
     parser.add_argument("--only", nargs="*", help="family/case names (e.g. 1pelagic_trawl/s2)")
+    parser.add_argument("--quick", action="store_true", help="one case per family (QUICK)")
     parser.add_argument("--timeout", type=float, default=600.0, help="wall-clock limit per case (s)")
     parser.add_argument("--out", default=str(ROOT / "validation" / "results" / "femnet_corpus.json"))
     parser.add_argument("--resume", action="store_true", help="skip the cases already recorded in --out")
@@ -176,36 +231,15 @@ def main():
     corpus = pathlib.Path(args.corpus)
     answers = femnet_answers(corpus)
     if args.table:
-        records = {}
-        for line in pathlib.Path(args.table).read_text().splitlines():
-            record = json.loads(line)
-            records[record["case"]] = record
-        text, summary = table(records, answers)
+        text, summary = table(read_records(args.table), answers)
         print(text + "\n\n" + summary)
         return
-    cases = sorted(str(p.relative_to(corpus).with_suffix("")) for p in corpus.rglob("*.don"))
+    cases = list(QUICK) if args.quick else all_cases(corpus)
     if args.only:
         cases = [c for c in cases if c in args.only]
-    out = pathlib.Path(args.out)
-    records = {}
-    if args.resume and out.exists():
-        for line in out.read_text().splitlines():
-            record = json.loads(line)
-            records[record["case"]] = record
-    elif out.exists():
-        out.unlink()
-    out.parent.mkdir(parents=True, exist_ok=True)
-    for k, name in enumerate(cases):
-        if name in records:
-            continue
-        record = {"case": name, **run(corpus / f"{name}.don", args.timeout)}
-        records[name] = record
-        with out.open("a") as f:
-            f.write(json.dumps(record) + "\n")
-        state = ("refused" if record.get("reads") is False else
-                 f"{record.get('iterations')} it, {'converged' if record.get('converged') else 'not converged'}")
-        print(f"[{k + 1}/{len(cases)}] {name}: {state}, {record.get('cold_s', 0):.1f} s", flush=True)
-    text, summary = table({c: records[c] for c in cases if c in records}, answers)
+    records = run_cases(cases, corpus, args.out, args.timeout, resume=args.resume,
+                        echo=lambda line: print(line, flush=True))
+    text, summary = table(records, answers)
     print(text + "\n\n" + summary)
 
 

@@ -53,7 +53,6 @@ def parse_don(path) -> DonFile:
         if number.value in types:
             raise r.error(f"node type {number.value} is described twice", number.line)
         types[number.value] = node_type
-    _zero_type(r, panels + hexagonal, cables, types)
     numeric = read_all(r, NUMERICS)
     if numeric["record_end"].value > 0:
         for key, what in (("dt", "dynamic time step"), ("record_dt", "dynamic record time step")):
@@ -111,20 +110,6 @@ def _parse_text_outputs(r):
     return out
 
 
-def _zero_type(r, panels, cables, types):
-    """Node types named by a corner, a side, a panel's or a cable's internal nodes but never described (tuto/a1's
-    types 0 and 6): FEMNET's node types are a zeroed C array, so such a type is a node with no mass, no force and no
-    fixity. The same here, with a warning naming the first line that uses it."""
-    used = [v for p in panels for v in p.corner_type + p.side_type + [p.material["inner_type"]]]
-    used += [v for c in cables for v in c.end_type + [c.material["inner_type"]]]
-    for t in sorted({v.value for v in used} - set(types)):
-        lines = [v.line for v in used if v.value == t]
-        zero = [Value(0, lines[0])] * 3
-        types[t] = DonNodeType([0.0] * 3, [0.0] * 3, zero, zero, lines[0])
-        r.warnings.append(f"{r.path}:{lines[0]}: node type {t} is named but not described: FEMNET's zeroed type (no "
-                          f"mass, force or fixity), on {len(lines)} corner(s), side(s) or part(s)")
-
-
 def _parse_panel(r, k, hexagonal):
     """One diamond or hexagonal panel (phobos ``chargement_don.c``): corners, then the material fields
     (:data:`~.grammar.PANEL_MATERIAL`, :data:`~.grammar.HEXAGONAL_PANEL_MATERIAL`)."""
@@ -141,8 +126,8 @@ def _parse_panel(r, k, hexagonal):
                 for coord in ("x", "y", "z", "U", "V")]
         rows.append([v.value for v in vals])
         lines.append(vals[0].line)
-        ctype.append(r.integer(f"{what} node type", 0))
-        stype.append(r.integer(f"{what} following side type", 0))
+        ctype.append(r.integer(f"{what} node type", 1))
+        stype.append(r.integer(f"{what} following side type", 1))
         r.one_line([number, *vals, ctype[-1], stype[-1]], number.line, what, "no x y z U V type following-type",
                    (f"{name} corner {c}", lines[-2]) if c else None)
     if hexagonal:
@@ -210,7 +195,7 @@ def _parse_cable(r, k):
         what = f"cable {k + 1} end {e + 1}"
         number = r.integer(f"{what} number")
         row = [r.number(f"{what} {name}", "position") for name in "xyz"]
-        etype.append(r.integer(f"{what} node type", 0))
+        etype.append(r.integer(f"{what} node type", 1))
         rows.append((what, [number, *row, etype[-1]]))
         ends.append([v.value for v in row])
     # one end per line, or FEMNET's short syntax: both ends on one line (``Ca: 1 D: 1 x y z type 2 x y z type
