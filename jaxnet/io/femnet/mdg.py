@@ -13,6 +13,7 @@ import numpy as np
 
 from jaxnet.io.femnet.grammar import twine_coordinates
 from jaxnet.io.femnet.mapping import (catch_of, check_types, environment_of, node_type_fields, result, rope_of,
+                                      spheres_folded,
                                       symmetry_planes, twine_of)
 from jaxnet.io.femnet.parse import parse_don
 from jaxnet.io.femnet.twines import mdg_twine_bars, numerical_twines
@@ -34,6 +35,8 @@ def read_mdg(path, don=None, femnet_laws=True):
     path = pathlib.Path(path)
     don = pathlib.Path(don) if don is not None else path.with_suffix(".don")
     case = parse_don(don)
+    if femnet_laws:
+        case = spheres_folded(case)   # FEMNET's spheres are folded into their cables' materials
     check_types(case)
     if not path.exists():
         raise SceneError(f"FEMNET mesh {path} does not exist")
