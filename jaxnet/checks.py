@@ -311,7 +311,8 @@ def validate(scene: Scene) -> None:
         _check_positive(net.ea_compression, "compression stiffness EA", culprit, strict=False)
         _check_positive(net.diameter, "twine diameter", culprit, strict=False)
         _check_positive(net.density, "volumic mass", culprit, strict=False)
-        for name in ("cd_normal", "tangential_ratio", "opening_stiffness", "knot_size", "knot_stiffness", "bending_stiffness"):
+        for name in ("cd_normal", "tangential_ratio", "opening_stiffness", "knot_size", "knot_stiffness", "bending_stiffness",
+                     "tarp_cd"):
             if getattr(net, name) is not None:
                 _check_positive(getattr(net, name), name.replace("_", " "), culprit, strict=False)
         if net.rest_angle is not None:

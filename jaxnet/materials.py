@@ -43,6 +43,10 @@ class Twine:
       knot_stiffness: contact stiffness (N·m/rad), None for the default of eq. 4.280; knot_form: "book"
       (4.278-4.280) or "femnet" (FEMNET's law, :mod:`jaxnet.terms.knot`; give it FEMNET's stiffness).
     bending_stiffness: flexural stiffness EI of one twine (N·m², eqs 4.220-4.245; 0 for none).
+    tarp_cd: pressure coefficient C of a tarp (dimensionless): 0 (the default) for netting the water flows
+      through; > 0 makes the panel impermeable (FEMNET's ``input tarp``): the current pushes it with the
+      pressure C ½ρ|c|² on its whole surface, towards -(U ^ V), instead of the drag of its twines
+      (:mod:`jaxnet.terms.tarp`). Only with the twine drag models ("twines", "femnet-catch").
     """
 
     l0: float
@@ -59,6 +63,7 @@ class Twine:
     knot_stiffness: float | None = None
     knot_form: str = "book"
     bending_stiffness: float = 0.0
+    tarp_cd: float = 0.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -124,7 +129,8 @@ def netting_columns(twine: Twine) -> dict:
             "tangential_ratio": float(twine.tangential_ratio), "opening_stiffness": float(twine.opening_stiffness),
             "rest_angle": float(twine.rest_angle), "knot_size": float(twine.knot_size),
             "bending_stiffness": float(twine.bending_stiffness), "knot_stiffness": knot_stiffness(twine),
-            "knot_form": KNOT_FORMS[twine.knot_form], "drag_model": DRAG_MODELS[twine.drag_model]}
+            "knot_form": KNOT_FORMS[twine.knot_form], "drag_model": DRAG_MODELS[twine.drag_model],
+            "tarp_cd": float(twine.tarp_cd)}
 
 
 def netting_rows(twines, material) -> dict:

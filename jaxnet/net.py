@@ -41,6 +41,7 @@ import dataclasses
 import numpy as np
 
 from jaxnet.materials import DRAG_MODELS, KNOT_FORMS, HexTwine, Rope, Twine, bar_columns, check_material, netting_rows
+from jaxnet.terms.drag import NETTING_DRAG_MODELS
 from jaxnet.mesh.hinges import netting_hinges
 from jaxnet.mesh.joining import NodeJoiner
 from jaxnet.mesh.panel import mesh_panel
@@ -243,6 +244,7 @@ class Net:
                         "tangential_ratio", "opening_stiffness", "knot_size", "bending_stiffness"), positive=("l0",))
         if twine.drag_model not in DRAG_MODELS:
             raise SceneError(f"panel '{name}': drag_model must be one of {sorted(DRAG_MODELS)}, got {twine.drag_model!r}")
+        _check_tarp(twine, name)
         if not 0.0 < twine.rest_angle <= np.pi / 2:
             raise SceneError(f"panel '{name}': rest_angle (half opening angle, rad) must be in (0, pi/2], got {twine.rest_angle!r}")
         if twine.knot_stiffness is not None:
@@ -774,6 +776,15 @@ class Net:
 def _mesh_length(twine):
     """Length (m) of one unit of twine coordinates, which sets the size of the triangles in the mesher."""
     return twine.base_mesh_side if isinstance(twine, HexTwine) else twine.l0
+
+
+def _check_tarp(twine: Twine, name: str):
+    """SceneError unless the panel's tarp coefficient is finite and >= 0, and, for a tarp, its drag model one
+    whose twine drag the tarp's pressure replaces (a screen model has no twines to take out)."""
+    check_material(twine, f"panel '{name}'", ("tarp_cd",))
+    if twine.tarp_cd > 0 and not NETTING_DRAG_MODELS[DRAG_MODELS[twine.drag_model]].twines:
+        raise SceneError(f"panel '{name}': a tarp (tarp_cd {twine.tarp_cd!r}) replaces the drag of its twines; "
+                         f"drag_model {twine.drag_model!r} is a screen model (use 'twines' or 'femnet-catch')")
 
 
 def outward(position, triangles, center) -> np.ndarray:

@@ -102,6 +102,8 @@ class Netting(eqx.Module):
     bending_stiffness: (E,) flexural stiffness EI of one twine (N·m², eqs 4.220-4.245): makes hinges.
     outward: (E,) +1 where 12 ^ 13 points out of the volume the net encloses (cod-end, cage), -1 where
       it points in; set with a catch or an enclosure, from the start shape.
+    tarp_cd: (E,) pressure coefficient of a tarp (:mod:`jaxnet.terms.tarp`), 0 for permeable netting: where
+      it is > 0 the current's pressure replaces the twine drag and the catch pressure.
     """
 
     vertices: np.ndarray
@@ -122,6 +124,7 @@ class Netting(eqx.Module):
     knot_form: np.ndarray | None = None
     bending_stiffness: np.ndarray | None = None
     outward: np.ndarray | None = None
+    tarp_cd: np.ndarray | None = None
 
 
 class Bars(eqx.Module):

@@ -160,8 +160,8 @@ def test_linked_points_with_different_types_keep_the_first():
 
 
 def test_unsupported_features_are_named_with_their_line():
-    with pytest.raises(SceneError, match=r"c2\.don:195: 'input tarp': an impermeable panel"):
-        femnet.read_don(_don("14tarp/c2"))
+    with pytest.raises(SceneError, match=r"g1\.don:179: 'input catch_gravity': the gravity catch"):
+        femnet.read_don(_don("13gravity_catch/g1"))
 
 
 def test_pelagic_trawl_matches_femnet():

@@ -7,7 +7,7 @@ The format mirrors the Python API (see README, "Scene files"). Top-level keys::
                   profile_factor, surface_level, bottom_stiffness, bottom_friction, bottom_band}
     twines       {NAME: {l0, ea, diameter, ea_compression?, density?, cd_normal?, tangential_ratio?,
                          drag_model?, opening_stiffness?, rest_angle?, knot_size?, knot_stiffness?,
-                         bending_stiffness?}}                                netting materials
+                         bending_stiffness?, tarp_cd?}}                      netting materials
     ropes        {NAME: {ea, diameter, ea_compression?, density?, cd_normal?, tangential_ratio?}}
     panels       [{name, corners: [[x, y, z, U, V], ...], twine: NAME | {...}, step}]
     cables       [{name, rope: NAME | {...}, start?: REF, end?: REF, along?: SIDE, n_bars?, length?}]

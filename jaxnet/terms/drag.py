@@ -416,8 +416,12 @@ def box_drag_on_element(x, state, length, drag_coefficient, env, floating, movin
 
 
 def _netting_arguments(p, env, models, shielded, **motion):
-    return {"uv": p.uv, "l0": p.l0, "diameter": p.diameter, "cd_normal": p.cd_normal,
-            "cd_tangential": p.tangential_ratio * p.cd_normal, "drag_model": p.drag_model, "env": env,
+    # a tarp's triangles (tarp_cd > 0, jaxnet.terms.tarp) have no twine drag: the water does not flow
+    # through them, and its pressure replaces the drag, as in FEMNET (trainee_front skips them)
+    tarp_cd = getattr(p, "tarp_cd", None)  # a row made by hand may have no such column
+    cd_normal = p.cd_normal if tarp_cd is None else jnp.where(tarp_cd > 0, 0.0, p.cd_normal)
+    return {"uv": p.uv, "l0": p.l0, "diameter": p.diameter, "cd_normal": cd_normal,
+            "cd_tangential": p.tangential_ratio * cd_normal, "drag_model": p.drag_model, "env": env,
             "models": models, "shielded": shielded, **motion}
 
 

@@ -180,7 +180,15 @@ def _active(scene, dynamic):
     return {}
 
 
+def _arguments(p, env):
+    # a tarp (jaxnet.terms.tarp) takes the pressure on its whole surface by its own term; the catch's, behind
+    # the front, is for the netting only (FEMNET's pres_pris_elem2: Surface[elem].tarp == 0)
+    tarp_cd = getattr(p, "tarp_cd", None)  # a row made by hand may have no such column
+    sign = p.outward if tarp_cd is None else jnp.where(tarp_cd > 0, 0.0, p.outward)
+    return {"sign": sign}
+
+
 CATCH_PRESSURE = register(Term(
     name="catch_pressure", family="netting", kind=FORCE, element=catch_pressure_on_element,
-    arguments=lambda p, env: {"sign": p.outward}, active=_active, group=CATCH, state="jaxnet.catch:catch_state",
+    arguments=_arguments, active=_active, group=CATCH, state="jaxnet.catch:catch_state",
     closed_form=ClosedForm("jaxnet.closed_form.pressure:catch_pressure_on_element_stiffness")))

@@ -444,6 +444,12 @@ def _netting2ropes_values(values):
     return None
 
 
+def _tarp_panel(values):
+    """``input tarp PANEL`` (FEMNET's ``chargement_don.c``: ``panneau[PANEL].tarp = 1``): a diamond panel number."""
+    return None if values[0] == int(values[0]) and values[0] >= 1 else \
+        f"'input tarp': the panel number must be a whole number >= 1, got {values[0]!r}"
+
+
 def _cable_number(value, what):
     """The message refusing a cable number that is not a whole number >= 1 (None when it is one)."""
     return None if value == int(value) and value >= 1 else f"{what}: the cable number must be a whole number >= 1, got {value!r}"
@@ -492,13 +498,14 @@ COMMANDS = (
     # FEMNET's current code has no handler for it (its reader skips the line)
     Command("input", "node_position", 1, use="ignored"),
     *(Command("input", name, tuple(range(0, 12)), use="unsupported", reason=reason) for name, reason in (
-        ("tarp", "an impermeable panel (a tarp): " + _UNSUPPORTED),
         ("catch_gravity", "the gravity catch: " + _UNSUPPORTED),
         ("catch2_volume", "extra catch volumes on listed panels: " + _UNSUPPORTED),
         ("drag_forces_type", "FEMNET's other twine drag laws: " + _UNSUPPORTED),
         ("meshing_uv", "FEMNET's meshing by U and V diagonals: " + _UNSUPPORTED),
         ("spheric_limit", "a spherical limit: " + _UNSUPPORTED),
         ("deck", "a deck: " + _UNSUPPORTED))),
+    # an impermeable panel (a tarp, jaxnet.terms.tarp): PANEL, loaded by the catch's pressure instead of drag
+    Command("input", "tarp", 1, _tarp_panel, per_panel=True),
     # a panel meshed as numerical twines (bars): PANEL PERIOD GAP_U GAP_V ACCURACY BARS (jaxnet.io.femnet.twines)
     Command("input", "netting2ropes", 6, _netting2ropes_values, per_panel=True),
     # cable bending (jaxnet.terms.cable_bending): EI (N·m²) of a cable; two cables welded at an angle (degrees)

@@ -38,6 +38,7 @@ def twine_of(p: DonPanel, case: DonFile, femnet_laws: bool) -> Twine:
     m = {k: v.value for k, v in p.material.items()}
     twine = Twine(l0=m["l0"], ea=m["ea"], diameter=m["diameter"], ea_compression=m["eac"], density=m["density"],
                   cd_normal=m["cd"], tangential_ratio=m["f"], opening_stiffness=m["opening"], knot_size=m["knot"])
+    twine = dataclasses.replace(twine, tarp_cd=_tarp_cd(case, p))
     if not femnet_laws:
         return twine
     return dataclasses.replace(
@@ -48,8 +49,31 @@ def twine_of(p: DonPanel, case: DonFile, femnet_laws: bool) -> Twine:
 def _femnet_catch_drag(case: DonFile) -> bool:
     """Whether FEMNET loads this case's netting with its drag of cases with a catch (``unix.c``: a catch
     volume above its accuracy, in a current) rather than its twine drag (``filethydro4_sta``)."""
-    return (case.catch["catch_volume"].value > case.catch["catch_accuracy"].value
+    return ((case.catch["catch_volume"].value > case.catch["catch_accuracy"].value or bool(_tarps(case)))
             and case.ocean["current_speed"].value > 0)
+
+
+def _tarps(case: DonFile) -> dict:
+    """{0-based diamond panel index: its ``input tarp PANEL`` line's Value} (a SceneError ``file:LINE:`` for a
+    line naming no diamond panel)."""
+    out = {}
+    for key, v in case.inputs.items():
+        if key.startswith("tarp "):
+            k = int(v.value) - 1
+            if not 0 <= k < len(case.panels):
+                raise SceneError(f"{case.path}:{v.line}: 'input tarp {k + 1}': panel {k + 1} does not exist (diamond "
+                                 f"panels: 1 to {len(case.panels)})")
+            out[k] = v
+    return out
+
+
+def _tarp_cd(case: DonFile, p: DonPanel) -> float:
+    """The tarp pressure coefficient of diamond panel ``p`` (:attr:`Twine.tarp_cd`): the catch's Cd ("Drag
+    coefficient on this volume") for a panel named by ``input tarp``, as FEMNET's ``pression_prise3`` pushes its
+    tarps with the catch's pressure (:mod:`jaxnet.terms.tarp`), else 0."""
+    tarps = _tarps(case)
+    k = next((k for k, q in enumerate(case.panels) if q is p), None)
+    return float(case.catch["catch_cd"].value) if k in tarps else 0.0
 
 
 def _hextwine(p: DonPanel) -> HexTwine:
