@@ -17,9 +17,8 @@ from jaxnet.solve.options import Newton
 from jaxnet.solve.statics import solve
 from jaxnet.terms.cable_bending import joint_energy, joint_moment
 
-CORPUS = pathlib.Path(__file__).resolve().parents[1].parent / "shared" / "femnet-corpus"
-C1 = CORPUS / "6flexion" / "c1.don"
-needs_corpus = pytest.mark.skipif(not C1.exists(), reason="FEMNET's corpus (../shared/femnet-corpus) is not here")
+# FEMNET's 6flexion/c1 (.don and .sta), copied with FEMNET's licence (tests/data/femnet-corpus/LICENSE)
+C1 = pathlib.Path(__file__).resolve().parent / "data" / "femnet-corpus" / "6flexion" / "c1.don"
 
 
 def _joint(alpha, a=0.7, b=1.3, tilt=0.3):
@@ -242,7 +241,6 @@ def test_builder_refuses_bad_joints():
 # -- FEMNET's reader and its case 6flexion/c1 -----------------------------------------------------------------
 
 
-@needs_corpus
 def test_c1_reads_its_stiff_cables_and_welds():
     scene = femnet.read_don(C1).scene
     joints = scene.cable_joints
@@ -263,7 +261,6 @@ def _edited(tmp_path, old, new):
     return path, line
 
 
-@needs_corpus
 @pytest.mark.parametrize("old, new, message", [
     ("input EI_flexion_cable 4   300000", "input EI_flexion_cable 9   300000", "no cable 9 .the case has 4 cable"),
     ("input EI_flexion_cable 4   300000", "input EI_flexion_cable 4   -3", "EI must be >= 0"),
@@ -279,7 +276,6 @@ def test_c1_bad_bending_commands_name_their_line(tmp_path, old, new, message):
         femnet.read_don(path)
 
 
-@needs_corpus
 def test_c1_equilibrium_is_femnets_ring():
     # Four stiff cables (EI = 3e5 N·m², EA = 3e6 N, l0 = 1.5708 m in 11 bars each) drawn as a square of side
     # sqrt(2) m (compressed), welded aligned at its corners, which slide along the axes. The bending joints push

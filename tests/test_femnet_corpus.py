@@ -159,9 +159,14 @@ def test_linked_points_with_different_types_keep_the_first():
     assert any("is given type 2 (cable 11 end 2) and type 3 (cable 10 end 2" in w for w in case.info["warnings"])
 
 
-def test_unsupported_features_are_named_with_their_line():
-    with pytest.raises(SceneError, match=r"g1\.don:179: 'input catch_gravity': the gravity catch"):
-        femnet.read_don(_don("13gravity_catch/g1"))
+def test_unsupported_features_are_named_with_their_line(tmp_path):
+    """A FEMNET command jaxnet does not model is refused at its line, saying what it is."""
+    text = _don("14tarp/c2").read_text()
+    path = tmp_path / "c2.don"
+    path.write_text(text.replace("input tarp 1", "input spheric_limit 0 0 0 5 1e5 1e5", 1))
+    line = text[:text.index("input tarp 1")].count("\n") + 1
+    with pytest.raises(SceneError, match=rf"c2\.don:{line}: 'input spheric_limit': a spherical limit"):
+        femnet.read_don(path)
 
 
 def test_pelagic_trawl_matches_femnet():

@@ -2,7 +2,7 @@
 material against the triangle element in closed form, and FEMNET's case ``0simple/nr_20_0_0_3_2`` solved.
 
 The data nr_20_0_0_3_2.{don,mdg} are FEMNET's own files (tests/data/femnet/LICENSE). FEMNET's answers are its
-current code's (``/work/shared/femnet-corpus/ANSWERS.md``): total force 158.10718 -0.00104 -60.45722 N.
+current code's (the FEMNET corpus's ``ANSWERS.md``): total force 158.10718 -0.00104 -60.45722 N.
 """
 
 import pathlib

@@ -1,7 +1,7 @@
 """A tarp (FEMNET's ``input tarp PANEL``, :mod:`jaxnet.terms.tarp`): the law against its closed form, its declared
 stiffness against finite differences, the builder and the reader, and FEMNET's case 14tarp/c2 against its answer.
 
-The cases are FEMNET's own (``../shared/femnet-corpus``, MIT licence, copyright 2026 dpriour); 14tarp/c2's answer
+The cases are FEMNET's own (copied into ``tests/data/femnet-corpus`` with its MIT licence, copyright 2026 dpriour); 14tarp/c2's answer
 is FEMNET's current code's (``ANSWERS.md``: 3350.90959 0 0 N on its fixings, 300 iterations).
 """
 
@@ -22,7 +22,7 @@ from jaxnet.scene import Environment, SceneError
 from jaxnet.solve.statics import solve
 from jaxnet.terms import tarp, term as term_lib
 
-CORPUS = pathlib.Path(__file__).resolve().parents[2] / "shared" / "femnet-corpus"
+CORPUS = pathlib.Path(__file__).resolve().parent / "data" / "femnet-corpus"
 RHO, C, U = 1025.0, 1.4, 1.9
 P = C * 0.5 * RHO * U**2  # 2590.0 Pa: 14tarp/c2's tarp pressure
 C2_FEMNET_X = 3350.90959  # N, ANSWERS.md
