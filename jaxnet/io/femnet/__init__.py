@@ -142,7 +142,7 @@ zero-length cable, a panel whose (U, V) contour has no area, positions, limits a
 1e5 m, meshes of more than 50000 nodes per panel or cables of more than 5000 bars (FEMNET's own limits are
 20000 nodes and 5000 bars in all), a link to a part that does not exist, and every FEMNET feature it does
 not model when it is used (sea-bed limits without a stiffness, hexagonal netting in a current, twines
-meshed as bars (meshing type 3), sliding cables, anisotropic node mass, the tarp, the gravity catch, extra catch volumes,
+meshed as bars (meshing type 3), sliding cables, anisotropic node mass, the tarp, extra catch volumes,
 FEMNET's other drag laws, meshing by U and V diagonals, unknown ``input`` commands, ...). Dynamic cases (an end time > 0) and waves are read: the time settings
 go to ``info["dynamic"]`` (``jaxnet run CASE.don --dynamic``), the waves to ``Environment.waves`` (linear
 waves on FEMNET's surface z = 0, a depth of 0 taken as deep water); the node types' added masses are read
