@@ -166,7 +166,7 @@ ON_OFF = {
                         lambda: node_types(small_scene(twine(cd_normal=0.0), current=0.5), {"bottom_stiffness": 1e6}, **SEA_BED)),
     "catch_pressure": (lambda: small_scene(twine(cd_normal=0.0), current=0.5, catch=True),
                        lambda: small_scene(twine(cd_normal=0.0), current=0.5)),
-    "gravity_catch": (lambda: small_scene(catch=True, catch_density=1000.0), lambda: small_scene(catch=True)),
+    "gravity_catch": (lambda: small_scene(catch=True, catch_density=1000.0), lambda: small_scene()),
     # with a free surface (1 m above everything) even neutral netting weighs where it emerges: only a
     # family without volume (diameter 0, no body) has no gravity energy
     "netting_gravity_at_surface": (lambda: small_scene(surface=1.0),
