@@ -32,9 +32,12 @@ vertices where the consistent load would give the deeper ones more ((2 h_i + h_j
 triangle the level cuts, the pressure is that of the whole triangle's centroid, not of the part below (it is even
 negative, a suction, when that centroid is above the level). So the resultant of the catch on a net that holds it
 is ρ_c g V (its weight) exactly when no triangle is cut — e.g. at a level through a row of nodes — and otherwise up
-to the cut triangles' error, which vanishes as the mesh is refined: 13gravity_catch/g1 (a coarse bag, its level
-across big triangles) gives 262.27 N in FEMNET where ρ_c g V = 259.97 N (+0.9 %), the finer g2 254.60 N at a
-volume... (same volume: -2.1 %, the bag's shape differing). jaxnet follows FEMNET's law, to give FEMNET's answers.
+to the cut triangles' error, which vanishes as the mesh is refined. Measured with FEMNET's own meshes and
+equilibria (13gravity_catch/g1 and g2, ``.mdg`` and ``.sta``; ρ_c g V = 259.97 N): this law gives 268.14 N on g1's
+coarse bag (+3.1 %) and 260.48 N on g2's fine one (+0.2 %), and with the twines' buoyancy (5.89 N up, which FEMNET
+counts out of the water too: ``flotteursurf3.c``) FEMNET's printed forces on the fixings, 262.27 N and 254.60 N, to
+0.01 %; the levels (9.025 m, 8.869 m), thicknesses and diameters are FEMNET's too. jaxnet follows FEMNET's law, to
+give FEMNET's answers; :func:`hydrostatic_resultant` is the exact one.
 
 The force is continuous in the positions (p_e is linear in them, w_i continuous; see
 :mod:`jaxnet.terms.pressure`), and, like the catch in a current, a follower load whose level (the front) is a
