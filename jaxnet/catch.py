@@ -279,14 +279,16 @@ def catch_summary(x, triangles, axis, front, pressure=0.0, symmetry=1.0, sign=1.
 
 def catch_state(x, scene, previous=None):
     """The catch front for positions x (N, 3): ``{"front": abscissa along the axis (m), "pressure": ½ ρ Cd v²
-    (Pa), "axis": the cod-end's axis}``, or None without a catch. The state of the catch pressure and of the
-    netting drag (the netting behind the front is shielded): one function, so that the front is solved for
-    once per evaluation. ``previous``: this state at the solver's last iterate, whose front starts the search
-    (the front moves little from one iterate to the next)."""
+    (Pa), "axis": the cod-end's axis, "specific_weight": ρ_c g of a gravity catch (N/m³, 0 for a catch in a
+    current)}``, or None without a catch. The state of the catch pressure, of the gravity catch
+    (:mod:`jaxnet.terms.gravity_catch`) and of the netting drag (the netting behind the front is shielded): one
+    function, so that the front is solved for once per evaluation. ``previous``: this state at the solver's last
+    iterate, whose front starts the search (the front moves little from one iterate to the next)."""
     c, env = scene.catch, scene.environment
     if c is None:
         return None
     guess = None if previous is None else previous["front"]
     front = catch_front(x, scene.netting.vertices, c.axis, c.volume, c.symmetry, sign=scene.netting.outward, guess=guess)
     p = catch_pressure_term.dynamic_pressure(env.water_density, c.drag_coefficient, env.current_speed)
-    return {"front": front.position, "pressure": p, "axis": c.axis}
+    return {"front": front.position, "pressure": p, "axis": c.axis,
+            "specific_weight": jnp.asarray(c.density, dtype=x.dtype) * env.gravity}

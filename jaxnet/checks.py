@@ -222,6 +222,9 @@ def _check_catch(scene):
         raise SceneError(f"catch: drag_coefficient must be finite and >= 0, got {catch.drag_coefficient!r}")
     if not (np.isfinite(symmetry) and symmetry >= 1):
         raise SceneError(f"catch: symmetry (copies of the modelled part) must be finite and >= 1, got {catch.symmetry!r}")
+    density = _scalar(catch.density, "catch: density")
+    if not (np.isfinite(density) and density >= 0):
+        raise SceneError(f"catch: density must be finite and >= 0 (kg/m³; > 0 for a gravity catch), got {catch.density!r}")
     if abs(np.linalg.norm(_vector(catch.axis, "catch: axis")) - 1.0) > 1e-9:
         raise SceneError(f"catch: axis must be a unit vector, got {catch.axis!r}")
     _vector(catch.center, "catch: center")

@@ -382,17 +382,24 @@ class Net:
             raise SceneError(f"limit: value must be finite on the axes with a sense, got {values.tolist()}")
         self._limits.append((where, np.where(used, values, 0.0), sense_arr.astype(np.int32)))
 
-    def catch(self, volume, drag_coefficient=1.4, symmetry=1.0, center=(0.0, 0.0, 0.0), axis=None):
+    def catch(self, volume, drag_coefficient=1.4, symmetry=1.0, center=(0.0, 0.0, 0.0), axis=None, density=0.0):
         """Fill the cod-end with ``volume`` m³ of catch (whole cod-end; ``symmetry`` copies of the modelled
         part make it, e.g. 4 for a quarter model), of drag coefficient Cd. The cod-end's axis passes through
         ``center`` (a point at its opening, m) along ``axis`` (downstream; default the current's
         direction). The netting's outward side is found from the start shape: away from ``center``.
-        See :class:`jaxnet.scene.Catch`."""
+
+        ``density`` > 0 (kg/m³) makes it a gravity catch (FEMNET's ``input catch_gravity``): the catch weighs on
+        a bag hanging out of the water, filling it up to a horizontal level, with the hydrostatic pressure
+        density × g × the depth below that level; ``axis`` then defaults to down (-up), no current is needed
+        and ``drag_coefficient`` is not used. See :class:`jaxnet.scene.Catch`."""
         if not volume > 0 or not drag_coefficient >= 0 or not symmetry >= 1:
             raise SceneError(f"catch: volume must be > 0, drag_coefficient >= 0 and symmetry >= 1, got "
                              f"{volume!r}, {drag_coefficient!r}, {symmetry!r}")
+        if not (np.isfinite(density) and density >= 0):
+            raise SceneError(f"catch: density must be finite and >= 0 (kg/m³; 0 for a catch in a current), got {density!r}")
         self._catch = dict(volume=float(volume), drag_coefficient=float(drag_coefficient), symmetry=float(symmetry),
-                           center=_point(center, "catch: center"), axis=None if axis is None else _unit(axis, "catch: axis"))
+                           center=_point(center, "catch: center"), axis=None if axis is None else _unit(axis, "catch: axis"),
+                           density=float(density))
 
     def enclose(self, center, axis):
         """Declare the net closed but for the opening through ``center`` (m) normal to ``axis`` (pointing into
@@ -448,7 +455,8 @@ class Net:
         catch, enclosure = self._catch_and_enclosure(environment)
         if netting is not None and (catch is not None or enclosure is not None):
             center = (catch or enclosure).center
-            netting = dataclasses.replace(netting, outward=_outward(position, np.asarray(netting.vertices), center))
+            netting = dataclasses.replace(netting, outward=_outward(position, np.asarray(netting.vertices), center,
+                                                                    np.asarray(netting.uv), np.asarray(netting.panel)))
         fixed = np.zeros((n, 3), dtype=bool)
         mass, volume, force = np.zeros(n), np.zeros(n), np.zeros((n, 3))
         drag_area, size = np.zeros(n), np.zeros(n)
@@ -515,6 +523,8 @@ class Net:
         catch = enclosure = None
         if self._catch is not None:
             spec = dict(self._catch)
+            if spec["axis"] is None and spec["density"] > 0:
+                spec["axis"] = -np.asarray(environment.up, dtype=float)  # a gravity catch fills the bag from below
             if spec["axis"] is None:
                 if not environment.current_speed > 0:
                     raise SceneError("catch: give its axis, or a current (the axis defaults to its direction)")
@@ -787,12 +797,14 @@ def _check_tarp(twine: Twine, name: str):
                          f"drag_model {twine.drag_model!r} is a screen model (use 'twines' or 'femnet-catch')")
 
 
-def outward(position, triangles, center) -> np.ndarray:
+def outward(position, triangles, center, uv=None, panel=None) -> np.ndarray:
     """(E,) ``Netting.outward`` of triangles ``triangles`` (E, 3) (node indices into ``position`` (N, 3), m):
     +1 where the triangle's 12 ^ 13 points away from ``center`` (a point on the axis of the net, m), -1
-    otherwise. This is how :meth:`Net.build` orients netting for a catch or an enclosure (the catch pushes
+    otherwise; with the triangles' twine coordinates ``uv`` (E, 3, 2) and ``panel`` (E,), decided panel by panel
+    (:func:`_outward`). This is how :meth:`Net.build` orients netting for a catch or an enclosure (the catch pushes
     outwards); public for readers that build the :class:`~jaxnet.scene.Netting` themselves."""
-    return _outward(np.asarray(position, dtype=float), np.asarray(triangles), np.asarray(center, dtype=float))
+    return _outward(np.asarray(position, dtype=float), np.asarray(triangles), np.asarray(center, dtype=float),
+                    None if uv is None else np.asarray(uv, dtype=float), None if panel is None else np.asarray(panel))
 
 
 def _triple(value, what, finite=True):
@@ -821,12 +833,27 @@ def _unit(value, what):
     return v / n
 
 
-def _outward(position, triangles, center):
-    """(E,) +1 where a triangle's 12 ^ 13 points away from ``center`` (out of the net), -1 otherwise."""
+def _outward(position, triangles, center, uv=None, panel=None):
+    """(E,) +1 where a triangle's 12 ^ 13 points away from ``center`` (out of the net), -1 otherwise.
+
+    Triangle by triangle, from the start shape, unless the twine coordinates ``uv`` (E, 3, 2) and the ``panel``
+    (E,) of the triangles are given: then panel by panel. On a panel, 12 ^ 13 = d U ^ V (d the sign of the
+    triangle's twine determinant, U ^ V the side of the netting, continuous over the panel), so a panel has one
+    outward side and each triangle's orientation is the panel's times d. The panel's side is its triangles'
+    majority vote (ties: the outward side of d > 0): a drawn shape that is not the net's (a bag drawn open, a
+    panel folded across a corner, as FEMNET's 13gravity_catch/g1) misleads the test of some triangles, not of
+    most of a panel."""
     x = position[triangles]
     normal = np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
     away = x.mean(axis=1) - center
-    return np.where(np.einsum("ij,ij->i", normal, away) >= 0.0, 1.0, -1.0)
+    geometric = np.where(np.einsum("ij,ij->i", normal, away) >= 0.0, 1.0, -1.0)
+    if uv is None or panel is None:
+        return geometric
+    e1, e2 = uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]
+    d = np.where(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0] >= 0.0, 1.0, -1.0)
+    votes = np.zeros(int(panel.max()) + 1 if panel.size else 0)
+    np.add.at(votes, panel, geometric * d)
+    return np.where(votes[panel] >= 0.0, 1.0, -1.0) * d
 
 
 def _normalised(env):

@@ -212,6 +212,10 @@ class Catch(eqx.Module):
     copies of the modelled part make the whole cod-end (4 for a quarter model). axis: unit vector of the
     cod-end axis, pointing downstream. center: a point (m) on the axis at the opening of the cod-end.
     The netting's outward side is ``Netting.outward``.
+    density: 0 (default) for the catch above; > 0 for a *gravity catch* (FEMNET's ``input catch_gravity``): a
+    catch of that density ρ_c (kg/m³) weighing on a bag out of the water, below a horizontal level placed so that
+    the enclosed volume is ``volume``; the axis then points down (-up) and the pressure is hydrostatic,
+    ρ_c g × the depth below the level, instead of ½ ρ Cd v² (:mod:`jaxnet.terms.gravity_catch`).
     """
 
     volume: float
@@ -219,6 +223,7 @@ class Catch(eqx.Module):
     axis: np.ndarray
     center: np.ndarray
     symmetry: float = 1.0
+    density: float = 0.0
 
 
 class Enclosure(eqx.Module):

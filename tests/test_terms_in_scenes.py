@@ -99,10 +99,11 @@ def hexagonal_curtain(net, name, y0, hex_twine):
 
 
 def small_scene(twine=BASE_TWINE, rope=None, current=0.0, surface=float("nan"), mass=0.0, volume=0.0,
-                force=(0.0, 0.0, 0.0), drag_area=0.0, catch=False, second_twine=None, hexagonal=None):
+                force=(0.0, 0.0, 0.0), drag_area=0.0, catch=False, second_twine=None, hexagonal=None, catch_density=0.0):
     """The base scene with one knob turned: a curtain of 3 x 3 meshes (~25 nodes), optionally a rope
     along its foot, a body at its lower corner, a catch, a current along x, a free surface, a second
-    curtain of another netting, a hexagonal-mesh curtain of 2 x 2 base meshes."""
+    curtain of another netting, a hexagonal-mesh curtain of 2 x 2 base meshes; ``catch_density`` > 0 makes the catch a
+    gravity catch."""
     net = Net(Environment(current_speed=current, surface_level=surface))
     p = curtain(net, "netting", 0.0, twine)
     if second_twine is not None:
@@ -113,7 +114,7 @@ def small_scene(twine=BASE_TWINE, rope=None, current=0.0, surface=float("nan"), 
         net.cable("foot rope", along=p.side(0), rope=rope)
     net.attach(p.corner(0), mass=mass, volume=volume, force=force, drag_area=drag_area)
     if catch:
-        net.catch(1.0, center=(-1.0, 0.0, -0.5 * WIDTH))
+        net.catch(1.0, center=(-1.0, 0.0, -0.5 * WIDTH), density=catch_density)
     return net.build()
 
 
@@ -167,6 +168,7 @@ ON_OFF = {
                        lambda: small_scene(twine(cd_normal=0.0), current=0.5)),
     "tarp_pressure": (lambda: small_scene(twine(cd_normal=0.0, tarp_cd=1.0), current=0.5),
                       lambda: small_scene(twine(cd_normal=0.0), current=0.5)),
+    "gravity_catch": (lambda: small_scene(catch=True, catch_density=1000.0), lambda: small_scene()),
     # with a free surface (1 m above everything) even neutral netting weighs where it emerges: only a
     # family without volume (diameter 0, no body) has no gravity energy
     "netting_gravity_at_surface": (lambda: small_scene(surface=1.0),

@@ -177,6 +177,8 @@ def _active(scene, dynamic):
     c = scene.catch
     if c is None or scene.netting is None or not scene.environment.current_speed > 0 or c.drag_coefficient == 0:
         return None
+    if c.density > 0:  # a gravity catch: its hydrostatic pressure replaces this one (jaxnet.terms.gravity_catch)
+        return None
     return {}
 
 

@@ -125,7 +125,10 @@ Conventions established from the files (see ``tests/test_femnet.py``):
 * **Catch.** FEMNET's catch volume is that of the *modelled* part (``c2``, a quarter model, asks for
   and reports 0.2 m³); jaxnet's :class:`~jaxnet.scene.Catch` takes the whole cod-end's volume and the
   number of copies (2 per symmetry plane used by the nodes): volume = 0.2 × 4 for ``c2``. The axis is
-  the current's direction, through the intersection of the symmetry planes.
+  the current's direction, through the intersection of the symmetry planes. ``input catch_gravity RHO_C`` makes it
+  a gravity catch (``Catch.density``, :mod:`jaxnet.terms.gravity_catch`): the axis points down, the level is solved
+  for the same volume and the pressure is FEMNET's hydrostatic one; refused in a current (FEMNET then gives the
+  netting no drag at all).
 * **Convergence.** FEMNET stops when the *mean* nodal residual norm is below its threshold; jaxnet's
   Newton tests the *largest* nodal residual. The threshold is passed unchanged as jaxnet's ``tol``:
   max <= tol implies mean <= tol, so jaxnet's answer is at least as converged as FEMNET's.
@@ -142,7 +145,7 @@ zero-length cable, a panel whose (U, V) contour has no area, positions, limits a
 1e5 m, meshes of more than 50000 nodes per panel or cables of more than 5000 bars (FEMNET's own limits are
 20000 nodes and 5000 bars in all), a link to a part that does not exist, and every FEMNET feature it does
 not model when it is used (sea-bed limits without a stiffness, hexagonal netting in a current, twines
-meshed as bars (meshing type 3), sliding cables, anisotropic node mass, the gravity catch, extra catch volumes,
+meshed as bars (meshing type 3), sliding cables, anisotropic node mass, extra catch volumes,
 FEMNET's other drag laws, meshing by U and V diagonals, unknown ``input`` commands, ...). Dynamic cases (an end time > 0) and waves are read: the time settings
 go to ``info["dynamic"]`` (``jaxnet run CASE.don --dynamic``), the waves to ``Environment.waves`` (linear
 waves on FEMNET's surface z = 0, a depth of 0 taken as deep water); the node types' added masses are read

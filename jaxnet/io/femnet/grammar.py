@@ -340,12 +340,15 @@ class TextOutput:
 
 #: FEMNET's display switches (integers, read and unused)
 DISPLAYS = (
-    field("show_forces", "structure forces display", r"structure forces display", r"affichage de l ?effort sur la structure", integer=True),
-    field("show_diameter", "catch diameter display", r"catch diameter display", r"affichage du diametre de la prise", integer=True),
-    field("show_thickness", "catch thickness display", r"catch thickness display", r"affichage de l ?epaisseur de la prise", integer=True),
-    field("show_volume", "catch volume display", r"catch volume display", r"affichage du volume de la prise", integer=True),
-    field("show_surface", "filtrated surface display", r"filt(e|ra)ted surface display", r"affichage de la surface filtree", integer=True),
-    field("show_speed", "speed display", r"speed display", r"affichage de la vitesse", integer=True),
+    field("show_forces", "structure forces display", r"structure forces display", r"affichage de l ?effort sur la structure",
+          r"force on structure", integer=True),
+    field("show_diameter", "catch diameter display", r"catch diameter display", r"affichage du diametre de la prise", r"catch diameter", integer=True),
+    field("show_thickness", "catch thickness display", r"catch thickness display", r"affichage de l ?epaisseur de la prise",
+          r"catch thi(c)?kness", integer=True),
+    field("show_volume", "catch volume display", r"catch volume display", r"affichage du volume de la prise", r"catch volume", integer=True),
+    field("show_surface", "filtrated surface display", r"filt(e|ra)ted surface display", r"affichage de la surface filtree",
+          r"swept area", integer=True),
+    field("show_speed", "speed display", r"speed display", r"affichage de la vitesse", r"water speed", integer=True),
 )
 
 
@@ -475,6 +478,13 @@ def _link_flexion_elem2(values):
     return None
 
 
+def _catch_gravity(values):
+    """``input catch_gravity RHO_C``: the gravity catch's density, finite and > 0 (kg/m³; FEMNET reads 0 as no
+    gravity catch, which a line asking for one does not mean)."""
+    rho = values[0]
+    return None if np.isfinite(rho) and rho > 0 else f"'input catch_gravity': the catch's density must be > 0 (kg/m³), got {rho!r}"
+
+
 COMMANDS = (
     Command("input", "auto_convergence"),
     Command("input", "convergence_parameters", 3),
@@ -498,7 +508,6 @@ COMMANDS = (
     # FEMNET's current code has no handler for it (its reader skips the line)
     Command("input", "node_position", 1, use="ignored"),
     *(Command("input", name, tuple(range(0, 12)), use="unsupported", reason=reason) for name, reason in (
-        ("catch_gravity", "the gravity catch: " + _UNSUPPORTED),
         ("catch2_volume", "extra catch volumes on listed panels: " + _UNSUPPORTED),
         ("drag_forces_type", "FEMNET's other twine drag laws: " + _UNSUPPORTED),
         ("meshing_uv", "FEMNET's meshing by U and V diagonals: " + _UNSUPPORTED),
@@ -511,6 +520,8 @@ COMMANDS = (
     # cable bending (jaxnet.terms.cable_bending): EI (N·m²) of a cable; two cables welded at an angle (degrees)
     Command("input", "ei_flexion_cable", 2, _ei_flexion_cable, repeatable=True),
     Command("input", "link_flexion_elem2", 3, _link_flexion_elem2, repeatable=True),
+    # the gravity catch (jaxnet.terms.gravity_catch): the catch's density (kg/m³) weighing on a bag out of the water
+    Command("input", "catch_gravity", 1, _catch_gravity),
 )
 INPUTS = {c.name: c for c in COMMANDS if c.kind == "input"}
 #: FEMNET's output commands (``output NAME ...``) print figures or draw: all are read and none changes the case;

@@ -303,16 +303,33 @@ def symmetry_planes(case: DonFile, position, node_type):
     return planes
 
 
-def catch_of(case: DonFile, position, netting_nodes, planes, env: Environment):
-    """(volume of the whole cod-end, Cd, copies, center, axis) of the catch, or None without one."""
+def gravity_catch_density(case: DonFile, env: Environment) -> float:
+    """The density (kg/m³) of the case's gravity catch (``input catch_gravity RHO_C``; :mod:`jaxnet.terms.gravity_catch`),
+    0 without one. FEMNET's statics (``unix.c``) give a gravity-catch case no netting drag at all (neither its twine
+    drag nor the drag ahead of a catch): jaxnet does not reproduce that, so a gravity catch in a current is refused
+    at its line."""
+    if "catch_gravity" not in case.inputs:
+        return 0.0
+    line = case.inputs["catch_gravity"]
+    if env.current_speed > 0 and case.catch["catch_volume"].value > 0:
+        raise SceneError(f"{case.path}:{line.line}: 'input catch_gravity' with a current of {env.current_speed!r} m/s: "
+                         "FEMNET then gives the netting no drag, which jaxnet does not reproduce (a gravity catch is "
+                         "for a bag out of the water)")
+    return float(line.value)
+
+
+def catch_of(case: DonFile, position, netting_nodes, planes, env: Environment, density: float = 0.0):
+    """(volume of the whole cod-end, Cd, copies, center, axis) of the catch, or None without one. ``density`` > 0:
+    a gravity catch (:func:`gravity_catch_density`), whose axis is the vertical downward (FEMNET's
+    ``changement_variable_catch``) and which needs no current."""
     volume = case.catch["catch_volume"].value
     if volume <= 0:
         return None
-    if not env.current_speed > 0:
+    if not env.current_speed > 0 and not density > 0:
         raise SceneError(f"{case.path}:{case.catch['catch_volume'].line}: a catch needs a current (its axis is the "
                          "current's direction)")
     copies = 2.0 ** len(planes)
-    axis = np.asarray(env.current_direction, dtype=float)
+    axis = -np.asarray(env.up, dtype=float) if density > 0 else np.asarray(env.current_direction, dtype=float)
     pts = position[netting_nodes]
     center = pts.mean(axis=0)
     for a, c in planes.items():
@@ -473,11 +490,13 @@ def read_don(path, femnet_laws=True):
     if not femnet_laws:
         spheres(case, net)
     netting_nodes = np.unique(np.asarray(scene.netting.vertices)) if scene.netting is not None else np.arange(len(position))
-    catch = catch_of(case, position, netting_nodes, planes, env)
+    density = gravity_catch_density(case, env)
+    catch = catch_of(case, position, netting_nodes, planes, env, density)
     with _located(case, "the net with its node types"):
         if catch is not None:
             volume, cd, copies, center, axis = catch
-            net.catch(volume, drag_coefficient=cd, symmetry=copies, center=tuple(center), axis=tuple(axis))
+            net.catch(volume, drag_coefficient=cd, symmetry=copies, center=tuple(center), axis=tuple(axis),
+                      density=density)
         scene = net.build()
     out = result(case, scene, net, planes, catch, femnet_laws, plan, label=f"FEMNET case {case.path}",
                  warnings=warnings, node_type=node_type)

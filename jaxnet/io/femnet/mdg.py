@@ -12,9 +12,8 @@ import pathlib
 import numpy as np
 
 from jaxnet.io.femnet.grammar import twine_coordinates
-from jaxnet.io.femnet.mapping import (catch_of, check_types, environment_of, node_type_fields, result, rope_of,
-                                      spheres_folded,
-                                      symmetry_planes, twine_of)
+from jaxnet.io.femnet.mapping import (catch_of, check_types, environment_of, gravity_catch_density, node_type_fields,
+                                      result, rope_of, spheres_folded, symmetry_planes, twine_of)
 from jaxnet.io.femnet.parse import parse_don
 from jaxnet.io.femnet.twines import mdg_twine_bars, numerical_twines
 from jaxnet.materials import bar_rows, netting_rows
@@ -143,12 +142,14 @@ def read_mdg(path, don=None, femnet_laws=True):
                                                                  "diameter", "density", "cable", "cd_normal",
                                                                  "tangential_ratio")})
     netting_nodes = np.unique(netting.vertices) if netting is not None else np.arange(n_nodes)
-    catch_spec = catch_of(case, position, netting_nodes, planes, env)
+    density = gravity_catch_density(case, env)
+    catch_spec = catch_of(case, position, netting_nodes, planes, env, density)
     catch = None
     if catch_spec is not None:
         volume, cd, copies, center, axis = catch_spec
-        catch = Catch(volume=volume, drag_coefficient=cd, axis=axis, center=center, symmetry=copies)
-        netting = dataclasses.replace(netting, outward=outward(position, np.asarray(netting.vertices), center))
+        catch = Catch(volume=volume, drag_coefficient=cd, axis=axis, center=center, symmetry=copies, density=density)
+        netting = dataclasses.replace(netting, outward=outward(position, np.asarray(netting.vertices), center,
+                                                               np.asarray(netting.uv), np.asarray(netting.panel)))
     scene = Scene(nodes=nodes, netting=netting, bars=bars, environment=env, catch=catch,
                   panel_names=tuple(f"panel {k + 1}" for k in range(len(case.panels))),
                   cable_names=tuple(f"cable {k + 1}" for k in range(len(case.cables))) + twine_names)
