@@ -86,9 +86,12 @@ Conventions established from the files (see ``tests/test_femnet.py``):
   not checked; ``info["boxes"]`` lists the nodes with a box and the height of its top above them, and
   ``validation/femnet_corpus.py`` checks the equilibrium against z = 0. Widths X, Y must be >= 0 (FEMNET
   takes them signed: a negative one would drag against the current).
-* **Spheres** (``input sphere_element CABLE COUNT D B``; manual, index): COUNT spherical floats of diameter
-  D (m) along the cable, each pulling up with B newtons net of its weight, Cd 0.6: floats of COUNT B newtons
-  and drag area COUNT 0.6 pi D²/4 shared equally by the cable's nodes (``Net.float_``).
+* **Spheres** (``input sphere_element CABLE COUNT D B``; ``sphere_element2`` adds the length L they are spread
+  over): COUNT spherical floats of diameter D (m) along the cable, each pulling up with B newtons net of its
+  weight, Cd 0.6. FEMNET's laws fold them into the cable (``chargement_don.c``): its diameter, volumic mass and
+  normal Cd become those of cable and spheres together (:func:`~.mapping.spheres_folded`); jaxnet's make them
+  floats of COUNT B newtons and drag area COUNT 0.6 pi D²/4 shared equally by the cable's nodes
+  (:func:`~.mapping.spheres`, ``Net.float_``).
 * **Node re-typing** (``input type_noeud_XYZ_SUPINF MODE BOUNDS... TYPE``): the nodes whose start position
   lies strictly inside FEMNET's window (modes 1-13: one bound, an interval on one, two or three axes) take
   the type. **Translations** (``input add_{x,y,z}_{ele,pan} D FIRST LAST``) move cables or panels FIRST to
