@@ -44,7 +44,7 @@ from jaxnet.materials import DRAG_MODELS, KNOT_FORMS, HexTwine, Rope, Twine, bar
 from jaxnet.terms.drag import NETTING_DRAG_MODELS
 from jaxnet.mesh.hinges import netting_hinges
 from jaxnet.mesh.joining import NodeJoiner
-from jaxnet.mesh.panel import mesh_panel
+from jaxnet.mesh.panel import lattice_divisions, mesh_panel
 from jaxnet.mesh.polygon import PanelError, side_divisions
 from jaxnet.mesh.twines import NumericalTwines, mesh_twines, numerical_twine_rope
 from jaxnet.scene import Bars, CableJoints, Environment, Netting, Nodes, Scene, SceneError
@@ -160,6 +160,7 @@ class _Panel:
     twine: Twine
     step: float
     twines: NumericalTwines | None = None   # meshed as numerical twines (bars) rather than triangles
+    lattice: tuple | None = None   # (NU, NV) meshes: nodes on that lattice of mesh diagonals (mesh_panel)
 
 
 @dataclasses.dataclass
@@ -202,7 +203,7 @@ class Net:
     # -- description ------------------------------------------------------------------------------
 
     def panel(self, name, corners, twine: Twine | HexTwine, step: float | None = None,
-              twines: NumericalTwines | None = None) -> PanelRef:
+              twines: NumericalTwines | None = None, lattice: tuple | None = None) -> PanelRef:
         """Add a panel. corners: (C, 5) rows x, y, z (m), U, V (twines of a diamond mesh, or base meshes of a
         hexagonal mesh when ``twine`` is a :class:`HexTwine`); step: meshing step (m) of its triangles.
 
@@ -212,7 +213,14 @@ class Net:
         cable named "<name> twines" (after the net's cables), of :func:`~jaxnet.mesh.twines.numerical_twine_rope`
         material. The twines end on the panel's border, where only a rope holds them: every side of such a
         panel needs a cable sewn along it (``Net.cable(along=...)``, as FEMNET requires), and it cannot be
-        seamed to another panel."""
+        seamed to another panel.
+
+        lattice: (NU, NV), numbers of meshes (> 0), to put the (diamond) panel's nodes on the lattice of every
+        NU meshes along the U diagonal and every NV meshes along the V diagonal of its meshes, U = (u - v)/2 and
+        V = (u + v)/2 for the twine coordinates (u, v) of ``corners`` (FEMNET's ``input Meshing_UV PANEL NU NV``;
+        :func:`~jaxnet.mesh.panel.mesh_panel`), instead of an isotropic step: a long, low panel (a gill net)
+        then gets long thin triangles. ``step`` is then unused; a side's default division is its length in
+        lattice cells."""
         if name in self._panels or name in self._cables:
             raise SceneError(f"panel '{name}': the name is already used")
         corners = np.asarray(corners, dtype=float)
@@ -230,6 +238,17 @@ class Net:
                                                       "cd_normal", "tangential_ratio"), positive=("l0",))
             self._panels[name] = _Panel(name, corners, twine, float("nan") if step is None else float(step), twines)
             return PanelRef(name)
+        if lattice is not None:
+            if twines is not None or not isinstance(twine, Twine):
+                raise SceneError(f"panel '{name}': a lattice of mesh diagonals meshes a diamond-mesh panel into "
+                                 f"triangles (not numerical twines nor hexagonal netting), got {twine!r}")
+            try:
+                lattice = tuple(float(x) for x in lattice)
+            except (TypeError, ValueError):
+                raise SceneError(f"panel '{name}': lattice must be (NU, NV), two numbers of meshes, got {lattice!r}") from None
+            if len(lattice) != 2 or not all(np.isfinite(x) and x > 0 for x in lattice):
+                raise SceneError(f"panel '{name}': lattice must be (NU, NV), two numbers of meshes > 0, got {lattice!r}")
+            step = float("nan") if step is None else step
         if step is None:
             raise SceneError(f"panel '{name}': give its meshing step (m), or twines= to mesh it as numerical twines")
         if isinstance(twine, HexTwine):
@@ -251,7 +270,7 @@ class Net:
             check_material(twine, f"panel '{name}'", ("knot_stiffness",))
         if twine.knot_form not in KNOT_FORMS:
             raise SceneError(f"panel '{name}': knot_form must be one of {sorted(KNOT_FORMS)}, got {twine.knot_form!r}")
-        self._panels[name] = _Panel(name, corners, twine, float(step))
+        self._panels[name] = _Panel(name, corners, twine, float(step), lattice=lattice)
         return PanelRef(name)
 
     def cable(self, name, start=None, end=None, rope: Rope | None = None, n_bars: int | None = None,
@@ -421,7 +440,8 @@ class Net:
                     m = mesh_twines(p.corners[:, 3:5], p.corners[:, 0:3], p.twines, divisions=divisions[p.name],
                                     name=p.name)
                 else:
-                    m = mesh_panel(p.corners[:, 3:5], p.corners[:, 0:3], p.step, _mesh_length(p.twine), divisions=divisions[p.name], name=p.name)
+                    m = mesh_panel(p.corners[:, 3:5], p.corners[:, 0:3], p.step, _mesh_length(p.twine), divisions=divisions[p.name], name=p.name,
+                                   lattice=p.lattice)
             except PanelError as err:
                 raise SceneError(str(err)) from err
             offset = builder.add_nodes(m.xyz)
@@ -549,10 +569,13 @@ class Net:
                 div[p.name] = np.zeros(len(p.corners), dtype=int)
                 continue
             try:
+                if p.lattice is not None:
+                    div[p.name] = np.array(lattice_divisions(p.corners[:, 3:5], p.lattice), dtype=int)
+                    continue
                 div[p.name] = np.array(side_divisions(p.corners[:, 3:5], p.step, _mesh_length(p.twine)), dtype=int)
             except PanelError as err:
                 # the mesher names the function, not the panel, in what it finds wrong here
-                message = str(err).removeprefix("panel 'side_divisions': ")
+                message = str(err).removeprefix("panel 'side_divisions': ").removeprefix("panel 'lattice_divisions': ")
                 raise SceneError(f"panel '{p.name}': {message}") from err
         sides = [s for seam in self._seams for s in seam]
         for s in sides:

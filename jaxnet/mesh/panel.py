@@ -17,6 +17,31 @@ nodes (row by row of the lattice).  Start positions of all nodes are
 
 The polygon is checked first (:mod:`jaxnet.mesh.polygon`: a :class:`~jaxnet.mesh.polygon.PanelError` names
 the panel and the culprit). This module depends on numpy and scipy only.
+
+**Meshing on a lattice of mesh diagonals** (``mesh_panel(..., lattice=(NU, NV))``, FEMNET's ``input
+Meshing_UV PANEL NU NV``). FEMNET's mesh coordinates count meshes along the two diagonals of the meshes,
+U = (u - v)/2 and V = (u + v)/2 for the twine coordinates (u, v) used here. With a lattice, the interior nodes
+are the points U = U0 + i NU, V = V0 + j NV (i, j integers; U0, V0 the floors of the corners' smallest U and V)
+strictly inside the panel, and the triangles are made in the *lattice coordinates* s = (U / NU, V / NV), where
+the lattice is the unit square grid: a panel long along U (a gill net: 5000 meshes by 42, NU = 200, NV = 3)
+gets the few nodes its shape needs across its length and enough across its height, with triangles long and
+thin in twine space (200 meshes by 3), which the element takes as any other (its twine vectors come from the
+triangle's (u, v), its twine counts are |d|/2). Every step of the isotropic mesher is done in s instead of
+(u, v) with h = 1 cell: default side divisions ceil(side length in cells), lattice points kept at 0.6 cells
+from the sides, Delaunay triangulation with the sides recovered. A square of four lattice nodes is cocircular
+(Delaunay could split it either way, at rounding's whim), so the triangulation is made in the sheared
+coordinates (s1 + s2 / 4, s2) (an affine map of determinant 1, which keeps orientation and areas): each
+cell's parallelogram has one shorter diagonal, the one from (i + 1, j) to (i, j + 1), and every cell is split
+along it. FEMNET's way (phobos ``maillage.c``, ``maillage_panneau``: for meshing type 2 with a step along U
+set, ``maillage_interne4`` of ``maillage_panneau2.c`` replaces the isotropic ``maillage_interne3``): the
+same lattice from i, j = 1 to int((U_max - U_min) / NU) and int((V_max - V_min) / NV) (so a band along the
+largest U or V can be missed when U_min is not a whole number; here the whole panel is covered), each point
+kept when it is inside the contour and farther than a quarter of the *isotropic* step (step / l0 twines) from
+every contour segment and corner (``proche_contour_filaire``, ``proche_panneau_filaire`` of
+``maillage_panneau1.c``; 0.6 lattice cells here), the sides divided as without the command (by the meshing step,
+or by the cable sewn along it when the cable is meshed first, FEMNET's advice for this command), then all the
+nodes triangulated in twine coordinates (Shewchuk's ``triangle.c``), where a rectangle of the lattice is a
+rectangle too, cocircular.
 """
 
 from __future__ import annotations
@@ -28,7 +53,7 @@ import numpy as np
 
 from jaxnet.mesh.polygon import REL_EPS, panel_error, validate_panel
 
-__all__ = ["PanelMesh", "mesh_panel"]
+__all__ = ["PanelMesh", "lattice_coordinates", "lattice_divisions", "mesh_panel"]
 
 #: Refuse to mesh a panel whose estimated node count exceeds this.
 MAX_NODES = 5_000_000
@@ -37,6 +62,8 @@ MAX_NODES = 5_000_000
 _CLEARANCE = 0.6
 # Points processed per chunk in the vectorised (points x corners) kernels.
 _CHUNK = 100_000
+# Shear of the lattice coordinates in which a lattice mesh is triangulated (see the module docstring).
+_LATTICE_SHEAR = 0.25
 
 
 @dataclasses.dataclass(frozen=True)
@@ -219,8 +246,12 @@ def _lattice(uv, area, h, seg, div):
     return pts[keep]
 
 
-def _interior_points(uv, area, h, seg, div, convex, bpts, segs):
-    pts = _lattice(uv, area, h, seg, div)
+def _interior_points(uv, area, h, seg, div, convex, bpts, segs, pts=None):
+    """The interior nodes: the candidate points ``pts`` (default: the equilateral lattice of spacing ~h)
+    strictly inside the polygon, at least _CLEARANCE h from its boundary (and, for a non-convex polygon, off
+    the diametral circles of the boundary segments)."""
+    if pts is None:
+        pts = _lattice(uv, area, h, seg, div)
     if len(pts) == 0:
         return pts
     pts = pts[_inside(pts, uv)]
@@ -249,7 +280,7 @@ def _edge_keys(a, b, n):
     return lo.astype(np.int64) * n + hi
 
 
-def mesh_panel(corners_uv, corners_xyz, step, l0, divisions=None, name="panel") -> PanelMesh:
+def mesh_panel(corners_uv, corners_xyz, step, l0, divisions=None, name="panel", lattice=None) -> PanelMesh:
     """Mesh a netting panel into triangles in twine-coordinate space.
 
     Parameters
@@ -269,9 +300,16 @@ def mesh_panel(corners_uv, corners_xyz, step, l0, divisions=None, name="panel") 
         corner ``(k + 1) % C``); default :func:`side_divisions`.  Side nodes
         are equally spaced in ``(U, V)``: node ``i`` of side ``k`` sits at
         fraction ``i / divisions[k]``.  Two panels given the same divisions
-        on a seam get matching border nodes.
+        on a seam get matching border nodes.  With a ``lattice``, the default
+        is :func:`lattice_divisions`.
     name : str
         Panel name used in error messages.
+    lattice : (float, float), optional
+        ``(NU, NV)``: put the interior nodes on the lattice of every ``NU``
+        meshes along the U diagonal and every ``NV`` meshes along the V
+        diagonal (FEMNET's ``input Meshing_UV``; see the module docstring)
+        instead of the isotropic lattice of step ``h``; ``step`` and ``l0``
+        are then unused.
 
     Returns
     -------
@@ -287,6 +325,8 @@ def mesh_panel(corners_uv, corners_xyz, step, l0, divisions=None, name="panel") 
         non-positive ``step`` or ``l0``, bad ``divisions``), or if the panel
         could not be meshed.
     """
+    if lattice is not None:
+        return _mesh_on_lattice(corners_uv, corners_xyz, lattice, divisions, name)
     uv_c, xyz_c, h, seg, area, scale, div = validate_panel(corners_uv, corners_xyz, step, l0, divisions, name)
     C = len(uv_c)
     if xyz_c is None:
@@ -312,6 +352,85 @@ def mesh_panel(corners_uv, corners_xyz, step, l0, divisions=None, name="panel") 
 
     xyz = weights @ xyz_c
     arrays = dict(uv=nodes, xyz=xyz, triangles=tri, corner_nodes=np.arange(C, dtype=np.int64),
+                  weights=weights)
+    for a in arrays.values():
+        a.setflags(write=False)
+    for s in sides:
+        s.setflags(write=False)
+    return PanelMesh(side_nodes=sides, **arrays)
+
+
+def _checked_lattice(lattice, name):
+    """(NU, NV) as two finite floats > 0 (meshes), or a PanelError."""
+    try:
+        nu, nv = (float(x) for x in lattice)
+    except (TypeError, ValueError):
+        raise panel_error(name, f"lattice must be (NU, NV), two numbers of meshes, got {lattice!r}") from None
+    if not (math.isfinite(nu) and math.isfinite(nv) and nu > 0 and nv > 0):
+        raise panel_error(name, f"lattice (NU, NV) must be two finite numbers of meshes > 0, got {lattice!r}")
+    return nu, nv
+
+
+def lattice_coordinates(uv, lattice) -> np.ndarray:
+    """Lattice coordinates s = (U / NU, V / NV) of points of twine coordinates ``uv`` (..., 2) (twines), with
+    U = (u - v) / 2 and V = (u + v) / 2 their mesh coordinates (meshes along the two diagonals of the meshes:
+    FEMNET's, the inverse of u = U + V, v = V - U) and ``lattice`` = (NU, NV) (meshes). One unit of s is one
+    cell of the lattice; the map is linear, of determinant 1 / (2 NU NV) > 0 (it keeps orientation)."""
+    uv = np.asarray(uv, dtype=float)
+    nu, nv = _checked_lattice(lattice, "lattice_coordinates")
+    return np.stack([(uv[..., 0] - uv[..., 1]) / (2.0 * nu), (uv[..., 0] + uv[..., 1]) / (2.0 * nv)], axis=-1)
+
+
+def lattice_divisions(corners_uv, lattice) -> np.ndarray:
+    """Default number of segments of each side of a panel meshed on a ``lattice`` (NU, NV) (meshes):
+    ceil(side length in lattice cells) (at least 1), the length measured in the lattice coordinates of
+    :func:`lattice_coordinates` (a side along U of 5000 meshes with NU = 200: 25 segments)."""
+    uv = validate_panel(corners_uv, None, 1.0, 1.0, None, "lattice_divisions")[0]
+    s = lattice_coordinates(uv, lattice)
+    seg = np.hypot(*(np.roll(s, -1, axis=0) - s).T)
+    return np.maximum(np.ceil(seg * (1.0 - 1e-12)), 1).astype(np.int64)
+
+
+def _mesh_on_lattice(corners_uv, corners_xyz, lattice, divisions, name) -> PanelMesh:
+    """:func:`mesh_panel` with a lattice (NU, NV): the isotropic mesher's steps in the lattice coordinates
+    s (h = 1 cell), the interior candidates the lattice's nodes, the triangulation sheared (module
+    docstring)."""
+    nu, nv = _checked_lattice(lattice, name)
+    # the polygon's checks in twine coordinates (its messages then give the caller's numbers)
+    uv_c, xyz_c = validate_panel(corners_uv, corners_xyz, 1.0, 1.0, None, name)[:2]
+    if xyz_c is None:
+        raise panel_error(name, "corners_xyz is required")
+    C = len(uv_c)
+    s_c = lattice_coordinates(uv_c, (nu, nv))
+    _, _, h, seg, area, scale, div = validate_panel(s_c, None, 1.0, 1.0, divisions, name)
+    estimate = abs(area) + float(div.sum()) + float(seg.sum())
+    if estimate > MAX_NODES:
+        raise panel_error(name, f"lattice of {nu:g} x {nv:g} meshes gives about {estimate:.3g} nodes (limit "
+                          f"{MAX_NODES}); use a coarser lattice")
+
+    e = np.roll(s_c, -1, axis=0) - s_c
+    turn = e[:, 0] * np.roll(e[:, 1], -1) - e[:, 1] * np.roll(e[:, 0], -1)
+    convex = bool(np.all(turn * np.sign(area) >= -REL_EPS * scale * scale))
+
+    w_b, sides, segs = _boundary(s_c, div)
+    b_pts = w_b @ s_c
+    # the lattice's nodes over the panel's bounding box, row by row (V, then U), from FEMNET's origin: the
+    # floors of the smallest mesh coordinates U, V of the corners
+    mesh_uv = s_c * np.array([nu, nv])
+    origin = np.floor(mesh_uv.min(axis=0)) / np.array([nu, nv])
+    extent = np.ceil(s_c.max(axis=0) - origin).astype(np.int64)
+    J, I = np.meshgrid(np.arange(extent[1] + 1), np.arange(extent[0] + 1), indexing="ij")
+    candidates = origin + np.stack([I.reshape(-1), J.reshape(-1)], axis=1).astype(float)
+    i_pts = _interior_points(s_c, area, h, seg, div, convex, b_pts, segs, pts=candidates)
+    w_i = _mean_value_coordinates(i_pts, s_c) if len(i_pts) else np.zeros((0, C))
+    weights = np.concatenate([w_b, w_i], axis=0)
+
+    shear = np.array([[1.0, _LATTICE_SHEAR], [0.0, 1.0]])
+    t_c = s_c @ shear.T
+    t_scale = float(np.max(np.abs(t_c - t_c.mean(axis=0)))) or 1.0
+    tri = _triangulate((weights @ s_c) @ shear.T, t_c, area, segs, t_scale, name)
+
+    arrays = dict(uv=weights @ uv_c, xyz=weights @ xyz_c, triangles=tri, corner_nodes=np.arange(C, dtype=np.int64),
                   weights=weights)
     for a in arrays.values():
         a.setflags(write=False)
