@@ -23,6 +23,13 @@ Conventions established from the files (see ``tests/test_femnet.py``):
   the number of twines of each family in a triangle is |d(u, v)|/2 = |d(U, V)|.
 * **Meshing step** (m): jaxnet's mesher uses step / l0 twines, as FEMNET's (7.27 twines in
   ``nr_netting``: 0.16 m / 0.022 m).
+* **Meshing by mesh diagonals** (``input Meshing_UV PANEL NU NV``: phobos ``chargement_don.c`` sets the panel's
+  ``pas_U``, ``pas_V``; ``maillage.c`` then meshes a panel of meshing type 2 with ``maillage_interne4`` of
+  ``maillage_panneau2.c``): the interior nodes lie on the lattice of every NU meshes along U and NV along V
+  (:func:`~jaxnet.mesh.panel.mesh_panel`'s ``lattice``, ``Net.panel(lattice=(NU, NV))``, whose docstring says
+  what FEMNET does and where jaxnet differs); the sides are divided as without it (by the sewn cable meshed
+  first, FEMNET's advice for this command). FEMNET ignores the command for the other meshing types (a warning
+  here); ``Meshing_uv`` (small uv: every nu, nv twines, ``maillage_interne6``) is another command, refused.
 * **Node types.** Every node has a type (corner: its own; nodes created along a panel side: the
   side's "following type"; inside a panel or a cable: the element's "type of internal nodes").
   Fixity "Displacement X,Y,Z" = 1 holds that coordinate; "Symmetry" = 1 means the node lies on a
@@ -149,7 +156,7 @@ zero-length cable, a panel whose (U, V) contour has no area, positions, limits a
 20000 nodes and 5000 bars in all), a link to a part that does not exist, and every FEMNET feature it does
 not model when it is used (sea-bed limits without a stiffness, hexagonal netting in a current, twines
 meshed as bars (meshing type 3), sliding cables, anisotropic node mass, extra catch volumes,
-FEMNET's other drag laws, meshing by U and V diagonals, unknown ``input`` commands, ...). Dynamic cases (an end time > 0) and waves are read: the time settings
+FEMNET's other drag laws, meshing along the twines (``Meshing_uv``), unknown ``input`` commands, ...). Dynamic cases (an end time > 0) and waves are read: the time settings
 go to ``info["dynamic"]`` (``jaxnet run CASE.don --dynamic``), the waves to ``Environment.waves`` (linear
 waves on FEMNET's surface z = 0, a depth of 0 taken as deep water); the node types' added masses are read
 into ``info["added_mass"]``, and a dynamic run of a case that has any stops with an error (not yet mapped).

@@ -453,6 +453,18 @@ def _tarp_panel(values):
         f"'input tarp': the panel number must be a whole number >= 1, got {values[0]!r}"
 
 
+def _meshing_uv(values):
+    """``input Meshing_UV PANEL NU NV`` (phobos ``chargement_don.c``: ``panneau[PANEL].pas_U``, ``pas_V``, read as
+    floats): a diamond panel number, then two numbers of meshes > 0 (FEMNET takes a step 0 along U for no command,
+    and divides by the one along V)."""
+    panel, nu, nv = values
+    if panel != int(panel) or panel < 1:
+        return f"'input Meshing_UV': the panel number must be a whole number >= 1, got {panel!r}"
+    if not (nu > 0 and nv > 0):
+        return f"'input Meshing_UV' {panel:g}: the numbers of meshes along U and V must be > 0, got {nu!r} and {nv!r}"
+    return None
+
+
 def _cable_number(value, what):
     """The message refusing a cable number that is not a whole number >= 1 (None when it is one)."""
     return None if value == int(value) and value >= 1 else f"{what}: the cable number must be a whole number >= 1, got {value!r}"
@@ -510,11 +522,13 @@ COMMANDS = (
     *(Command("input", name, tuple(range(0, 12)), use="unsupported", reason=reason) for name, reason in (
         ("catch2_volume", "extra catch volumes on listed panels: " + _UNSUPPORTED),
         ("drag_forces_type", "FEMNET's other twine drag laws: " + _UNSUPPORTED),
-        ("meshing_uv", "FEMNET's meshing by U and V diagonals: " + _UNSUPPORTED),
         ("spheric_limit", "a spherical limit: " + _UNSUPPORTED),
         ("deck", "a deck: " + _UNSUPPORTED))),
     # an impermeable panel (a tarp, jaxnet.terms.tarp): PANEL, loaded by the catch's pressure instead of drag
     Command("input", "tarp", 1, _tarp_panel, per_panel=True),
+    # a panel meshed on a lattice of mesh diagonals: PANEL NU NV (meshes along U, along V; Net.panel(lattice=...));
+    # FEMNET's 'Meshing_uv' (small uv: along the twines) is another command, refused by the reader
+    Command("input", "meshing_uv", 3, _meshing_uv, per_panel=True),
     # a panel meshed as numerical twines (bars): PANEL PERIOD GAP_U GAP_V ACCURACY BARS (jaxnet.io.femnet.twines)
     Command("input", "netting2ropes", 6, _netting2ropes_values, per_panel=True),
     # cable bending (jaxnet.terms.cable_bending): EI (N·m²) of a cable; two cables welded at an angle (degrees)

@@ -67,6 +67,24 @@ def _tarps(case: DonFile) -> dict:
     return out
 
 
+def meshing_lattices(case: DonFile) -> dict:
+    """{0-based diamond panel index: (NU, NV)} from the ``input Meshing_UV PANEL NU NV`` lines (meshes along the U
+    and V diagonals between nodes: ``Net.panel(lattice=...)``; phobos ``chargement_don.c`` sets ``pas_U``, ``pas_V``
+    and ``maillage.c`` then meshes the panel with ``maillage_interne4``), for the panels of meshing type 2, the only
+    ones FEMNET meshes so (the parser warns of the others). A SceneError ``file:LINE:`` for a line naming no
+    diamond panel."""
+    out = {}
+    for key, v in case.inputs.items():
+        if key.startswith("meshing_uv "):
+            k = int(v.value[0]) - 1
+            if not 0 <= k < len(case.panels):
+                raise SceneError(f"{case.path}:{v.line}: 'input Meshing_UV {k + 1}': panel {k + 1} does not exist "
+                                 f"(diamond panels: 1 to {len(case.panels)})")
+            if case.panels[k].material["mesh_type"].value == 2:
+                out[k] = (float(v.value[1]), float(v.value[2]))
+    return out
+
+
 def _tarp_cd(case: DonFile, p: DonPanel) -> float:
     """The tarp pressure coefficient of diamond panel ``p`` (:attr:`Twine.tarp_cd`): the catch's Cd ("Drag
     coefficient on this volume") for a panel named by ``input tarp``, as FEMNET's ``pression_prise3`` pushes its
@@ -344,10 +362,12 @@ def _describe(case: DonFile, env: Environment, plan: JoinPlan, femnet_laws: bool
     net = Net(environment=env, merge_tolerance=MERGE_TOLERANCE)
     case = _with_cable_bending(case)
     twines = numerical_twines(case, femnet_laws)
+    lattices = meshing_lattices(case)
     for kind, k, p, name in all_panels(case):
         if kind == "pa":
             corners = np.concatenate([p.corners[:, :3], twine_coordinates(p.corners[:, 3:5])], axis=1)
-            net.panel(name, corners, twine_of(p, case, femnet_laws), p.material["step"].value, twines=twines.get(k))
+            net.panel(name, corners, twine_of(p, case, femnet_laws), p.material["step"].value, twines=twines.get(k),
+                      lattice=lattices.get(k))
         else:
             # hexagonal: FEMNET's (U, V) count base meshes, as jaxnet's (see the package's docstring)
             net.panel(name, p.corners, _hextwine(p), p.material["step"].value)

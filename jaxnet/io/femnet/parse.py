@@ -77,6 +77,16 @@ def parse_don(path) -> DonFile:
     text_outputs = _parse_text_outputs(r)
     read_all(r, DISPLAYS)
     inputs, outputs, commands = _commands(r)
+    for k, p in enumerate(panels):
+        # FEMNET's maillage_panneau (maillage.c) honours Meshing_UV for meshing type 2 only (mapping.meshing_lattices)
+        lattice = inputs.get(f"meshing_uv {k + 1}")
+        if lattice is not None and p.material["mesh_type"].value != 2:
+            r.warnings.append(f"{path}:{lattice.line}: 'input Meshing_UV {k + 1}': panel {k + 1} has meshing type "
+                              f"{p.material['mesh_type'].value}, and FEMNET uses the command for type 2 only: ignored")
+            lattice = None
+        _check_node_estimate(r, p, f"panel {k + 1}", lattice)
+    for k, p in enumerate(hexagonal):
+        _check_node_estimate(r, p, f"hexagonal panel {k + 1}")
     return DonFile(str(path), panels, cables, order, types, numeric, ocean, catch, inputs, outputs, hexagonal, links,
                    orientation.value, text_outputs, commands, r.warnings)
 
@@ -154,12 +164,30 @@ def _parse_panel(r, k, hexagonal):
                       f"{t.value}", t.line)
     corners = np.array(rows)
     _check_contour(r, corners, lines, name)
-    # jaxnet meshes with a step of h twines (base meshes for hexagonal netting): refuse a mesh too large to be
-    # meant (FEMNET's own limit is 20000 nodes in all, phobos.h NBMAXNOEUD) before trying to make it
-    if hexagonal:
-        uv, h = corners[:, 3:5], mat["step"].value / (3.0 * np.mean([v.value for v in mat["l0"]]))
+    return DonPanel(corners, ctype, stype, mat, nc.line, hexagonal)
+
+
+def _check_node_estimate(r, p, name, lattice=None):
+    """Refuse a panel whose mesh would be too large to be meant (FEMNET's own limit is 20000 nodes in all,
+    phobos.h NBMAXNOEUD) before trying to make it: jaxnet meshes with a step of h twines (base meshes for
+    hexagonal netting), or, with ``input Meshing_UV`` (``lattice`` = its line's Value (PANEL, NU, NV)), on the
+    lattice of every NU, NV meshes (:func:`~jaxnet.mesh.panel.mesh_panel`): about one node per lattice cell
+    (area / (NU NV), the area in meshes²) and one per cell along the sides. Checked once the commands are
+    read, since the command comes after the panels."""
+    mat = p.material
+    if lattice is not None:
+        UV = p.corners[:, 3:5] / np.array(lattice.value[1:])
+        nxt = np.roll(UV, -1, axis=0)
+        area = 0.5 * abs(np.sum(UV[:, 0] * nxt[:, 1] - nxt[:, 0] * UV[:, 1]))
+        estimate = area + np.hypot(*(nxt - UV).T).sum()
+        if not estimate <= MAX_PANEL_NODES:
+            raise r.error(f"{name}: 'input Meshing_UV' {lattice.value[1]:g} {lattice.value[2]:g} gives about "
+                          f"{estimate:.3g} nodes (limit {MAX_PANEL_NODES}); use a coarser lattice", lattice.line)
+        return
+    if p.hexagonal:
+        uv, h = p.corners[:, 3:5], mat["step"].value / (3.0 * np.mean([v.value for v in mat["l0"]]))
     else:
-        uv, h = twine_coordinates(corners[:, 3:5]), mat["step"].value / mat["l0"].value
+        uv, h = twine_coordinates(p.corners[:, 3:5]), mat["step"].value / mat["l0"].value
     nxt = np.roll(uv, -1, axis=0)
     area = 0.5 * abs(np.sum(uv[:, 0] * nxt[:, 1] - nxt[:, 0] * uv[:, 1]))
     with np.errstate(all="ignore"):  # a step that underflows h to 0 estimates inf nodes, refused below
@@ -167,7 +195,6 @@ def _parse_panel(r, k, hexagonal):
     if not estimate <= MAX_PANEL_NODES:
         raise r.error(f"{name}: meshing step {mat['step'].value!r} m gives about {estimate:.3g} nodes (limit "
                       f"{MAX_PANEL_NODES}); use a larger step", mat["step"].line)
-    return DonPanel(corners, ctype, stype, mat, nc.line, hexagonal)
 
 
 def _check_contour(r, corners, lines, name):
@@ -348,6 +375,11 @@ def _commands(r):
         if name.lower() not in INPUTS:
             raise r.error(f"'input {name}': unknown input command, not supported (known: {sorted(INPUTS)})", line_no)
         command = INPUTS[name.lower()]
+        if command.name == "meshing_uv" and name != "Meshing_UV":
+            # FEMNET's strcmp tells them apart: Meshing_uv puts nodes every nu, nv *twines* (maillage_interne6)
+            raise r.error(f"'input {name}': FEMNET reads 'Meshing_UV' (nodes every NU, NV meshes along the mesh "
+                          "diagonals, supported) and 'Meshing_uv' (every nu, nv twines, not supported) and no other "
+                          "spelling", line_no)
         if command.use == "unsupported":
             raise r.error(f"'input {name}': {command.reason}", line_no)
         try:
