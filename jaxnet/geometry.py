@@ -116,6 +116,21 @@ def mesh_surface(U, V):
     return 2.0 * safe_norm(jnp.cross(U, V))
 
 
+def diamond_solidity(U, V, l0, diameter):
+    """Solidity Sn of diamond netting (dimensionless, in [0, 1]), as FEMNET's ``Solidity_diamond`` computes it
+    for Zhan's law: the twines' projected area in one mesh over the mesh's area,
+
+        Sn = (4 D l0 - D²) / (2 |U ^ V|),   clipped to [0, 1],
+
+    the mesh's area (book 4.28) from the twine vectors U, V (3,) of the current shape (m), so that Sn grows as
+    the meshes close; l0 the unstretched twine length and D its diameter (m). A flat mesh (|U ^ V| = 0) has
+    Sn = 1, the clip's value there."""
+    twines = 4.0 * diameter * l0 - diameter**2
+    mesh = mesh_surface(U, V)
+    open_ = mesh > twines  # where Sn < 1: the division is safe there, and its derivative is used only there
+    return jnp.clip(jnp.where(open_, twines / jnp.where(open_, mesh, 1.0), 1.0), 0.0, 1.0)
+
+
 @jax.custom_jvp
 def half_opening_angle(U, V):
     """Half angle between the twine vectors, in radians (eq. 4.211): pi/4 for square meshes.

@@ -35,8 +35,11 @@ class Twine:
     (kg/m³, 1140 = polyamide).
     cd_normal, tangential_ratio: twine drag: normal coefficient Cd and f, the tangential drag as a fraction
       of Cd (eqs 4.114-4.115; FEMNET's usual 1.2 and 0.08); drag_model: "twines" (drag on every twine, the book), "loland" or
-      "kristiansen-faltinsen" (screen models of aquaculture engineering), or "femnet-catch" (FEMNET's twine
-      drag of cases with a catch, which misdirects the U twines' cross-flow drag: to reproduce FEMNET only).
+      "kristiansen-faltinsen" (screen models of aquaculture engineering), "femnet-catch" (FEMNET's twine
+      drag of cases with a catch, which misdirects the U twines' cross-flow drag: to reproduce FEMNET only),
+      "zhan" (Zhan et al.'s twine drag with the netting's solidity, its own coefficients: Cd and f unused;
+      FEMNET's drag_forces_type 2) or "none" (the current does not load the netting: what FEMNET's
+      drag_forces_type 3 and 4 do; :mod:`jaxnet.terms.drag`).
     opening_stiffness: mesh opening stiffness H (N·m/rad, eqs 4.211-4.219); rest_angle: the half opening
       angle α0 (rad) at which the mesh is unstressed in flexion (π/4: square meshes).
     knot_size: knot size (m, eq. 4.278: meshes cannot close below the angle it sets; 0 for none);

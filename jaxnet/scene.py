@@ -92,7 +92,9 @@ class Netting(eqx.Module):
     drag_model: (E,) int, how the current loads the netting: 0 twine drag (Morison per twine, the book),
       1 Løland screen model, 2 Kristiansen-Faltinsen screen model, 3 FEMNET's twine drag of cases with a
       catch (``trainee_fil``: the U twines' cross-flow drag turned along the V twines' cross-flow
-      direction; :func:`jaxnet.terms.drag.netting_drag_femnet_catch`), for reproducing FEMNET only.
+      direction; :func:`jaxnet.terms.drag.netting_drag_femnet_catch`), for reproducing FEMNET only, 4 Zhan's
+      twine drag with the solidity (:func:`jaxnet.terms.drag.netting_drag_zhan`), 5 none (FEMNET's drag laws
+      3 and 4, which its code leaves out).
     opening_stiffness: (E,) mesh opening stiffness H (N·m/rad, eqs 4.211-4.219); rest_angle: (E,) rest
       half opening angle α0 (rad).
     knot_size: (E,) knot size (m, eq. 4.278); knot_stiffness: (E,) contact stiffness (N·m/rad, default 4.280).

@@ -310,6 +310,64 @@ def netting_drag_femnet_catch_stiffness(x, uv, l0, diameter, cd_normal, cd_tange
     return (stiffness, _per_vertex(total)) if with_force else stiffness
 
 
+def _solidity_gradients(U, V, l0, diameter):
+    """Sn of :func:`jaxnet.geometry.diamond_solidity` and its gradients ∂Sn/∂U, ∂Sn/∂V (3,) in 1/m: with
+    n = U ^ V and M = 2 |n| the mesh's area, Sn = T/M (T = 4 D l0 - D²) where 0 < T < M, so
+    ∂Sn/∂U = -(Sn/M) 2 (V ^ n)/|n| and ∂Sn/∂V = -(Sn/M) 2 (n ^ U)/|n|; 0 where the clip holds Sn at 0 or 1."""
+    solidity = geometry.diamond_solidity(U, V, l0, diameter)
+    n = jnp.cross(U, V)
+    mesh = geometry.mesh_surface(U, V)
+    twines = 4.0 * diameter * l0 - diameter**2
+    free = (mesh > twines) & (twines > 0.0)
+    # -(Sn/M) (2/|n|) = -4 Sn/M² (M = 2|n|), 0 where Sn is clipped
+    scale = jnp.where(free, -4.0 * solidity * _inverse(mesh) ** 2, 0.0)
+    return solidity, scale * jnp.cross(V, n), scale * jnp.cross(n, U)
+
+
+def _zhan_jacobians(U, V, count, l0, diameter, cd_normal, cd_tangential, water_velocity, water_density, normal,
+                    tangential):
+    """(∂F/∂U, ∂F/∂V, ∂F/∂c, F) of a triangle's whole drag by Zhan's law
+    (:func:`jaxnet.terms.drag.netting_drag_zhan`, three thirds), with the water velocity c (..., 3) relative to the netting (``cd_normal``, ``cd_tangential``
+    unused, as there). Per twine F = K[a_n |c_n| c_n + a_t |c_t| c_t] + K[c1 c_n + c4 c_t] (K = ½ ρ D l0,
+    a_n = 1 + c2 Sn + c3 Sn², a_t = 1 + c5 Sn): the first bracket is the Morison form with Cn = a_n, Ct = a_t
+    (:func:`_both_families`), the second linear in the split (∂/∂W = K (c4 - c1) ∂c_t/∂W, ∂/∂c = K [c1 I +
+    (c4 - c1) ∂c_t/∂c]); Sn depends on U and V (:func:`_solidity_gradients`), adding ∂F/∂Sn ∂Sn/∂W^T with
+    ∂F/∂Sn = K Σ_twines [(c2 + 2 c3 Sn) |c_n| c_n + c5 |c_t| c_t]. ``normal`` = (c1, c2, c3), ``tangential`` =
+    (c4, c5): the law's coefficients (:data:`jaxnet.terms.drag.ZHAN_NORMAL`, ``ZHAN_TANGENTIAL``), given by the
+    caller as this module does not import the terms."""
+    c1, c2, c3 = normal
+    c4, c5 = tangential
+    solidity, ds_du, ds_dv = _solidity_gradients(U, V, l0, diameter)
+    (fu, ju_axis, ju_c), (fv, jv_axis, jv_c) = _both_families(
+        U, V, l0, diameter, 1.0 + c2 * solidity + c3 * solidity**2, 1.0 + c5 * solidity, water_velocity, water_density)
+    k = 0.5 * water_density * diameter * l0
+    c = water_velocity
+    force, j_c, j_axes, d_solidity = fu + fv, ju_c + jv_c, [ju_axis, jv_axis], 0.0
+    for i, axis in enumerate((U, V)):
+        c_t, c_n, dct_daxis, dct_dc = _split(axis, c)
+        force = force + k * (c1 * c_n + c4 * c_t)
+        j_axes[i] = j_axes[i] + (k * (c4 - c1)) * dct_daxis
+        j_c = j_c + k * (c1 * _identity() + (c4 - c1) * dct_dc)
+        d_solidity = d_solidity + k * ((c2 + 2.0 * c3 * solidity) * geometry.safe_norm(c_n)[..., None] * c_n
+                                       + c5 * geometry.safe_norm(c_t)[..., None] * c_t)
+    j_u = count * (j_axes[0] + _outer(d_solidity, ds_du))
+    j_v = count * (j_axes[1] + _outer(d_solidity, ds_dv))
+    return j_u, j_v, count * j_c, count * force
+
+
+def netting_drag_zhan_stiffness(x, uv, l0, diameter, cd_normal, cd_tangential, water_velocity, water_density,
+                                velocity_slope=None, up=None, with_force=False, *, normal, tangential):
+    """(9, 9) stiffness K = -∂F/∂x (N/m) of Zhan's netting drag, :func:`jaxnet.terms.drag.netting_drag_zhan`
+    (:func:`_zhan_jacobians`). Args as :func:`netting_drag_stiffness` (the forces of ``with_force`` are
+    :func:`jaxnet.terms.drag.netting_drag_zhan`'s), and the law's coefficients ``normal`` (c1 m/s, c2, c3) and
+    ``tangential`` (c4 m/s, c5)."""
+    coefficients, U, V, count = _twine_geometry(x, uv)
+    j_u, j_v, j_c, total = _zhan_jacobians(U, V, count, l0, diameter, cd_normal, cd_tangential, water_velocity,
+                                           water_density, normal, tangential)
+    stiffness = _spread_stiffness(coefficients, (j_u, j_v), j_c, _vertical(velocity_slope, up), 3)
+    return (stiffness, _per_vertex(total)) if with_force else stiffness
+
+
 def bar_drag_stiffness(x, rest_length, diameter, cd_normal, cd_tangential, water_velocity, water_density,
                        velocity_slope=None, up=None):
     """(6, 6) drag stiffness K = -∂F/∂x (N/m) of one cable bar, :func:`jaxnet.terms.drag.bar_drag` (half the
@@ -406,6 +464,18 @@ def moving_netting_drag_femnet_catch_stiffness(x, uv, l0, diameter, cd_normal, c
     computed with c_i. Args as :func:`moving_netting_drag_stiffness`."""
     return _moving_netting(_femnet_catch_jacobians, x, uv, l0, diameter, cd_normal, cd_tangential,
                            relative_velocity, water_gradient, time_step, water_density)
+
+
+def moving_netting_drag_zhan_stiffness(x, uv, l0, diameter, cd_normal, cd_tangential, relative_velocity,
+                                       water_gradient, time_step, water_density, *, normal, tangential):
+    """(9, 9) stiffness K = -∂F/∂x (N/m) of Zhan's netting drag (:func:`jaxnet.terms.drag.netting_drag_zhan`) on
+    a moving net: vertex i takes a third of it computed with c_i. Args as :func:`moving_netting_drag_stiffness`,
+    and the law's coefficients as :func:`netting_drag_zhan_stiffness`."""
+    def element_jacobians(*args):
+        return _zhan_jacobians(*args, normal, tangential)
+
+    return _moving_netting(element_jacobians, x, uv, l0, diameter, cd_normal, cd_tangential, relative_velocity,
+                           water_gradient, time_step, water_density)
 
 
 def moving_bar_drag_stiffness(x, rest_length, diameter, cd_normal, cd_tangential, relative_velocity, water_gradient,

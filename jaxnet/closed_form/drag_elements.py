@@ -16,8 +16,9 @@ import jax.numpy as jnp
 from jaxnet import geometry
 from jaxnet.closed_form.drag import (bar_drag_stiffness, current_slope, moving_bar_drag_stiffness,
                                      moving_netting_drag_femnet_catch_stiffness, moving_netting_drag_stiffness,
-                                     moving_node_drag_stiffness, netting_drag_femnet_catch_stiffness,
-                                     netting_drag_stiffness, node_drag_stiffness)
+                                     moving_netting_drag_zhan_stiffness, moving_node_drag_stiffness,
+                                     netting_drag_femnet_catch_stiffness, netting_drag_stiffness,
+                                     netting_drag_zhan_stiffness, node_drag_stiffness)
 from jaxnet.closed_form.pressure import clipped_shape_integrals_jacobian
 from jaxnet.terms import drag as drag_term, pressure as pressure_term
 
@@ -49,15 +50,19 @@ def _water_at_vertices(x, env, waves):
 
 #: closed forms of the netting drag models made of twine drags (their codes in
 #: :data:`jaxnet.terms.drag.NETTING_DRAG_MODELS`): at rest in a current, and moving (a time step)
-_NETTING = {0: netting_drag_stiffness, 3: netting_drag_femnet_catch_stiffness}
-_MOVING_NETTING = {0: moving_netting_drag_stiffness, 3: moving_netting_drag_femnet_catch_stiffness}
+_ZHAN = {"normal": drag_term.ZHAN_NORMAL, "tangential": drag_term.ZHAN_TANGENTIAL}
+_NETTING = {0: netting_drag_stiffness, 3: netting_drag_femnet_catch_stiffness,
+            4: lambda *args, **kwargs: netting_drag_zhan_stiffness(*args, **kwargs, **_ZHAN)}
+_MOVING_NETTING = {0: moving_netting_drag_stiffness, 3: moving_netting_drag_femnet_catch_stiffness,
+                   4: lambda *args: moving_netting_drag_zhan_stiffness(*args, **_ZHAN)}
 
 
 def netting_drag_on_element_stiffness(x, state, uv, l0, diameter, cd_normal, cd_tangential, drag_model, env, models,
-                                      shielded, moving=False, waves=False, velocity=None, time_step=None):
+                                      shielded, moving=False, waves=False, velocity=None, time_step=None,
+                                      selective=False):
     """(9, 9) stiffness (N/m) of :func:`jaxnet.terms.drag.netting_drag_on_element` (same arguments; in a time
     step also ``time_step`` Δt, s: the matrix then holds the damping -(1/Δt) ∂F/∂c), the catch front held
-    fixed. Only the twine drag models (codes 0 and 3) have one."""
+    fixed. Only the twine drag models (codes 0, 3 and 4, Zhan's) have one."""
     rho = env.water_density
     if moving:
         # vertex i takes its share of the drag at the water's velocity relative to it, c_i
@@ -77,7 +82,7 @@ def netting_drag_on_element_stiffness(x, state, uv, l0, diameter, cd_normal, cd_
             k = _NETTING[code](x, uv, l0, diameter, cd_normal, cd_tangential, c, rho, slope, env.up,
                                with_force=shielded)
             k, f = k if shielded else (k, 0.0)
-        if len(models) > 1:
+        if len(models) > 1 or selective:
             k, f = jnp.where(drag_model == code, k, 0.0), jnp.where(drag_model == code, f, 0.0)
         stiffness, force = stiffness + k, force + f
     if shielded:

@@ -97,6 +97,34 @@ otherwise; and a twine exactly normal to c is given θ = π/4 (its ``atan`` guar
 direction (V along c) FEMNET's ``rota1`` picks an arbitrary normal; here U's cross part is then dropped,
 so this force has a discontinuity on that set, as FEMNET's has.
 
+FEMNET's netting drag laws (``input drag_forces_type N`` of its ``.don``: 1 Morison, the default; 2 Zhan; 3 "drop
+pressure"; 4 Aarnes). ``chargement_don.c`` reads N into ``Structure.drag_forces_type``; the statics' main loop
+(``unix_2004/unix.c``) uses it only where there is no catch, tarp or extra catch volume (with one, ``catch_hexa``
+and ``trainee_front`` load the netting whatever N is: :func:`netting_drag_femnet_catch`), and its dynamics
+(``dyna2``'s main) alike:
+
+* 1, Morison: ``filethydro4_sta`` (``basic_bar_drag1`` per twine): :func:`netting_drag`, drag model "twines".
+* 2, Zhan: ``filethydro4_sta_zhan`` and ``calculeffort_Zhan`` (``unix_2004/calculeffort_Zhan.c``), after Zhan et
+  al. (2006, "Analytical and experimental investigation of drag on nets of fish cages", Aquacultural
+  Engineering 35), per U and per V twine, with Sn the solidity (``Solidity_diamond``: (4 D l0 - D²) / (2 |U ^ V|),
+  clipped to [0, 1], U, V the twine vectors of the current shape):
+
+      F_n = ½ ρ D l0 |c_n| (|c_n| + 0.137 + 1.002 |c_n| Sn + 2.230 |c_n| Sn²)   along c_n,
+      F_t = ½ ρ D l0 |c_t| (|c_t| - 0.211 + 0.947 |c_t| Sn)                    along c_t,
+
+  |d|/2 twines of each kind, one third per vertex (FEMNET calls the routine three times per family, each adding
+  a third of a third: the same total), the current without Cd nor f: :func:`netting_drag_zhan`, drag model
+  "zhan". Its static loop calls it at the current, the dynamic one (``calculeffort_zhan_dyna``) per vertex.
+* 3, drop pressure, and 4, Aarnes: named in ``chargement_don.c``'s and ``4c19.h``'s comments, and in the main
+  statics' loop as ``//if (Structure.drag_forces_type == 3) filethydro4_sta();`` and the same for 4: commented
+  out (the dynamics' loop calls only 1 and 2). FEMNET's current code has no such law: it gives its diamond netting *no* drag (its
+  ``.sta`` then prints "surface drag (N) 0.0", as the corpus's ``3bottom_trawl/b2.sta``). jaxnet reproduces that
+  with drag model "none" (a drop-pressure law, the pressure loss across a screen of Cd(Sn) times the dynamic
+  pressure on the netting's area, would be a screen model like :mod:`jaxnet.terms.screen`'s; there is no
+  FEMNET formula to take it from).
+
+The drag of the cables (``courantelem8``) and of the node bodies (``traineecourant2``) does not depend on N.
+
 These are forces (N), not energies: drag is not conservative. Its tangent -d force/dx (book 4.136-4.210)
 is obtained by ``jax.jacfwd`` of these functions and is not symmetric; when the current depends on depth
 the caller composes :func:`jaxnet.current.current_velocity` inside the differentiated function so that
@@ -137,16 +165,21 @@ def twine_drag(axis, length, diameter, cd_normal, cd_tangential, water_velocity,
       (normal, tangential): two (3,) forces in N on the whole cylinder.
     """
     c = water_velocity
-    sq = jnp.dot(axis, axis)
-    has_axis = sq > 0.0
-    # double where: 1/|axis|² must not be evaluated (nor differentiated) at a zero axis
-    inv_sq = jnp.where(has_axis, 1.0 / jnp.where(has_axis, sq, 1.0), 0.0)
-    c_t = (jnp.dot(c, axis) * inv_sq) * axis
+    c_t = _along(axis, c)
     c_n = c - c_t
     k = 0.5 * water_density * diameter * length
     normal = (k * cd_normal * geometry.safe_norm(c_n)) * c_n
     tangential = (k * cd_tangential * geometry.safe_norm(c_t)) * c_t
     return normal, tangential
+
+
+def _along(axis, water_velocity):
+    """The part (3,) of the water velocity along ``axis``, (c.W) W/|W|²; 0 for a zero axis."""
+    sq = jnp.dot(axis, axis)
+    has_axis = sq > 0.0
+    # double where: 1/|axis|² must not be evaluated (nor differentiated) at a zero axis
+    inv_sq = jnp.where(has_axis, 1.0 / jnp.where(has_axis, sq, 1.0), 0.0)
+    return (jnp.dot(water_velocity, axis) * inv_sq) * axis
 
 
 def netting_drag_parts(x, uv, l0, diameter, cd_normal, cd_tangential, water_velocity, water_density):
@@ -222,6 +255,53 @@ def netting_drag_femnet_catch(x, uv, l0, diameter, cd_normal, cd_tangential, wat
     across_u = jnp.dot(force_u, unit_across(U, c, inv_c2))
     total = force_v + in_line_u + across_u * unit_across(V, c, inv_c2)
     return jnp.broadcast_to(total / 3.0, (3, 3))
+
+
+#: Zhan et al. (2006)'s drag of a twine in netting, as FEMNET's ``calculeffort_Zhan.c`` has it: the normal
+#: coefficients (c1 in m/s, c2, c3) and the tangential ones (c4 in m/s, c5) of :func:`zhan_twine_drag`
+ZHAN_NORMAL = (0.137, 1.002, 2.230)
+ZHAN_TANGENTIAL = (-0.211, 0.947)
+
+
+def zhan_twine_drag(axis, length, diameter, solidity, water_velocity, water_density):
+    """Zhan's drag on one twine of netting of solidity Sn (Zhan et al. 2006, Aquacultural Engineering 35: drag on
+    nets of fish cages; FEMNET's ``calculeffort_Zhan``), split in normal and tangential parts:
+
+        F_n = ½ ρ D L [ (1 + c2 Sn + c3 Sn²) |c_n| + c1 ] c_n,    F_t = ½ ρ D L [ (1 + c5 Sn) |c_t| + c4 ] c_t,
+
+    c_n and c_t the water velocity's parts across and along ``axis`` (as :func:`twine_drag`), (c1, c2, c3) =
+    :data:`ZHAN_NORMAL`, (c4, c5) = :data:`ZHAN_TANGENTIAL`. The constants c1 and c4 are velocities (m/s): the
+    law is a fit in SI units, and ½ ρ D L |c| (|c| + c1) is a Cd of 1 + c1/|c|. FEMNET writes the magnitudes
+    |c_n| (|c_n| + c1 + ...) along ĉ_n, which is this; with c4 < 0 the tangential part points *upstream* for
+    |c_t| < -c4 / (1 + c5 Sn) (about 0.2 m/s), as in FEMNET. Every part is |v| v or linear in v: the force is
+    continuously differentiable in the velocity and the axis (a zero axis: all the velocity normal).
+
+    Args: axis (3,) m (only its direction), length L m (the unstretched twine), diameter D m, solidity Sn
+      (:func:`jaxnet.geometry.diamond_solidity`), water_velocity (3,) m/s relative to the twine, water_density ρ kg/m³.
+    Returns: (normal, tangential), two (3,) forces in N on the twine.
+    """
+    c1, c2, c3 = ZHAN_NORMAL
+    c4, c5 = ZHAN_TANGENTIAL
+    quadratic_n, quadratic_t = twine_drag(axis, length, diameter, 1.0 + c2 * solidity + c3 * solidity**2,
+                                          1.0 + c5 * solidity, water_velocity, water_density)
+    c_t = _along(axis, water_velocity)
+    k = 0.5 * water_density * diameter * length
+    return quadratic_n + (k * c1) * (water_velocity - c_t), quadratic_t + (k * c4) * c_t
+
+
+def netting_drag_zhan(x, uv, l0, diameter, cd_normal, cd_tangential, water_velocity, water_density):
+    """Per-vertex drag (3, 3) in N on one diamond-mesh triangle by Zhan's law (FEMNET's ``input drag_forces_type
+    2``, ``filethydro4_sta_zhan``): |d|/2 U twines and |d|/2 V twines, each :func:`zhan_twine_drag` with the
+    triangle's solidity (:func:`jaxnet.geometry.diamond_solidity` of its U, V), one third per vertex, as :func:`netting_drag`.
+    The law has its own coefficients: ``cd_normal`` and ``cd_tangential`` are not used (same arguments as
+    :func:`netting_drag` otherwise)."""
+    U, V, d = geometry.twine_vectors(x, uv)
+    solidity = geometry.diamond_solidity(U, V, l0, diameter)
+    total = 0.0
+    for axis in (U, V):
+        normal, tangential = zhan_twine_drag(axis, l0, diameter, solidity, water_velocity, water_density)
+        total = total + normal + tangential
+    return jnp.broadcast_to(geometry.twine_count(d) * total / 3.0, (3, 3))
 
 
 def bar_drag(x, rest_length, diameter, cd_normal, cd_tangential, water_velocity, water_density):
@@ -330,14 +410,16 @@ class NettingDragModel:
 
     name: the material's name for it (``Twine.drag_model``). scope: its name in compiled programs.
     force: ``force(x, uv, l0, diameter, cd_normal, cd_tangential, c, rho) -> (3, 3)`` vertex forces (N) of a
-      triangle in a uniform relative velocity c (m/s). twines: made of twine drags (Cd, f), so present only
-      where some Cd is not zero.
+      triangle in a uniform relative velocity c (m/s); None for netting the current does not load (nothing is
+      computed for its triangles). twines: made of twine drags (Cd, f), so present only where some Cd is not
+      zero. closed_form: :mod:`jaxnet.closed_form.drag_elements` has its stiffness.
     """
 
     name: str
     scope: str
-    force: Callable
+    force: Callable | None
     twines: bool
+    closed_form: bool = False
 
 
 def _screen_force(model):
@@ -346,13 +428,18 @@ def _screen_force(model):
 
 #: netting drag models, by code
 NETTING_DRAG_MODELS = (
-    NettingDragModel("twines", "twine_drag", netting_drag, twines=True),
+    NettingDragModel("twines", "twine_drag", netting_drag, twines=True, closed_form=True),
     NettingDragModel("loland", "loland_screen", _screen_force(screen.loland_force), twines=False),
     NettingDragModel("kristiansen-faltinsen", "kristiansen_faltinsen_screen",
                      _screen_force(screen.kristiansen_faltinsen_force), twines=False),
     # FEMNET's drag of netting ahead of a catch (trainee_front -> trainee_fil): the twine drag along the
     # current, the U twines' cross-flow part turned onto the V twines' (netting_drag_femnet_catch)
-    NettingDragModel("femnet-catch", "femnet_catch_drag", netting_drag_femnet_catch, twines=True),
+    NettingDragModel("femnet-catch", "femnet_catch_drag", netting_drag_femnet_catch, twines=True, closed_form=True),
+    # Zhan et al.'s twine drag with the netting's solidity (FEMNET's drag_forces_type 2, netting_drag_zhan)
+    NettingDragModel("zhan", "zhan_drag", netting_drag_zhan, twines=False, closed_form=True),
+    # no drag: what FEMNET's current statics give diamond netting for its drag_forces_type 3 and 4 (module
+    # docstring), to reproduce it
+    NettingDragModel("none", "no_drag", None, twines=False),
 )
 
 
@@ -360,9 +447,10 @@ NETTING_DRAG_MODELS = (
 
 
 def netting_drag_on_element(x, state, uv, l0, diameter, cd_normal, cd_tangential, drag_model, env, models,
-                            shielded, moving=False, waves=False, velocity=None):
+                            shielded, moving=False, waves=False, velocity=None, selective=False):
     """Drag (3, 3) in N on one netting triangle, by its drag model (``drag_model``: a code of
-    :data:`NETTING_DRAG_MODELS`; ``models``: the codes present in the scene, static). In statics the water's
+    :data:`NETTING_DRAG_MODELS`; ``models``: the codes present in the scene that load it, static; ``selective``:
+    some triangles have a model not in ``models``, which gives them no drag, static). In statics the water's
     velocity is the current at the centroid; in dynamics (``moving``) each vertex takes its share with the
     velocity relative to it (:func:`per_vertex`). ``shielded``: the scene has a catch, whose front is in
     ``state`` (:func:`jaxnet.catch.catch_state`)."""
@@ -376,7 +464,7 @@ def netting_drag_on_element(x, state, uv, l0, diameter, cd_normal, cd_tangential
 
         with jax.named_scope(model.scope):
             f = per_vertex(force, x, env, velocity, waves) if moving else force(water_velocity(x, env))
-        total = total + (f if len(models) == 1 else jnp.where(drag_model == code, f, 0.0))
+        total = total + (jnp.where(drag_model == code, f, 0.0) if len(models) > 1 or selective else f)
     if shielded:
         # netting behind the catch front is backed by fish: the water does not flow through it, and the
         # catch pressure replaces its drag, as in FEMNET. The part of the triangle ahead of the front keeps
@@ -437,11 +525,14 @@ def _netting_active(scene, dynamic):
     codes = np.asarray(net.drag_model)
     has_cd = (np.asarray(net.cd_normal) != 0) if net.cd_normal is not None else np.zeros(codes.shape, bool)
     present = set(codes.tolist())
-    models = tuple(sorted(code for code in present if not NETTING_DRAG_MODELS[code].twines
-                          or np.any((codes == code) & has_cd)))
+    models = tuple(sorted(code for code in present if NETTING_DRAG_MODELS[code].force is not None
+                          and (not NETTING_DRAG_MODELS[code].twines or np.any((codes == code) & has_cd))))
     if not models:
         return None
-    return {"models": models, "shielded": scene.catch is not None, **moving_options(scene, dynamic)}
+    # a triangle whose model is left out (no force, or twine drag with Cd = 0 in every triangle of it) gets none
+    selective = present != set(models)
+    return {"models": models, "shielded": scene.catch is not None, **({"selective": True} if selective else {}),
+            **moving_options(scene, dynamic)}
 
 
 def _bar_active(scene, dynamic):
@@ -469,7 +560,7 @@ NETTING_DRAG = register(Term(
     name="netting_drag", family="netting", kind=FORCE, element=netting_drag_on_element, arguments=_netting_arguments,
     active=_netting_active, group=DRAG_NETTING, moving=True, state="jaxnet.catch:catch_state",
     closed_form=ClosedForm("jaxnet.closed_form.drag_elements:netting_drag_on_element_stiffness",
-                           covers=lambda options: all(NETTING_DRAG_MODELS[c].twines for c in options["models"]))))
+                           covers=lambda options: all(NETTING_DRAG_MODELS[c].closed_form for c in options["models"]))))
 BAR_DRAG = register(Term(
     name="bar_drag", family="bars", kind=FORCE, element=bar_drag_on_element, arguments=_bar_arguments,
     active=_bar_active, group=DRAG_CABLES, moving=True,

@@ -490,6 +490,13 @@ def _link_flexion_elem2(values):
     return None
 
 
+def _drag_forces_type(values):
+    """``input drag_forces_type N``: FEMNET's netting drag law, one of its 1 to 4 (``chargement_don.c``'s comments;
+    its solver does nothing for another value, which a line asking for a law does not mean)."""
+    n = values[0]
+    return None if n in (1, 2, 3, 4) else f"'input drag_forces_type': the law must be 1, 2, 3 or 4, got {n!r}"
+
+
 def _catch_gravity(values):
     """``input catch_gravity RHO_C``: the gravity catch's density, finite and > 0 (kg/m³; FEMNET reads 0 as no
     gravity catch, which a line asking for one does not mean)."""
@@ -521,9 +528,10 @@ COMMANDS = (
     Command("input", "node_position", 1, use="ignored"),
     *(Command("input", name, tuple(range(0, 12)), use="unsupported", reason=reason) for name, reason in (
         ("catch2_volume", "extra catch volumes on listed panels: " + _UNSUPPORTED),
-        ("drag_forces_type", "FEMNET's other twine drag laws: " + _UNSUPPORTED),
         ("spheric_limit", "a spherical limit: " + _UNSUPPORTED),
         ("deck", "a deck: " + _UNSUPPORTED))),
+    # the netting's drag law: 1 Morison, 2 Zhan, 3 drop pressure, 4 Aarnes (jaxnet.terms.drag's docstring)
+    Command("input", "drag_forces_type", 1, _drag_forces_type),
     # an impermeable panel (a tarp, jaxnet.terms.tarp): PANEL, loaded by the catch's pressure instead of drag
     Command("input", "tarp", 1, _tarp_panel, per_panel=True),
     # a panel meshed on a lattice of mesh diagonals: PANEL NU NV (meshes along U, along V; Net.panel(lattice=...));

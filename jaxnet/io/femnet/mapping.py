@@ -38,12 +38,25 @@ def twine_of(p: DonPanel, case: DonFile, femnet_laws: bool) -> Twine:
     m = {k: v.value for k, v in p.material.items()}
     twine = Twine(l0=m["l0"], ea=m["ea"], diameter=m["diameter"], ea_compression=m["eac"], density=m["density"],
                   cd_normal=m["cd"], tangential_ratio=m["f"], opening_stiffness=m["opening"], knot_size=m["knot"])
-    twine = dataclasses.replace(twine, tarp_cd=_tarp_cd(case, p))
+    twine = dataclasses.replace(twine, tarp_cd=_tarp_cd(case, p), drag_model=_drag_law(case))
     if not femnet_laws:
         return twine
     return dataclasses.replace(
         twine, knot_form="femnet", knot_stiffness=float(knot.femnet_knot_stiffness(m["l0"], m["knot"], m["ea"])),
-        drag_model="femnet-catch" if _femnet_catch_drag(case) else "twines")
+        drag_model="femnet-catch" if _femnet_catch_drag(case) else twine.drag_model)
+
+
+#: FEMNET's netting drag laws (``input drag_forces_type N``) -> jaxnet's drag models (jaxnet.terms.drag's
+#: docstring): its 3 (drop pressure) and 4 (Aarnes) are calls commented out in its code, so no drag
+FEMNET_DRAG_LAWS = {1: "twines", 2: "zhan", 3: "none", 4: "none"}
+
+
+def _drag_law(case: DonFile) -> str:
+    """The drag model of the case's diamond netting, by its ``input drag_forces_type`` (1, Morison, without one).
+    A law of the case, kept with the book's laws too; with FEMNET's, a case with a catch takes its catch drag
+    instead, as FEMNET does whatever the law (:func:`twine_of`)."""
+    law = case.inputs.get("drag_forces_type")
+    return FEMNET_DRAG_LAWS[1 if law is None else int(law.value)]
 
 
 def _femnet_catch_drag(case: DonFile) -> bool:
