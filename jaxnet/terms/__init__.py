@@ -17,6 +17,8 @@ term's declaration (:mod:`jaxnet.terms.term` says what a declaration holds). The
   screen      screen models of netting drag (used by ``drag``)
   bottom      sea-bed contact and friction
   pressure    the catch's pressure behind its front (4.246-4.264)
+  gravity_catch  the weight of a catch out of the water: hydrostatic pressure below its level (FEMNET)
+  tarp        the current's pressure on an impermeable panel, in place of its twines' drag (FEMNET)
   inertia     inertia of a moving net (4.265-4.271; used by the dynamic solver)
 
 :data:`CONTENTS` is that order: the registry's, in which the terms of a family are summed (floating-point
@@ -26,4 +28,4 @@ entry: modules not listed come after, by name.
 
 #: the modules of the package in registry order (module docstring)
 CONTENTS = ("tension", "cable", "gravity", "surface", "applied", "hexagonal", "opening", "knot", "bending", "drag",
-            "screen", "bottom", "pressure", "inertia", "cable_bending")
+            "screen", "bottom", "pressure", "inertia", "cable_bending", "gravity_catch", "tarp")
