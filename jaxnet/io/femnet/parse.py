@@ -17,8 +17,8 @@ from jaxnet.io.femnet.grammar import (
     CABLE_MATERIAL, CABLES_NUMBER, CATCH, DESIGN_PLANE, DISPLAYS, HEADINGS, HEXAGONAL_PANEL_MATERIAL,
     HEXAGONAL_PANELS_NUMBER, INPUTS, LINKS_NUMBER, MAX_PANEL_NODES, NODE_TYPE, NODE_TYPES_NUMBER, NUMERICS, OCEAN,
     PANEL_CORNERS, PANEL_MATERIAL, PANELS_NUMBER, PART_NAMES, SEA_BED, SLIDING_CABLES_NUMBER, TEXT_OUTPUT_COMMENT,
-    TEXT_OUTPUT_DECIMALS, TEXT_OUTPUT_ENTRIES, TEXT_OUTPUT_HEADING, TEXT_OUTPUTS, DonCable, DonFile, DonLink, DonNodeType, DonPanel, TextOutput, read, read_all, twine_coordinates)
-from jaxnet.io.femnet.grammar import Occurrence
+    TEXT_OUTPUT_DECIMALS, TEXT_OUTPUT_ENTRIES, TEXT_OUTPUT_HEADING, TEXT_OUTPUTS, DonCable, DonFile, DonLink,
+    DonNodeType, DonPanel, Occurrence, TextOutput, read, read_all, twine_coordinates)
 from jaxnet.io.femnet.reader import MAX_COORDINATE, Reader, Value
 from jaxnet.scene import SceneError
 
