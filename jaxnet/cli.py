@@ -125,6 +125,7 @@ def _run(args):
     result = figures.summary(scene, eq)
     if "symmetry_axes" in case.info:  # a FEMNET case: its own figures, and what the reader decided
         result["femnet"] = femnet.femnet_figures(scene, eq, case.info["symmetry_axes"], case.info.get("fixity"))
+        result["femnet"]["printed"] = femnet.text_output_figures(scene, eq, case.info)
         result["femnet_case"] = case.info
     (out / "result.json").write_text(json.dumps(result, indent=2))
     vtk.write_vtu(out / "net.vtu", scene, eq.x)
@@ -136,6 +137,9 @@ def _run(args):
         print(f"  wall {eq.timing.wall_s:.2f} s (compile {eq.timing.compile_s:.2f} s)")
     print(f"  reaction at fixed nodes [{r[0]:.4g}, {r[1]:.4g}, {r[2]:.4g}] N, max twine tension "
           f"{result['max_twine_tension_N']:.4g} N, max bar tension {result['max_bar_tension_N']:.4g} N")
+    for figure in result.get("femnet", {}).get("printed", []):   # FEMNET's text outputs, as it prints them
+        if figure["value"] is not None:
+            print(f"  {figure['comment']}: {figure['value']:.6g} {figure['unit']}")
     print(f"  wrote {out / 'result.json'}, {out / 'net.vtu'}, {out / 'net.png'}")
     if failed is not None:
         print(f"jaxnet: {failed}", file=sys.stderr)

@@ -171,7 +171,10 @@ def test_unsupported_features_are_named_with_their_line(tmp_path):
 
 def test_pelagic_trawl_matches_femnet():
     """The pelagic trawl s2 (FEMNET's current code: 33247.94 6375.49 -20424.09 N on its fixings, 1410 iterations),
-    solved from its drawn shape on jaxnet's mesh: each component within 1 % of the norm of FEMNET's force."""
+    solved from its drawn shape on jaxnet's mesh: each component within 1 % of the norm of FEMNET's force. And the
+    figures FEMNET prints for it (its text outputs, in its stored .sta): the door's distance to the boat to 0.1 %,
+    the immersions of the headline, footrope and door to 0.5 m (of 108-132 m), the warp and bridle tensions to 5 %
+    (jaxnet's mesh is not FEMNET's; the bottom bridle differs most, by 3.2 %), the boat's forces as the total."""
     from jaxnet.solve.statics import solve
 
     case = femnet.read_don(_don("1pelagic_trawl/s2"))
@@ -179,6 +182,19 @@ def test_pelagic_trawl_matches_femnet():
     total = femnet.femnet_figures(case.scene, eq, case.info["symmetry_axes"], case.info["fixity"])["total_force_N"]
     target = np.array([33247.94314, 6375.49291, -20424.09454])
     assert np.abs(np.array(total) - target).max() <= 0.01 * np.linalg.norm(target), total
+    # FEMNET's global nodes: boat 48 (cable 1 end 1, at the origin), door 49
+    assert np.allclose(np.asarray(eq.x)[case.info["global_nodes"][47]], 0.0)
+    summary = femnet.read_sta_summary(_don("1pelagic_trawl/s2").with_suffix(".sta"))
+    printed = {f["comment"]: (f["value"], femnet.printed_figure(summary, f["comment"]))
+               for f in femnet.text_output_figures(case.scene, eq, case.info)}
+    assert len(printed) == 10 and printed["Boat to door distance"][1] == 200.04
+    jx, fx = printed["Boat to door distance"]
+    assert jx == pytest.approx(fx, rel=1e-3)
+    for name in ("Head line immersion (m)", "Bottom line immersion (m)", "Door immersion (m)"):
+        assert abs(printed[name][0] - printed[name][1]) < 0.5, (name, printed[name])
+    for name in ("Warp tension (N)", "Bottom bridle tension (N)", "Top bridle tension (N)"):
+        assert printed[name][0] == pytest.approx(printed[name][1], rel=0.05), (name, printed[name])
+    assert printed["Boat X force (N)"][0] == pytest.approx(total[0]) and printed["Boat Z force (N)"][0] == pytest.approx(total[2])
 
 
 def test_a_static_run_says_what_it_leaves_out(tmp_path, capsys):

@@ -8,8 +8,10 @@ Per case (each in its own process, so that its time is cold: reading, meshing, t
 from the drawn shape; then a second, warm solve of the same scene in that process): whether it reads (else the
 reader's first refusal, ``file:LINE: message``), nodes and unknowns, Newton iterations, converged and why not,
 FEMNET's "forces along X Y and Z axes" against jaxnet's (the reactions at the coordinates FEMNET's node types hold by
-"Displacement"), with the relative difference of each component to the norm of FEMNET's force, whether the node
-boxes (floats, bodies) that jaxnet takes wholly immersed are under FEMNET's surface z = 0 at the equilibrium,
+"Displacement"), with the relative difference of each component to the norm of FEMNET's force, the figures FEMNET
+prints (its text outputs: distances, forces, tensions and positions of the nodes it names) against those of its
+stored ``.sta``, whether the node boxes (floats, bodies) that jaxnet takes wholly immersed are under FEMNET's
+surface z = 0 at the equilibrium,
 and the cold and warm wall times against FEMNET's own (``ANSWERS.md``: its current code on this kind of machine,
 from the start its job file uses, which may be an earlier case's equilibrium where jaxnet starts from the drawn
 shape). FEMNET's target is its current code's answer where ``ANSWERS.md`` has one and FEMNET converged, else its stored
@@ -84,11 +86,17 @@ def one(don):
     boxes = info.get("boxes", {})
     tops = [x[int(i), 2] + h for i, h in boxes.items()]
     figures = femnet.femnet_figures(scene, eq, info["symmetry_axes"], info.get("fixity"))
+    # FEMNET's printed figures (its text outputs) against those of its stored .sta, where it has one
+    sta = pathlib.Path(don).with_suffix(".sta")
+    summary = femnet.read_sta_summary(sta) if sta.exists() else {}
+    printed = [{**f, "femnet": femnet.printed_figure(summary, f["comment"])}
+               for f in femnet.text_output_figures(scene, eq, info)]
     return {"reads": True, "nodes": scene.n_nodes, "dof": scene.n_dof, "iterations": int(eq.iterations),
             "converged": bool(eq.converged), "reason": str(getattr(eq, "reason", "")),
             "largest_residual_N": float(np.abs(np.where(np.asarray(scene.nodes.fixed), 0.0, np.asarray(eq.force))).max()),
             "total_force_N": figures["total_force_N"], "boxes": len(boxes),
             "highest_box_top_m": float(max(tops)) if tops else None,
+            "printed": printed,
             "warnings": len(info.get("warnings", [])), "dynamic_only": len(info.get("dynamic_only", [])),
             "cold_s": cold, "warm_s": warm}
 
@@ -109,6 +117,21 @@ def run_case(don, timeout):
     return json.loads(lines[-1])
 
 
+def printed_summary(printed):
+    """FEMNET's printed figures of a case against jaxnet's: "k/n within 2 %" over those both have (distances and
+    positions within 2 % of their scale, the largest |value| of their kind), and the worst one's difference."""
+    pairs = [p for p in printed if p.get("value") is not None and p.get("femnet") is not None]
+    if not pairs:
+        return ""
+    scale = {}
+    for p in pairs:
+        scale[p["kind"]] = max(scale.get(p["kind"], 0.0), abs(p["femnet"]), abs(p["value"]), 1e-9)
+    rel = [abs(p["value"] - p["femnet"]) / scale[p["kind"]] for p in pairs]
+    worst = pairs[max(range(len(rel)), key=rel.__getitem__)]
+    return (f"{sum(r <= 0.02 for r in rel)}/{len(pairs)} within 2 % (worst: {worst['comment'][:30]} "
+            f"{worst['value']:.4g} vs {worst['femnet']:.4g} {worst['unit']})")
+
+
 def ratio(femnet_s, jaxnet_s):
     """FEMNET's time over jaxnet's, as "12x" (empty when either is missing)."""
     return f"{femnet_s / jaxnet_s:.2g}x" if femnet_s and jaxnet_s else ""
@@ -116,16 +139,16 @@ def ratio(femnet_s, jaxnet_s):
 
 def table(records, answers):
     """The corpus table (markdown) and its summary lines."""
-    head = ("| case | reads | nodes | it | conv | jaxnet X Y Z (N) | FEMNET X Y Z (N) | max rel diff | boxes under z=0 "
-            "| cold s | warm s | FEMNET s (it) | cold ratio | warm ratio |")
-    rows = [head, "|" + "---|" * 14]
+    head = ("| case | reads | nodes | it | conv | jaxnet X Y Z (N) | FEMNET X Y Z (N) | max rel diff | printed figures "
+            "| boxes under z=0 | cold s | warm s | FEMNET s (it) | cold ratio | warm ratio |")
+    rows = [head, "|" + "---|" * 15]
     stats = {"cases": 0, "read": 0, "converged": 0, "within_1pct": 0, "compared": 0, "iterations": []}
     for name, r in records.items():
         a = answers.get(name, {})
         stats["cases"] += 1
         if not r.get("reads"):
             why = r.get("refusal") or r.get("error") or ""
-            rows.append(f"| {name} | no: {why.split(': ', 1)[-1][:110]} |" + " |" * 12)
+            rows.append(f"| {name} | no: {why.split(': ', 1)[-1][:110]} |" + " |" * 13)
             continue
         stats["read"] += 1
         # FEMNET's current code's answer, unless it stopped unconverged (its cap, a timeout) and the .sta has one
@@ -149,7 +172,8 @@ def table(records, answers):
         rows.append(
             f"| {name} | yes | {r.get('nodes', '')} | {r.get('iterations', '')} | "
             f"{'yes' if r.get('converged') else 'no: ' + str(r.get('reason', ''))[:40]} | {fmt(force) if force else ''} | "
-            f"{fmt(target) if target else ''} | {diff} | {under} | {r.get('cold_s', 0):.1f} | "
+            f"{fmt(target) if target else ''} | {diff} | {printed_summary(r.get('printed', []))} | {under} | "
+            f"{r.get('cold_s', 0):.1f} | "
             f"{r.get('warm_s', 0) or 0:.2f} | {'' if femnet_s is None else f'{femnet_s:.2f}'} ({a.get('iterations', '')}) | "
             f"{ratio(femnet_s, r.get('cold_s'))} | {ratio(femnet_s, r.get('warm_s'))} |")
     its = sorted(stats["iterations"])

@@ -115,7 +115,9 @@ Conventions established from the files (see ``tests/test_femnet.py``):
 * **Text outputs** (``Distances number``, ``Forces number``, ``Tensions number``, ``Positions number``): the
   figures FEMNET prints after its solve (distance between two of its global nodes, force on one along an
   axis, tension of a cable at an end, position of a node), each with its comment: read into
-  ``info["text_outputs"]``. ``output NAME ...`` commands (prints and drawings) are read and listed in
+  ``info["text_outputs"]``; :func:`text_output_figures` computes them at an equilibrium, naming nodes by
+  FEMNET's global numbers (the joined points in the order of their first corner or end, as its ``.mdg`` lists
+  them first: ``info["global_nodes"]``). ``output NAME ...`` commands (prints and drawings) are read and listed in
   ``info["outputs"]``; they change nothing.
 * **Commands of the tail.** FEMNET's dynamics-only commands (winches ``hauling_cable4``/``6`` and towing
   speeds ``speed_type_node2`` with the time tables on their next lines, ``wave_model``) are read and kept:
@@ -178,7 +180,10 @@ from jaxnet.io.femnet.mapping import GRAVITY, WATER_DENSITY, read_don
 from jaxnet.io.femnet.mdg import read_mdg
 from jaxnet.io.femnet.parse import parse_don
 from jaxnet.io.femnet.reader import MAX_COORDINATE, MAX_MESHES, Value
-from jaxnet.io.femnet.results import femnet_figures, read_sta
+from jaxnet.io.femnet.results import (femnet_figures, printed_figure, read_sta, read_sta_summary,
+                                      text_output_figures)
 
 __all__ = ["GRAVITY", "MAX_BARS", "MAX_COORDINATE", "MAX_MESHES", "MAX_PANEL_NODES", "MERGE_TOLERANCE", "WATER_DENSITY",
-           "DonFile", "Value", "femnet_figures", "parse_don", "read_don", "read_mdg", "read_sta", "twine_coordinates"]
+           "DonFile", "Value", "femnet_figures", "parse_don", "printed_figure", "read_don", "read_mdg", "read_sta",
+           "read_sta_summary", "text_output_figures",
+           "twine_coordinates"]

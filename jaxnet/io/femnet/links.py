@@ -40,6 +40,7 @@ class JoinPlan:
     n_bars: list         # per cable: number of bars when it is not sewn along a side
     joined: list         # [[point names]]: the points made one node, groups of two or more
     warnings: list = dataclasses.field(default_factory=list)   # points at one place kept apart (file:LINE: ...)
+    global_nodes: list = dataclasses.field(default_factory=list)  # FEMNET's global node k+1: its start (3,) (m)
 
 
 def _point_names(case: DonFile):
@@ -178,7 +179,13 @@ def plan_joins(case: DonFile) -> JoinPlan:
         corners[(kind, k)] = moved[[index[(kind, k, c)] for c in range(len(p.corners))]]
     cable_ends = [moved[[index[("el", k, 0)], index[("el", k, 1)]]] for k in range(len(case.cables))]
     joined = [[points[i][1] for i in ids] for ids in members.values() if len(ids) > 1]
-    return JoinPlan(corners, cable_ends, seams, along, n_bars, joined, warnings)
+    # FEMNET's global nodes (numerotation.c; the first nodes of its .mdg): the joined points numbered in the order
+    # their first point comes (panel corners, then hexagonal panels', then cable ends)
+    first = {}
+    for i, g in enumerate(group):
+        first.setdefault(g, i)
+    global_nodes = [moved[i] for i in sorted(first.values())]
+    return JoinPlan(corners, cable_ends, seams, along, n_bars, joined, warnings, global_nodes)
 
 
 def _panel_of(case: DonFile, key):

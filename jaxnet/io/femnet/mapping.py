@@ -533,8 +533,19 @@ def read_don(path, femnet_laws=True):
         scene = net.build()
     out = result(case, scene, net, planes, catch, femnet_laws, plan, label=f"FEMNET case {case.path}",
                  warnings=warnings, node_type=node_type)
+    out.info["global_nodes"] = _global_nodes(plan, np.asarray(scene.nodes.position))
     if gauge is not None:
         out.info["gauge"] = {"node": gauge[0], "axes": gauge[1]}
+    return out
+
+
+def _global_nodes(plan: JoinPlan, position):
+    """The scene's node of each of FEMNET's global nodes (the joined points, numbered as FEMNET numbers them: its
+    text outputs name nodes by these numbers): [node index] for global node 1, 2, ..."""
+    out = []
+    for point in plan.global_nodes:
+        d = np.linalg.norm(position - point, axis=1)
+        out.append(int(np.argmin(d)))
     return out
 
 

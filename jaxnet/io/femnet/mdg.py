@@ -154,5 +154,8 @@ def read_mdg(path, don=None, femnet_laws=True):
                   panel_names=tuple(f"panel {k + 1}" for k in range(len(case.panels))),
                   cable_names=tuple(f"cable {k + 1}" for k in range(len(case.cables))) + twine_names)
     validate(scene)
-    return result(case, scene, None, planes, catch_spec, femnet_laws, label=f"FEMNET case {don} on FEMNET's mesh {path}",
+    out = result(case, scene, None, planes, catch_spec, femnet_laws, label=f"FEMNET case {don} on FEMNET's mesh {path}",
                   node_type=node_type)
+    # FEMNET's global nodes are the first nodes of its .mdg, in order (its text outputs name nodes by them)
+    out.info["global_nodes"] = list(range(scene.n_nodes))
+    return out

@@ -116,7 +116,7 @@ def _parse_text_outputs(r):
                 values[key] = r.integer(f"{what}: {name}", 0).value
             r.label(TEXT_OUTPUT_DECIMALS, f"{what}: decimal nb")
             decimals = r.integer(f"{what}: decimal nb", 0)
-            out.append(TextOutput(f.key, values, comment.strip().strip("#").strip(), decimals.value, count.line))
+            out.append(TextOutput(f.key, values, " ".join(comment.strip("#").split()), decimals.value, count.line))
     return out
 
 

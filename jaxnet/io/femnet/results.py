@@ -64,3 +64,70 @@ def read_sta(path, n_nodes, n_bars, n_triangles):
         else:
             summary["front"] = [float(w) for w in ln.split()]
     return pos, strain, vec, summary
+
+
+#: the unit of each kind of FEMNET text output
+TEXT_OUTPUT_UNITS = {"distances": "m", "forces": "N", "tensions": "N", "sliding_tensions": "N", "positions": "m"}
+
+
+def text_output_figures(scene, eq, info):
+    """FEMNET's text outputs of a case (its ``Distances``, ``Forces``, ``Tensions``, ``Positions`` lists: the
+    figures it prints after its solve, with their comments), computed by jaxnet at the equilibrium ``eq``:
+    [{"kind", "comment", "value", "unit"}] in the file's order, ``value`` None where jaxnet cannot compute it
+    (a sliding cable). FEMNET names nodes by its global numbers (the joined points: ``info["global_nodes"]``):
+
+    * distance between global nodes a and b (m);
+    * force along an axis (1-3) on a global node (N): the out-of-balance force there, which at a held
+      coordinate is what the net exerts on its fixing (FEMNET's sum of the forces on the node);
+    * tension of cable k at its end at global node a (N): that of the cable's bar at that node;
+    * position of a global node along an axis (m).
+    """
+    from jaxnet import figures
+
+    x = np.asarray(eq.x)
+    force = np.asarray(eq.force)
+    nodes = info.get("global_nodes", [])
+    tensions = figures.bar_tensions(scene, x) if scene.bars is not None else np.zeros(0)
+    out = []
+    for t in info.get("text_outputs", []):
+        kind, v = t["kind"], t["values"]
+
+        def node(k):
+            return nodes[k - 1] if 1 <= k <= len(nodes) else None
+
+        value = None
+        if kind == "distances" and node(v["node_1"]) is not None and node(v["node_2"]) is not None:
+            value = float(np.linalg.norm(x[node(v["node_1"])] - x[node(v["node_2"])]))
+        elif kind in ("forces", "positions") and node(v["node"]) is not None and 1 <= v["axis"] <= 3:
+            value = float((force if kind == "forces" else x)[node(v["node"]), v["axis"] - 1])
+        elif kind == "tensions" and node(v["node"]) is not None and scene.bars is not None:
+            ends, cable = np.asarray(scene.bars.ends), np.asarray(scene.bars.cable)
+            at = np.flatnonzero((cable == v["cable"] - 1) & np.any(ends == node(v["node"]), axis=1))
+            value = float(tensions[at[0]]) if at.size else None
+        out.append({"kind": kind, "comment": t["comment"], "value": value, "unit": TEXT_OUTPUT_UNITS[kind]})
+    return out
+
+
+def read_sta_summary(path):
+    """The labelled lines of FEMNET's ``.sta`` (its summary and the figures of its text outputs, labelled by their
+    comments), without its mesh's sizes: {label (blanks collapsed): [numbers]}."""
+    summary = {}
+    for ln in pathlib.Path(path).read_text(errors="replace").split("\n"):
+        if ":" not in ln:
+            continue
+        key, value = ln.rsplit(":", 1)
+        try:
+            summary[" ".join(key.split())] = [float(w) for w in value.split()]
+        except ValueError:
+            continue
+    return summary
+
+
+def printed_figure(summary, comment):
+    """The figure FEMNET printed in its ``.sta`` for the text output whose comment is ``comment`` (``summary``:
+    :func:`read_sta_summary`'s labelled lines, whose labels are the comments), or None when it has none."""
+    key = " ".join(comment.split())
+    for label, values in summary.items():
+        if " ".join(label.split()) == key and values:
+            return values[0]
+    return None
