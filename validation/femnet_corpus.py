@@ -230,7 +230,7 @@ def all_cases(corpus):
 def run(report, quick: bool) -> None:
     """The report section (``python -m validation``): the whole corpus (quick: one case per family, :data:`QUICK`),
     its table and summary."""
-    report.text(__doc__.split("\n\n", 2)[1].replace("\n", " ") + "\n")
+    report.text(" ".join(__doc__.split("\n\n")[2].split()) + "\n")
     cases = list(QUICK) if quick else all_cases(CORPUS)
     records = run_cases(cases, CORPUS, report.results / "femnet_corpus.json", timeout=600.0,
                         echo=lambda line: print(line, flush=True))
