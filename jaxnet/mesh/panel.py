@@ -280,6 +280,14 @@ def _edge_keys(a, b, n):
     return lo.astype(np.int64) * n + hi
 
 
+def _is_convex(uv, area, scale):
+    """Whether the polygon ``uv`` (C, 2) of signed ``area`` turns the same way at every corner, to a tolerance
+    relative to its size ``scale`` (collinear corners count as convex)."""
+    e = np.roll(uv, -1, axis=0) - uv
+    turn = e[:, 0] * np.roll(e[:, 1], -1) - e[:, 1] * np.roll(e[:, 0], -1)
+    return bool(np.all(turn * np.sign(area) >= -REL_EPS * scale * scale))
+
+
 def mesh_panel(corners_uv, corners_xyz, step, l0, divisions=None, name="panel", lattice=None) -> PanelMesh:
     """Mesh a netting panel into triangles in twine-coordinate space.
 
@@ -338,9 +346,7 @@ def mesh_panel(corners_uv, corners_xyz, step, l0, divisions=None, name="panel", 
         raise panel_error(name, f"step={step} m with l0={l0} m gives h={h:g} twines and about "
                          f"{estimate:.3g} nodes (limit {MAX_NODES}); use a larger step")
 
-    e = np.roll(uv_c, -1, axis=0) - uv_c
-    turn = e[:, 0] * np.roll(e[:, 1], -1) - e[:, 1] * np.roll(e[:, 0], -1)
-    convex = bool(np.all(turn * np.sign(area) >= -REL_EPS * scale * scale))
+    convex = _is_convex(uv_c, area, scale)
 
     w_b, sides, segs = _boundary(uv_c, div)
     b_pts = w_b @ uv_c
@@ -408,9 +414,7 @@ def _mesh_on_lattice(corners_uv, corners_xyz, lattice, divisions, name) -> Panel
         raise panel_error(name, f"lattice of {nu:g} x {nv:g} meshes gives about {estimate:.3g} nodes (limit "
                           f"{MAX_NODES}); use a coarser lattice")
 
-    e = np.roll(s_c, -1, axis=0) - s_c
-    turn = e[:, 0] * np.roll(e[:, 1], -1) - e[:, 1] * np.roll(e[:, 0], -1)
-    convex = bool(np.all(turn * np.sign(area) >= -REL_EPS * scale * scale))
+    convex = _is_convex(s_c, area, scale)
 
     w_b, sides, segs = _boundary(s_c, div)
     b_pts = w_b @ s_c
