@@ -24,6 +24,14 @@ from jaxnet.terms.drag import NETTING_DRAG_MODELS
 DRAG_MODELS = {model.name: code for code, model in enumerate(NETTING_DRAG_MODELS)}
 #: knot contact law (``Twine.knot_form``) -> code in ``Netting.knot_form``
 KNOT_FORMS = {form: code for code, form in enumerate(knot.FORMS)}
+#: Young's modulus of lead (Pa): handbooks give 14-17 GPa for cast lead; the value of sinker bars here
+LEAD_YOUNG_MODULUS = 16e9
+
+
+def rod_bending_stiffness(diameter, young_modulus=LEAD_YOUNG_MODULUS):
+    """Flexural stiffness EI (N·m²) of a solid round rod of ``diameter`` (m): E pi d⁴ / 64, E in Pa (lead's by
+    default): the ``bending_stiffness`` of a :class:`Rope` that is a bar (a 10 mm lead rod: 7.85 N·m²)."""
+    return float(young_modulus) * np.pi * float(diameter) ** 4 / 64.0
 
 
 @dataclasses.dataclass(frozen=True)

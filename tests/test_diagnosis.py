@@ -2,21 +2,22 @@
 
 A chain of two cable bars between two held ends, drawn shorter than the bars: both are in compression by an
 exact strain. With a compression stiffness, the free joint between them makes a strut that buckles; a rope
-without one (ea_compression=0) goes slack and is no strut; a stretched chain, or a joint held on every axis,
-is none either.
+without one (ea_compression=0) goes slack and is no strut; a stretched chain, a joint held on every axis, or a
+joint that bends with a stiffness (a bar, Rope(bending_stiffness=EI)) is none either.
 """
 
 import numpy as np
 import pytest
 
 import jaxnet as jn
-from jaxnet.scene import Bars, Environment, Nodes, Scene
+from jaxnet.scene import Bars, CableJoints, Environment, Nodes, Scene
 from jaxnet.solve import diagnosis
 
 
-def chain(span=1.9, ea_compression=1e4, joint_fixed=False, load=0.0):
+def chain(span=1.9, ea_compression=1e4, joint_fixed=False, load=0.0, bending=None):
     """Two bars of rest length 1 m from (0, 0, 0) to (span, 0, 0), the joint drawn at the middle; ``load``
-    (N) pushes the joint sideways (along y)."""
+    (N) pushes the joint sideways (along y); ``bending``: the joint's flexural stiffness EI (N·m²), None for a
+    hinge."""
     pos = np.array([[0.0, 0.0, 0.0], [span / 2, 0.0, 0.0], [span, 0.0, 0.0]])
     fixed = np.array([[True] * 3, [joint_fixed] * 3, [True] * 3])
     force = np.zeros((3, 3))
@@ -25,7 +26,11 @@ def chain(span=1.9, ea_compression=1e4, joint_fixed=False, load=0.0):
     bars = Bars(ends=np.array([[0, 1], [1, 2]]), rest_length=np.ones(2), ea_traction=np.full(2, 1e4),
                 ea_compression=np.full(2, ea_compression), diameter=np.full(2, 1e-3), density=np.full(2, 1e-9),
                 cable=np.zeros(2, dtype=int))
-    return Scene(nodes=nodes, bars=bars, environment=Environment(gravity=0.0), cable_names=("strut",))
+    joints = None if bending is None else CableJoints(
+        vertices=np.array([[0, 1, 2]]), rest_length=np.ones((1, 2)), stiffness=np.array([bending]),
+        rest_angle=np.zeros(1), cable=np.zeros((1, 2), dtype=int))
+    return Scene(nodes=nodes, bars=bars, environment=Environment(gravity=0.0), cable_names=("strut",),
+                 cable_joints=joints)
 
 
 def test_a_compressed_chain_with_compression_stiffness_is_a_strut():
@@ -35,8 +40,9 @@ def test_a_compressed_chain_with_compression_stiffness_is_a_strut():
     assert strain == pytest.approx(0.05, rel=1e-12)  # each bar 0.95 m for 1 m at rest
 
 
-@pytest.mark.parametrize("options, span", [({"ea_compression": 0.0}, 1.9), ({}, 2.1), ({"joint_fixed": True}, 1.9)],
-                         ids=["slack rope", "stretched", "joint held"])
+@pytest.mark.parametrize("options, span", [({"ea_compression": 0.0}, 1.9), ({}, 2.1), ({"joint_fixed": True}, 1.9),
+                                           ({"bending": 10.0}, 1.9)],
+                         ids=["slack rope", "stretched", "joint held", "joint bends"])
 def test_no_strut(options, span):
     scene = chain(span=span, **options)
     assert diagnosis.compressed_struts(scene, scene.nodes.position) == []
@@ -50,7 +56,13 @@ def test_a_failed_solve_names_the_strut_and_what_to_try():
         jn.solve_static(scene, max_iter=1)
     assert diagnosis.compressed_struts(scene, failure.value.equilibrium.x)
     assert "cable 'strut' has 2 bars in compression" in str(failure.value)
-    assert "ea_compression=0" in str(failure.value)
+    assert "ea_compression=0" in str(failure.value) and "bending_stiffness" in str(failure.value)
+
+
+def test_a_jointless_strut_is_named_but_a_bending_joint_of_zero_stiffness_is_still_a_hinge():
+    scene = chain(span=1.9, bending=0.0)
+    (name, count, _, joint), = diagnosis.compressed_struts(scene, scene.nodes.position)
+    assert (name, count, joint) == ("strut", 2, 1)
 
 
 def test_a_failed_solve_without_struts_claims_none():

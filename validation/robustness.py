@@ -17,9 +17,15 @@ its test size; ``full`` everything):
 
 - ``readme``: the README's panel (40 x 40 meshes of l0 = 0.025 m, EA 2000 N, twine diameter 1.5 mm, drawn
   in the vertical x-z plane, a headline along its top, held at its two top corners), with its lead sinker
-  bar (10 mm, 0.89 kg/m) or without it (the bottom border free).
-- ``hanging``: :func:`jaxnet.scenes.hanging_panel` (the same curtain, its sinker bar of 1 kg/m), with the
-  sinker or with the same bottom rope weightless (``sinker_kg_per_m=0``: the rope keeps the bottom's width).
+  bar (a 10 mm lead rod, 0.89 kg/m, EI 7.9 N·m²) or without it (the bottom border free).
+- ``hanging``: :func:`jaxnet.scenes.hanging_panel` (the same curtain, its sinker bar of 1 kg/m, a lead rod
+  with its bending stiffness), with the sinker or with the same bar weightless (``sinker_kg_per_m=0``, the
+  1 kg/m rod's bending stiffness: the bar keeps the bottom's width).
+
+  The sinker bars bend with the stiffness of a lead rod (:func:`jaxnet.materials.rod_bending_stiffness`).
+  Before, they were chains of hinged struts: the netting, which gathers, pushed their ends together and they
+  folded into a zigzag (:mod:`jaxnet.solve.diagnosis`), a net with no stable equilibrium; the baseline
+  records (``robustness_before.json``) and the set's records before this change hold those runs.
 - ``framed``: :func:`jaxnet.scenes.framed_panel` (40 x 40 meshes, horizontal, held along its border), with
   its 5 kg central sinker or without it (its own weight only).
 
@@ -179,7 +185,7 @@ def readme_panel(nodes, speed, angle, sinker):
     net.cable("headline", along=wall.side(2), rope=Rope(ea=5e4, diameter=8e-3))
     if sinker:
         net.cable("sinker bar", along=wall.side(0),
-                  rope=Rope(ea=1e5, diameter=0.01, density=11340.0, ea_compression=1e5))
+                  rope=Rope(ea=1e5, diameter=0.01, density=11340.0, ea_compression=1e5, bending_stiffness=7.9))
     net.fix(wall.corner(2))
     net.fix(wall.corner(3))
     return net.build()
@@ -187,11 +193,15 @@ def readme_panel(nodes, speed, angle, sinker):
 
 def hanging(nodes, speed, angle, sinker):
     """:func:`jaxnet.scenes.hanging_panel` of about ``nodes`` nodes in a current; its sinker bar of 1 kg/m,
-    or weightless (0 kg/m) when ``sinker`` is false. Rebuilt from the case's ``net``, its environment set."""
+    or weightless (0 kg/m) when ``sinker`` is false, bending as the 1 kg/m lead rod in both. Rebuilt from the
+    case's ``net``, its environment set."""
+    from jaxnet.materials import rod_bending_stiffness
     from jaxnet.scenes import hanging_panel
 
+    rod = math.sqrt(4.0 * 1.0 / (math.pi * 11340.0))  # the diameter (m) of a lead rod of 1 kg/m
     net = hanging_panel(meshes=PANEL_MESHES, l0=PANEL_L0, step=panel_step(nodes), twine=physical_twine(),
-                        sinker_kg_per_m=1.0 if sinker else 0.0).net
+                        sinker_kg_per_m=1.0 if sinker else 0.0,
+                        sinker_bending_stiffness=rod_bending_stiffness(rod)).net
     net.environment = environment(speed, vertical_panel_direction(angle))
     return net.build()
 

@@ -12,7 +12,10 @@ U = u + v, V = v - u, book eqs 4.12-4.13), drawn with square meshes (half openin
 vertical x-z plane. The headline is sewn along the top border and held at both ends; the sinker bar (a
 heavy rope) is sewn along the bottom border. Polyamide netting in sea water, no current.
 
-The sinker bar is a bar: it resists compression (EA_c = EA), so the bottom keeps its width. The default
+The sinker bar resists compression (EA_c = EA), so the bottom keeps its width; its joints are hinges unless
+it is given a bending stiffness (``sinker_bending_stiffness``, a lead rod's by
+:func:`jaxnet.materials.rod_bending_stiffness`): a chain of hinged struts pushed together buckles (folds), so
+with slack twines, whose netting gathers and pushes the bar's ends together, it needs one. The default
 twine also has a compression stiffness equal to its traction stiffness. Real twines go slack (EA_c = 0,
 FEMNET's usual setting; pass ``twine=`` to choose), and then the free sides of this curtain gather: their
 meshes close and large regions of netting go slack. That equilibrium is degenerate (the energy is flat over
@@ -30,10 +33,12 @@ from jaxnet.net import Net, Rope, Twine
 
 
 def hanging_panel(meshes: int = 40, l0: float = 0.025, step: float = 0.1, twine: Twine | None = None,
-                  sinker_kg_per_m: float = 1.0) -> Case:
+                  sinker_kg_per_m: float = 1.0, sinker_bending_stiffness: float = 0.0) -> Case:
     """The hanging panel (see module docstring), as a :class:`~jaxnet.case.Case` (its ``net`` the
     description). l0: mesh side (m); step: meshing step (m); sinker_kg_per_m: mass of the sinker bar per metre
-    (kg/m, lead)."""
+    (kg/m, lead); sinker_bending_stiffness: its flexural stiffness EI (N·m²): 0, a chain of hinges, which
+    buckles if the netting pushes its ends together (slack twines that gather: :mod:`jaxnet.solve.diagnosis`);
+    :func:`jaxnet.materials.rod_bending_stiffness` of its diameter for a lead rod."""
     twine = twine or Twine(l0=l0, ea=2000.0, diameter=1.5e-3, density=1140.0, ea_compression=2000.0)
     width = meshes * l0 * np.sqrt(2.0)  # a square mesh of side l0 is l0*sqrt(2) across
     n = meshes
@@ -49,7 +54,8 @@ def hanging_panel(meshes: int = 40, l0: float = 0.025, step: float = 0.1, twine:
     # lead rope: diameter from the mass per metre (kg/m = density * pi D²/4)
     lead = 11340.0
     diameter = float(np.sqrt(4.0 * sinker_kg_per_m / (np.pi * lead)))
-    net.cable("sinker bar", along=panel.side(0), rope=Rope(ea=1e5, diameter=diameter, density=lead, ea_compression=1e5))
+    net.cable("sinker bar", along=panel.side(0), rope=Rope(ea=1e5, diameter=diameter, density=lead, ea_compression=1e5,
+                                                           bending_stiffness=sinker_bending_stiffness))
     net.fix(panel.corner(2))
     net.fix(panel.corner(3))
     return from_net(net, label=f"square panel of {meshes} x {meshes} meshes hanging from a top rope with a sinker "

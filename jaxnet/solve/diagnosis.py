@@ -5,16 +5,18 @@ node and where it is. Some nets have no stable equilibrium for any solver to fin
 solve stops in often shows why. :func:`hints` reads it and returns sentences that say what was found and
 what to try; the static solve appends them to its error.
 
-Struts. jaxnet's cable bars carry no bending moment: the joints of a cable are hinges. A cable whose bars
-have a compression stiffness (``Rope(ea_compression=...)``) and are pushed into compression is a chain of
-hinged struts: unless something else holds its joints, it buckles (a compressed straight chain is a
+Struts. The joints of a cable are hinges unless its rope has a bending stiffness
+(``Rope(bending_stiffness=EI)``, :mod:`jaxnet.terms.cable_bending`). A cable whose bars have a compression
+stiffness (``Rope(ea_compression=...)``) and are pushed into compression, and whose joints are hinges, is a
+chain of hinged struts: unless something else holds its joints, it buckles (a compressed straight chain is a
 saddle of the energy, and the bent one folds further at no cost), and the net around it has no stable
-equilibrium, or only a crumpled one. This is met with sinker bars along the free bottom of a curtain: the
-netting above gathers (its meshes close under the weight) and pushes the bar's ends together. A real rope
-goes slack in compression (``ea_compression=0``); a rigid bar needs a bending stiffness that cable bars do
-not model. In ``validation/robustness.py`` the curtains with slack-prone twines (the README's, the built-in
-hanging panel) stop on their sinker bar this way; given a slack sinker rope instead, more of them converge,
-not all: a strut is one cause of failure, the one this module recognises.
+equilibrium, or only a crumpled one: its bars folded into a zigzag. This is met with sinker bars along the
+free bottom of a curtain: the netting above gathers (its meshes close under the weight) and pushes the bar's
+ends together. A real rope goes slack in compression (``ea_compression=0``); a rigid bar resists with its
+bending stiffness. In ``validation/robustness.py``, the curtains with slack-prone twines (the README's, the
+built-in hanging panel) whose sinker bar was a hinged strut stopped on it this way in most currents; a lead
+bar with its bending stiffness converges in nearly all (the set's records: a strut is one cause of failure,
+the one this module recognises).
 
 Units: m, N.
 """
@@ -30,8 +32,8 @@ COMPRESSED_STRAIN = 1e-9
 
 def compressed_struts(scene, x):
     """The cables whose bars are pushed into compression with a compression stiffness, at positions x (N, 3)
-    (m), and whose compressed bars meet at a free joint (a node of exactly two bars that is not fixed on every
-    axis): hinged struts that buckle. Returns ``[(cable name, bars in compression, largest compressive strain,
+    (m), and whose compressed bars meet at a free hinge (a node of exactly two bars, not fixed on every axis,
+    where no cable joint with a bending stiffness resists their turn): hinged struts that buckle. Returns ``[(cable name, bars in compression, largest compressive strain,
     one such joint)]``, the cable with the most compressed bars first; [] when there are none."""
     bars = scene.bars
     if bars is None:
@@ -45,15 +47,20 @@ def compressed_struts(scene, x):
         return []
     degree = np.bincount(ends.ravel(), minlength=scene.n_nodes)
     held = np.asarray(scene.nodes.fixed).all(axis=1)
+    joints = scene.cable_joints
+    if joints is not None:  # a joint that bends with a stiffness is no hinge
+        stiff = np.asarray(joints.vertices)[np.asarray(joints.stiffness, dtype=float) > 0.0, 1]
+        held = held.copy()
+        held[stiff] = True
     cable = np.asarray(bars.cable)
     found = []
     for c in np.unique(cable[pushed]):
         mine = pushed & (cable == c)
-        joints = [n for n in np.unique(ends[mine]) if degree[n] == 2 and not held[n]
+        hinges = [n for n in np.unique(ends[mine]) if degree[n] == 2 and not held[n]
                   and np.count_nonzero(mine & ((ends[:, 0] == n) | (ends[:, 1] == n))) == 2]
-        if joints:
+        if hinges:
             name = scene.cable_names[c] if c < len(scene.cable_names) else f"cable {int(c)}"
-            found.append((name, int(mine.sum()), float(-strain[mine].min()), int(joints[0])))
+            found.append((name, int(mine.sum()), float(-strain[mine].min()), int(hinges[0])))
     return sorted(found, key=lambda f: -f[1])
 
 
@@ -67,7 +74,8 @@ def hints(scene, eq):
         others = "" if len(struts) == 1 else f" (and {len(struts) - 1} other cable(s))"
         out.append(
             f"cable {name!r}{others} has {count} bars in compression (strain down to {-strain:.3g}) that meet at "
-            f"free joints such as node {joint}: cable bars have no bending stiffness, so a compressed chain of "
-            f"them buckles and the net may have no stable equilibrium; a rope goes slack in compression: give it "
-            f"ea_compression=0 (jaxnet.solve.diagnosis explains)")
+            f"hinges such as node {joint}: its rope has no bending stiffness, so a compressed chain of its bars "
+            f"buckles and the net may have no stable equilibrium; a rope goes slack in compression "
+            f"(ea_compression=0), a rigid bar resists with its bending stiffness (Rope(bending_stiffness=EI), "
+            f"N·m²) (jaxnet.solve.diagnosis explains)")
     return out
