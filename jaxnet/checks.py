@@ -12,7 +12,7 @@ import dataclasses
 import numpy as np
 import scipy.sparse as sp
 
-from jaxnet.scene import Bars, Netting, Scene, SceneError, bottom_axis, has_free_surface
+from jaxnet.scene import FLOATING, Bars, Netting, Scene, SceneError, bottom_axis, has_free_surface
 from jaxnet.terms import drag, knot
 
 def _panel_name(scene, family, e):
@@ -201,6 +201,10 @@ def _check_environment(env):
     if np.isinf(_scalar(env.surface_level, "environment: surface_level")):
         raise SceneError(f"environment: surface_level must be a finite height (m), or NaN for no free surface, got "
                          f"{env.surface_level!r}")
+    unknown = [f for f in env.floating if f not in FLOATING]
+    if unknown or not isinstance(env.floating, tuple):
+        raise SceneError(f"environment: floating names the families that feel the free surface, a tuple among "
+                         f"{FLOATING}; got {env.floating!r}")
     if not np.isfinite(_scalar(env.time, "environment: time")):
         raise SceneError(f"environment: time must be finite (s), got {env.time!r}")
     ca = _scalar(env.added_mass_coefficient, "environment: added_mass_coefficient")
@@ -345,12 +349,9 @@ def validate(scene: Scene) -> None:
             _check_positive(values, name, culprit, strict=(name == "l0"))
         _check_positive(hexa.diameter, "twine diameter", culprit, strict=False)
         _check_positive(hexa.density, "volumic mass", culprit, strict=False)
-        # say so rather than leave hexagonal netting silently without these loads
+        # say so rather than leave hexagonal netting silently without this load
         if env.current_speed > 0:
             raise SceneError(f"{culprit(0)}: hexagonal netting has no drag model yet; it cannot be put in a current")
-        if has_free_surface(scene):
-            raise SceneError(f"{culprit(0)}: hexagonal netting has no free-surface weight yet; use a scene without a "
-                             "free surface (surface_level NaN)")
         used[tri.ravel()] = True
         edges += [tri[:, [0, 1]], tri[:, [1, 2]]]
     if scene.bars is not None:

@@ -246,6 +246,10 @@ class Environment(eqx.Module):
       increasing; linear in between, constant beyond; empty: uniform). See :mod:`jaxnet.current`.
     surface_level: height of the free surface along ``up`` (m); NaN (default) for none: everything is
       fully immersed and weight is a constant load.
+    floating: the element families whose weight and buoyancy feel the free surface (:data:`FLOATING`, the
+      default: all of them, :mod:`jaxnet.terms.surface`); the others keep their fully immersed load wherever
+      they are. FEMNET's statics float bars and node boxes by their immersed part but keep diamond netting
+      buoyant out of the water (``flotteursurf3.c``): its scenes name ("bars", "nodes").
     bottom_stiffness: stiffness (N/m) of the penetration of a node beyond its limit (``Nodes.limit``):
       FEMNET's "stiffness of the insertion in the sea bottom".
     bottom_friction: friction coefficient mu (dimensionless) of the sea bed *sliding under the net* in the
@@ -279,6 +283,11 @@ class Environment(eqx.Module):
     time: float = 0.0
     waves: object | None = None
     added_mass_coefficient: float = 1.0
+    floating: tuple = eqx.field(static=True, default=("netting", "hexagonal", "bars", "nodes"))
+
+
+#: the element families that can feel a free surface (``Environment.floating``)
+FLOATING = ("netting", "hexagonal", "bars", "nodes")
 
 
 class Scene(eqx.Module):
@@ -325,3 +334,9 @@ def bottom_axis(env):
 def has_free_surface(scene) -> bool:
     """Whether the scene has a free surface (``environment.surface_level`` not NaN)."""
     return bool(np.isfinite(scene.environment.surface_level))
+
+
+def feels_surface(scene, family) -> bool:
+    """Whether the weight and buoyancy of ``family`` ("netting", "hexagonal", "bars", "nodes") feel the scene's
+    free surface: it has one, and the family is among ``environment.floating``."""
+    return has_free_surface(scene) and family in scene.environment.floating

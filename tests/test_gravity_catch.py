@@ -213,7 +213,9 @@ def test_g1_solved_on_jaxnets_mesh_against_femnet():
     total = np.array(fig["total_force_N"])
     assert abs(total[2] / -262.26737 - 1.0) < 0.02 and np.abs(total[:2]).max() < 0.01 * 262.27, total
     forces = figures.force_breakdown(case.scene, eq.x)
-    assert forces["weight_and_buoyancy_N"][2] == pytest.approx(5.888, abs=2e-3)
+    # the twines' buoyancy (5.888 N: FEMNET's statics keep diamond netting buoyant out of the water) less the
+    # weight of the bag's bars, which lie above FEMNET's surface z = 0 and float by their immersed part, none
+    assert forces["weight_and_buoyancy_N"][2] == pytest.approx(5.876, abs=2e-3)
     excess = forces["catch_weight_N"][2] / (-GAMMA * 0.0265) - 1.0
     assert 0.005 < excess < 0.025, excess
     assert fig["catch"]["holds_the_volume"] and -fig["catch"]["front_m"] == pytest.approx(9.025, abs=0.05)

@@ -324,3 +324,79 @@ def test_thin_band_two_cycle_and_its_cures():
     for band, line_search in ((jump, False), (diameter, True)):
         history, residual = solve(band, line_search)
         assert abs(residual) < 1e-12 and abs(history[-1]) < band / 2  # equilibrium inside the band
+
+
+# ---------------------------------------------------------------- FEMNET's boxes (flotteur2.c)
+
+
+BOX = Term(lambda x, m, v, lz: surface.node_gravity_energy(x, m, v, 0.3, RHO, G, UP, LEVEL, box_height=lz), (3,))
+
+
+@pytest.mark.parametrize("lz", [0.6, -0.6])
+def test_box_potential_is_the_antiderivative_of_the_drag_boxs_fraction(lz):
+    # dPhi/dz is the immersed fraction the box drag uses (terms.drag.box_immersed_fraction), by central differences
+    # of Phi over heights that cross the box (above its node for L_z > 0, below it for L_z < 0)
+    from jaxnet.terms.drag import box_immersed_fraction
+
+    step = 1e-6
+    for z in np.linspace(LEVEL - 1.3, LEVEL + 1.3, 53):
+        slope = (float(surface.box_fraction_integral(z + step, lz, LEVEL))
+                 - float(surface.box_fraction_integral(z - step, lz, LEVEL))) / (2 * step)
+        assert slope == pytest.approx(float(box_immersed_fraction(z, lz, LEVEL)), abs=2e-6)
+    # out of the water 0, immersed (its top under the surface) Phi = z_bottom - s + |L_z|/2
+    top, bottom = max(lz, 0.0), min(lz, 0.0)
+    assert float(surface.box_fraction_integral(LEVEL - bottom + 0.01, lz, LEVEL)) == 0.0
+    z = LEVEL - top - 0.25
+    assert float(surface.box_fraction_integral(z, lz, LEVEL)) == pytest.approx(z + bottom - LEVEL + abs(lz) / 2,
+                                                                              abs=1e-14)
+
+
+@pytest.mark.parametrize("lz", [0.5, -0.5])
+def test_box_float_sits_at_femnets_draft_with_femnets_waterplane_stiffness(lz):
+    # a box Lx x Ly x |Lz| of volume V on a node of mass m floats with rho Lx Ly h = m immersed; its top is then
+    # |Lz| - h above the water whichever side of its node it stands on; FEMNET's stiffness rho g Lx Ly in the band
+    lx, ly = 0.8, 0.5
+    volume, mass = lx * ly * abs(lz), 0.3 * RHO * lx * ly * abs(lz)
+    energy, grad, hess = BOX(mass, volume, lz)
+    x, residual = newton_in_height((energy, grad, hess), at_height(-0.2 if lz > 0 else 0.2))  # in the band
+    assert float(jnp.max(jnp.abs(residual))) < 1e-12 * mass * G
+    draft = mass / (RHO * lx * ly)
+    top = float(x @ UP) - LEVEL + max(lz, 0.0)
+    assert top == pytest.approx(abs(lz) - draft, abs=1e-12)
+    np.testing.assert_allclose(hess(x), RHO * G * lx * ly * np.outer(UP, UP), rtol=1e-12)
+    # wholly immersed: exactly the constant load of gravity (weight less rho g V); out of the water its weight in air
+    np.testing.assert_allclose(-grad(at_height(-1.0)), gravity.node_weight(mass, volume, RHO, G, UP), rtol=1e-12)
+    np.testing.assert_allclose(-grad(at_height(1.0)), -mass * G * UP, rtol=1e-13)
+
+
+def test_a_node_without_a_box_height_floats_as_the_cylinder():
+    # box_height 0 selects the cylinder profile of the node's size (a body given no box height)
+    mass, volume = 3.0, 0.01
+    for h in (-0.2, -0.05, 0.0, 0.1, 0.2):
+        np.testing.assert_allclose(BOX(mass, volume, 0.0)[1](at_height(h)),
+                                   node_energy(mass, volume, 0.3)[1](at_height(h)), rtol=1e-13, atol=1e-15)
+
+
+def test_a_bar_or_twine_of_no_diameter_has_no_load_and_no_nan_at_the_surface():
+    # FEMNET's files have links of diameter 0: no volume, so no weight or buoyancy, wherever they are
+    for h in (-0.3, 0.0, 1e-9, 0.4):
+        x = jnp.concatenate([at_height(h), at_height(h, lateral=(2.0, 0.0, 0.0))])
+        for fn in bar_energy(2.0, 0.0, 7800.0)[1:]:
+            assert float(jnp.max(jnp.abs(fn(x)))) == 0.0
+        x3 = jnp.concatenate([at_height(h), at_height(h, (1, 0, 0)), at_height(h, (0, 1, 0))])
+        # the term's own call: no thickness given, the band is the twine's
+        twines = Term(lambda x: surface.netting_gravity_energy(x, UV, 0.02, 0.0, 1140.0, RHO, G, UP, LEVEL), (3, 3))
+        for fn in twines()[1:]:
+            assert float(jnp.max(jnp.abs(fn(x3)))) == 0.0
+
+
+def test_hexagonal_triangle_at_the_surface_weighs_as_gravity_says_under_it_and_in_air_above():
+    l0 = jnp.array([0.02, 0.03, 0.025])  # the three families' twine lengths
+    hexa = Term(lambda x: surface.hexagonal_gravity_energy(x, UV, l0, 0.002, 1140.0, RHO, G, UP, LEVEL), (3, 3))
+    _, grad, _ = hexa()
+    under = jnp.concatenate([at_height(-0.01), at_height(-0.5, (1, 0, 0)), at_height(-3.0, (0, 1, 0))])
+    np.testing.assert_allclose(-grad(under).reshape(3, 3),
+                               gravity.hexagonal_weight(UV, l0, 0.002, 1140.0, RHO, G, UP), rtol=1e-12)
+    above = jnp.concatenate([at_height(0.01), at_height(0.5, (1, 0, 0)), at_height(3.0, (0, 1, 0))])
+    per_vertex = 38 * np.pi * 0.002**2 / 4 * float(jnp.sum(l0)) * 1140.0 * G / 3
+    np.testing.assert_allclose(-grad(above).reshape(3, 3), -per_vertex * np.tile(UP, (3, 1)), rtol=1e-13)

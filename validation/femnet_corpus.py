@@ -10,8 +10,8 @@ reader's first refusal, ``file:LINE: message``), nodes and unknowns, Newton iter
 FEMNET's "forces along X Y and Z axes" against jaxnet's (the reactions at the coordinates FEMNET's node types hold by
 "Displacement"), with the relative difference of each component to the norm of FEMNET's force, the figures FEMNET
 prints (its text outputs: distances, forces, tensions and positions of the nodes it names) against those of its
-stored ``.sta``, whether the node boxes (floats, bodies) that jaxnet takes wholly immersed are under FEMNET's
-surface z = 0 at the equilibrium,
+stored ``.sta``, the height of the highest node box's top (floats, bodies: above 0, a box partly out of the water,
+both programs floating it by its immersed part under z = 0),
 and the cold and warm wall times against FEMNET's own (``ANSWERS.md``: its current code on this kind of machine,
 from the start its job file uses, which may be an earlier case's equilibrium where jaxnet starts from the drawn
 shape). FEMNET's target is its current code's answer where ``ANSWERS.md`` has one and FEMNET converged, else its stored
@@ -140,7 +140,7 @@ def ratio(femnet_s, jaxnet_s):
 def table(records, answers):
     """The corpus table (markdown) and its summary lines."""
     head = ("| case | reads | nodes | it | conv | jaxnet X Y Z (N) | FEMNET X Y Z (N) | max rel diff | printed figures "
-            "| boxes under z=0 | cold s | warm s | FEMNET s (it) | cold ratio | warm ratio |")
+            "| highest box top z (m) | cold s | warm s | FEMNET s (it) | cold ratio | warm ratio |")
     rows = [head, "|" + "---|" * 15]
     stats = {"cases": 0, "read": 0, "converged": 0, "within_1pct": 0, "compared": 0, "iterations": []}
     for name, r in records.items():
@@ -167,7 +167,7 @@ def table(records, answers):
             stats["iterations"].append(r["iterations"])
         femnet_s = a.get("wall_s")
         top = r.get("highest_box_top_m")
-        under = "" if not r.get("boxes") else ("yes" if top is not None and top <= 0 else f"no ({top:.2f} m)")
+        under = "" if not r.get("boxes") or top is None else f"{top:.2f}"
         fmt = (lambda v: " ".join(f"{x:.1f}" for x in v)) if force else (lambda v: "")
         rows.append(
             f"| {name} | yes | {r.get('nodes', '')} | {r.get('iterations', '')} | "

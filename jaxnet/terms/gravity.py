@@ -22,7 +22,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxnet import geometry
-from jaxnet.scene import has_free_surface
+from jaxnet.scene import feels_surface
 from jaxnet.terms.term import LOAD, WEIGHT, Term, any_nonzero, register
 
 
@@ -58,13 +58,13 @@ def node_weight(mass, volume, water_density, g, up):
 def weight_activity(family, at_surface):
     """The activity rule of a family's weight and buoyancy: present where gravity and the net density of some
     element are not zero. ``at_surface``: False for the constant load of a fully immersed net (no free
-    surface), True for the energy of the heights near a free surface (:mod:`jaxnet.terms.surface`), None for
-    the constant load whatever the surface (families without a free-surface form)."""
+    surface, or one the family does not feel: ``Environment.floating``), True for the energy of the heights
+    near a free surface (:mod:`jaxnet.terms.surface`), None for the constant load whatever the surface."""
 
     def active(scene, dynamic):
         f = getattr(scene, family)
         env = scene.environment
-        if f is None or env.gravity == 0 or (at_surface is not None and has_free_surface(scene) != at_surface):
+        if f is None or env.gravity == 0 or (at_surface is not None and feels_surface(scene, family) != at_surface):
             return None
         net_density = np.asarray(f.density) - env.water_density
         if at_surface:  # above the surface even a neutrally buoyant net weighs
@@ -93,7 +93,7 @@ def _node_arguments(p, env):
 
 def _node_weight_activity(scene, dynamic):
     n = scene.nodes
-    if scene.environment.gravity == 0 or has_free_surface(scene):
+    if scene.environment.gravity == 0 or feels_surface(scene, "nodes"):
         return None
     if not any_nonzero(np.asarray(n.mass) - scene.environment.water_density * np.asarray(n.volume)):
         return None

@@ -348,4 +348,4 @@ HEXAGONAL_TENSION = register(Term(
     active=tension_activity("hexagonal"), elastic=True))
 HEXAGONAL_WEIGHT = register(Term(
     name="hexagonal_weight", family="hexagonal", kind=LOAD, element=hexagonal_weight, arguments=netting_arguments,
-    active=weight_activity("hexagonal", at_surface=None), group=WEIGHT))
+    active=weight_activity("hexagonal", at_surface=False), group=WEIGHT))

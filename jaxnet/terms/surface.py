@@ -67,18 +67,20 @@ slack netting at the surface, pass ``thickness`` >= rho g V_vertex / k to :func:
 
 Conventions: ``up`` is the unit vertical (m/m), ``surface_level`` the height of the water plane along up
 (m), g > 0 (m/s²). Every function here is a pure jnp function of one element (vmappable, no Python
-control flow on traced values). ``thickness`` and diameters must be > 0.
+control flow on traced values). ``thickness`` must be > 0; a bar or twine of diameter 0 has no volume, and its
+band is taken as 1 m so that it stays finite.
 """
 
 from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 
 from jaxnet import geometry
 from jaxnet.terms.gravity import weight_activity
-from jaxnet.scene import has_free_surface
+from jaxnet.scene import feels_surface
 from jaxnet.terms.term import ENERGY, WEIGHT, Term, any_nonzero, register
 
 
@@ -144,12 +146,45 @@ def immersed_fraction_integral(h, thickness):
     return 0.5 * thickness * cylinder_fraction_integral(2.0 * h / thickness)
 
 
+def box_fraction_integral(height, vertical_length, surface_level):
+    """Antiderivative Phi (m) in the node's height of the immersed fraction of a box standing on its node
+    (FEMNET's node body, :func:`jaxnet.terms.drag.box_immersed_fraction`: the box spans
+    [z + min(L_z, 0), z + max(L_z, 0)], above its node for L_z > 0, below it for L_z < 0).
+
+    With d = s - z_bottom the depth of the box's bottom under the surface and H = |L_z|: Phi = 0 while the box
+    is out of the water (d <= 0), -d²/(2H) while it crosses the surface, H/2 - d once immersed (d >= H). So
+    dPhi/dz = d/H clipped to [0, 1], the immersed fraction, which is linear in the height because a box's
+    waterplane area is constant: FEMNET's buoyancy rho g L_x L_y h (``flotteur2.c``) and its stiffness
+    rho g L_x L_y while crossing. A flat box (H = 0) is immersed when its node is under the surface
+    (Phi = min(-d, 0)), as the drag's fraction has it.
+
+    Args:
+      height: the node's height z along ``up`` (m).
+      vertical_length: L_z, the box's signed height (m).
+      surface_level: height s of the water plane (m).
+    """
+    size = jnp.abs(vertical_length)
+    d = surface_level - (height + jnp.minimum(vertical_length, 0.0))
+    flat = size == 0.0
+    safe = jnp.where(flat, 1.0, size)
+    crossing = -jnp.clip(d, 0.0, safe) ** 2 / (2.0 * safe)
+    immersed = 0.5 * safe - d
+    box = jnp.where(d >= safe, immersed, crossing)
+    return jnp.where(flat, jnp.minimum(-d, 0.0), box)
+
+
+def _band(diameter):
+    """The immersion band (m) of a bar or twine: its diameter; 1 m where the diameter is 0 (a link of no volume,
+    common in FEMNET's files: it then has no weight or buoyancy at all, and the band only keeps h / band finite)."""
+    return jnp.where(diameter > 0.0, diameter, 1.0)
+
+
 def _height(x, up, surface_level):
     """Height (m) above the water plane of points x (..., 3)."""
     return x @ up - surface_level
 
 
-def node_gravity_energy(x, mass, volume, thickness, water_density, g, up, surface_level):
+def node_gravity_energy(x, mass, volume, thickness, water_density, g, up, surface_level, box_height=None):
     """Potential energy (J) of weight and buoyancy of one body lumped at a node.
 
     Args:
@@ -160,11 +195,17 @@ def node_gravity_energy(x, mass, volume, thickness, water_density, g, up, surfac
         pipe or horizontal cylindrical float: its diameter).
       water_density: (kg/m³). g: gravity (m/s²). up: (3,) unit vertical. surface_level: height of the
         water plane along up (m).
+      box_height: None, or the signed height L_z (m) of a box body standing on the node (FEMNET's node types):
+        where it is not 0 the body floats as that box (:func:`box_fraction_integral`), not as a cylinder
+        centred on the node.
     Returns:
       m g (x·up) - rho g V Phi(h): -grad is the weight in air plus the buoyancy of the immersed part (N).
     """
     h = _height(x, up, surface_level)
-    return mass * g * (x @ up) - water_density * g * volume * immersed_fraction_integral(h, thickness)
+    phi = immersed_fraction_integral(h, thickness)
+    if box_height is not None:
+        phi = jnp.where(box_height != 0.0, box_fraction_integral(x @ up, box_height, surface_level), phi)
+    return mass * g * (x @ up) - water_density * g * volume * phi
 
 
 def bar_gravity_energy(x, rest_length, diameter, density, water_density, g, up, surface_level):
@@ -182,7 +223,7 @@ def bar_gravity_energy(x, rest_length, diameter, density, water_density, g, up, 
     h = _height(x, up, surface_level)
     return jnp.sum(
         density * half_volume * g * (x @ up)
-        - water_density * g * half_volume * immersed_fraction_integral(h, diameter)
+        - water_density * g * half_volume * immersed_fraction_integral(h, _band(diameter))
     )
 
 
@@ -202,12 +243,20 @@ def netting_gravity_energy(x, uv, l0, diameter, density, water_density, g, up, s
     """
     d = geometry.twine_determinant(uv)
     vertex_volume = geometry.twine_volume(jnp.abs(d), l0, diameter) / 3.0
-    band = diameter if thickness is None else thickness
+    band = _band(diameter) if thickness is None else thickness
     h = _height(x, up, surface_level)
     return jnp.sum(
         density * vertex_volume * g * (x @ up)
         - water_density * g * vertex_volume * immersed_fraction_integral(h, band)
     )
+
+
+def hexagonal_gravity_energy(x, uv, l0, diameter, density, water_density, g, up, surface_level):
+    """Potential energy (J) of weight and buoyancy of the twines of one hexagonal-mesh triangle: |d| twines of
+    each family l, m, n (lengths ``l0``, (3,) m) of diameter D, lumped a third at each vertex as for diamond
+    netting (:func:`netting_gravity_energy` of the summed length); fully immersed, -grad equals
+    :func:`jaxnet.terms.gravity.hexagonal_weight` exactly."""
+    return netting_gravity_energy(x, uv, jnp.sum(l0), diameter, density, water_density, g, up, surface_level)
 
 
 # -- the terms -------------------------------------------------------------------------------------
@@ -223,23 +272,30 @@ def _bar_arguments(p, env):
             "water_density": env.water_density, "g": env.gravity, "up": env.up, "surface_level": env.surface_level}
 
 
-def _node_arguments(p, env):
+def _node_arguments(p, env, boxes=False):
     # a body given no size is taken as the sphere of its volume (1 mm at least) for its waterline band
     sphere = jnp.cbrt(6.0 * p.volume / jnp.pi)
     size = jnp.maximum(jnp.where(p.size > 0, p.size, sphere), 1e-3)
     return {"mass": p.mass, "volume": p.volume, "thickness": size, "water_density": env.water_density,
-            "g": env.gravity, "up": env.up, "surface_level": env.surface_level}
+            "g": env.gravity, "up": env.up, "surface_level": env.surface_level,
+            **({"box_height": p.drag_length[2]} if boxes else {})}
 
 
-def _node_gravity(x, mass, volume, thickness, water_density, g, up, surface_level):
-    return node_gravity_energy(x[0], mass, volume, thickness, water_density, g, up, surface_level)
+def _node_gravity(x, mass, volume, thickness, water_density, g, up, surface_level, box_height=None):
+    return node_gravity_energy(x[0], mass, volume, thickness, water_density, g, up, surface_level, box_height)
 
 
 def _node_activity(scene, dynamic):
+    """Present with a free surface the nodes feel (``Environment.floating``) and a node of some mass or volume;
+    option ``boxes`` where a node with a volume has a box body of some height (``Nodes.drag_length``): it floats
+    as that box."""
     n = scene.nodes
-    if scene.environment.gravity == 0 or not has_free_surface(scene) or not (any_nonzero(n.mass) or any_nonzero(n.volume)):
+    if scene.environment.gravity == 0 or not feels_surface(scene, "nodes") or not (any_nonzero(n.mass)
+                                                                                 or any_nonzero(n.volume)):
         return None
-    return {}
+    boxes = n.drag_length is not None and bool(np.any((np.asarray(n.drag_length, dtype=float)[:, 2] != 0.0)
+                                                     & (np.asarray(n.volume, dtype=float) > 0.0)))
+    return {"boxes": True} if boxes else {}
 
 
 NETTING_GRAVITY_AT_SURFACE = register(Term(
@@ -248,6 +304,9 @@ NETTING_GRAVITY_AT_SURFACE = register(Term(
 BAR_GRAVITY_AT_SURFACE = register(Term(
     name="bar_gravity_at_surface", family="bars", kind=ENERGY, element=bar_gravity_energy,
     arguments=_bar_arguments, active=weight_activity("bars", at_surface=True), group=WEIGHT))
+HEXAGONAL_GRAVITY_AT_SURFACE = register(Term(
+    name="hexagonal_gravity_at_surface", family="hexagonal", kind=ENERGY, element=hexagonal_gravity_energy,
+    arguments=_netting_arguments, active=weight_activity("hexagonal", at_surface=True), group=WEIGHT))
 NODE_GRAVITY_AT_SURFACE = register(Term(
     name="node_gravity_at_surface", family="nodes", kind=ENERGY, element=_node_gravity, arguments=_node_arguments,
     active=_node_activity, group=WEIGHT))

@@ -87,11 +87,14 @@ Conventions established from the files (see ``tests/test_femnet.py``):
   ½ ρ Cd_y L_x h U² sin θ, h its immersed height (the box stands above its node for L_z > 0, below it for
   L_z < 0, FEMNET's "lest"), which is jaxnet's box drag for a horizontal current. FEMNET also *floats* a
   box (``flotteur2.c``: rho g L_x L_y times its immersed height, along z): a box with a volume displaces
-  V = |L_x L_y L_z| (``Nodes.volume``). FEMNET's water surface is z = 0 and jaxnet's scenes from FEMNET have
-  none: boxes are taken wholly immersed (h = |L_z|, buoyancy rho g V). Gear is often drawn above z = 0 and
-  sinks to its equilibrium (bottom trawls drawn at z > 0 rest on a sea bed at z = -depth), so the start is
-  not checked; ``info["boxes"]`` lists the nodes with a box and the height of its top above them, and
-  ``validation/femnet_corpus.py`` checks the equilibrium against z = 0. Widths X, Y must be >= 0 (FEMNET
+  V = |L_x L_y L_z| (``Nodes.volume``). FEMNET's water surface is z = 0, and so is that of jaxnet's scenes
+  from FEMNET (``Environment.surface_level``): a box floats by its immersed part, FEMNET's law
+  (:func:`jaxnet.terms.surface.box_fraction_integral`), and is dragged by it; bars crossing the surface float
+  by jaxnet's profile (:mod:`jaxnet.terms.surface`), and diamond netting stays buoyant wherever it is, as in
+  FEMNET's statics (``Environment.floating``, :func:`.mapping.environment_of` says how each compares). Gear
+  drawn above z = 0 (bottom trawls drawn at z > 0 rest on a sea bed at z = -depth) starts with its bars and
+  boxes in air and sinks, as in FEMNET. ``info["boxes"]`` lists the
+  nodes with a box and the height of its top above them. Widths X, Y must be >= 0 (FEMNET
   takes them signed: a negative one would drag against the current).
 * **Spheres** (``input sphere_element CABLE COUNT D B``; ``sphere_element2`` adds the length L they are spread
   over): COUNT spherical floats of diameter D (m) along the cable, each pulling up with B newtons net of its
@@ -146,7 +149,7 @@ Conventions established from the files (see ``tests/test_femnet.py``):
   max <= tol implies mean <= tol, so jaxnet's answer is at least as converged as FEMNET's.
 * **Environment.** z is up, the water density FEMNET's default 1025 kg/m³ unless ``input
   water_density`` says otherwise, g = 9.81 m/s². The current direction (deg) turns from x towards y.
-  The free surface is not modelled (both cases lie well below z = 0).
+  The water plane is z = 0 (a free surface, as FEMNET's statics have it: see node bodies above).
 
 Strictness. FEMNET skips to the next colon and reads numbers, whatever the text before the colon; this
 reader checks each label against the field it expects (the long and the short spellings found in

@@ -133,9 +133,19 @@ def rope_of(c: DonCable) -> Rope:
 
 
 def environment_of(case: DonFile) -> Environment:
-    """The surroundings: FEMNET's water and current, and its sea bed (``fond.c``): the limits' penalty stiffness,
-    its law exactly (no band), and the friction of the bottom only where FEMNET applies it, with ``input
-    moving_bottom`` (a still bottom exerts none)."""
+    """The surroundings: FEMNET's water and current, its water plane z = 0, and its sea bed (``fond.c``): the
+    limits' penalty stiffness, its law exactly (no band), and the friction of the bottom only where FEMNET applies
+    it, with ``input moving_bottom`` (a still bottom exerts none).
+
+    The water plane. FEMNET's statics float node boxes (``flotteur2.c``) and bars (``flotteurelement2.c``: their
+    wetted length) by their part under z = 0, and keep diamond netting buoyant wherever it is
+    (``flotteursurf3.c``; its static loop does not call ``flotteursurf4.c``, the surface-aware one). jaxnet's
+    scenes from FEMNET have their free surface there too (``surface_level`` 0) and the same split
+    (``floating=("bars", "nodes")``): boxes float as boxes (:func:`jaxnet.terms.surface.box_fraction_integral`,
+    FEMNET's law), bars by jaxnet's profile (:mod:`jaxnet.terms.surface`: each end as a horizontal cylinder of
+    the bar's diameter, which differs from the wetted length only within a diameter of the surface; a bar lying
+    at z = 0 exactly is half immersed, FEMNET's wholly). Under the surface the loads are the constant immersed
+    weights, as before."""
     angle = math.radians(case.ocean["current_direction"].value)
     rho = case.inputs["water_density"].value if "water_density" in case.inputs else WATER_DENSITY
     friction = case.ocean["bottom_friction"].value if "moving_bottom" in case.inputs else 0.0
@@ -151,23 +161,21 @@ def environment_of(case: DonFile) -> Environment:
                        current_speed=case.ocean["current_speed"].value,
                        current_direction=np.array([math.cos(angle), math.sin(angle), 0.0]),
                        bottom_stiffness=float(case.ocean["bottom_stiffness"].value), bottom_friction=float(friction),
-                       bottom_band=0.0, waves=waves)
+                       bottom_band=0.0, waves=waves, surface_level=0.0, floating=("bars", "nodes"))
 
 
 def node_type_fields(case: DonFile, position, node_type):
     """The nodes' box bodies, float volumes and limits from their types: {Nodes field: array}, a field absent when
     no node has a body (a float, a limit), so that its term is not compiled. FEMNET drags and floats the immersed
-    part of a box under its surface z = 0; jaxnet's FEMNET scenes have no free surface and take boxes wholly
-    immersed, which the equilibrium must bear out (``info["boxes"]``: the nodes with a box and the height of its top
-    above them; gear drawn above z = 0 is common, so the start is not checked)."""
+    part of a box under its surface z = 0, and so do jaxnet's scenes from FEMNET (their free surface is z = 0,
+    :func:`environment_of`); ``info["boxes"]``: the nodes with a box and the height of its top above them."""
     types = [case.types[t] for t in node_type]
     fields = {}
     volume = np.array([nt.box_volume for nt in types])
     if volume.any():
-        # a box with a volume floats: FEMNET's buoyancy rho g L_x L_y h (flotteur2.c), h its immersed height, is
-        # rho g V wholly under its surface z = 0, which jaxnet's FEMNET scenes (no free surface) take it to be.
-        # Not checked at the start: gear is often drawn above z = 0 and sinks to its equilibrium (a bottom trawl
-        # drawn at z > 0 rests on a sea bed at z = -depth): ``info["boxes"]`` tells where to check the equilibrium
+        # a box with a volume floats: FEMNET's buoyancy rho g L_x L_y h (flotteur2.c), h its immersed height under
+        # the surface z = 0: the node's volume V = |L_x L_y L_z|, floated as a box by the surface term (the box's
+        # height is drag_length's z)
         fields["volume"] = volume
     if any(nt.has_body for nt in types):
         length = np.array([[v.value for v in nt.length] if nt.has_body else [0.0] * 3 for nt in types])
@@ -577,8 +585,8 @@ def result(case: DonFile, scene, net, planes, catch, femnet_laws, plan: JoinPlan
         # the coordinates FEMNET holds by a node type's "Displacement" (not by its symmetry): its "forces along X Y
         # and Z axes" sum the reactions there (femnet_figures)
         info["fixity"] = [[int(i), j] for i, t in enumerate(node_type) for j in range(3) if case.types[t].fixed[j].value]
-        # FEMNET's node boxes (floats, bodies with drag) are taken wholly immersed: the nodes that have one and the
-        # height of its top above them (m), to check the equilibrium against FEMNET's surface z = 0
+        # FEMNET's node boxes (floats, bodies with drag): the nodes that have one and the height of its top above
+        # them (m), for the reports (which boxes rest at the surface z = 0)
         info["boxes"] = {int(i): max(case.types[t].length[2].value, 0.0) for i, t in enumerate(node_type)
                          if case.types[t].box_volume > 0 or case.types[t].has_body}
     return Case(scene=scene, solver=solver, time=time_settings(case, solver), net=net, label=label, info=info)
