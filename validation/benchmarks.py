@@ -37,6 +37,8 @@ SCRIPTS = {
     "bench_terms.py": ("The cage at several refinements and the cost of every term",
                        ["--steps", "0.8", "0.5", "--repeats", "3", "--compile-repeats", "1"], []),
     "design_gradient_cost.py": ("Design gradients: the adjoint against one forward solve", ["--quick"], []),
+    "newton_oracle.py": ("The static solver against a textbook trust-region Newton on still-water curtains",
+                         ["--nodes", "100"], []),
 }
 
 
