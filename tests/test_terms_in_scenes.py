@@ -181,6 +181,9 @@ ON_OFF = {
                           lambda: small_scene(hexagonal=hex_twine(ea=0.0))),
     "hexagonal_weight": (lambda: small_scene(hexagonal=hex_twine(density=1140.0)),
                          lambda: small_scene(hexagonal=hex_twine())),
+    "hexagonal_gravity_at_surface": (lambda: small_scene(twine(diameter=0.0), hexagonal=hex_twine(), surface=1.0),
+                                     lambda: small_scene(twine(diameter=0.0), hexagonal=hex_twine(diameter=0.0),
+                                                         surface=1.0)),
 }
 
 

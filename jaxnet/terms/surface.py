@@ -35,6 +35,15 @@ A C² polynomial (smoothstep) would be smoother but is no body's exact fraction;
 is C¹ only, like the cylinder. For a node float of another shape, ``thickness`` is its height and the
 cylinder profile is an approximation of its draft curve with the right volume and the right limits.
 
+Boxes (FEMNET's node bodies). A node whose body is a box (``Nodes.drag_length``, L_z != 0: FEMNET's node types)
+floats as that box, not as a cylinder centred on the node: the box stands on its node (above it for L_z > 0,
+below for L_z < 0), its waterplane area is constant, so its immersed fraction is linear in the height and its
+stiffness rho g L_x L_y while it crosses the surface (:func:`box_fraction_integral`, FEMNET's ``flotteur2.c``).
+
+Families. ``Environment.floating`` names the families that feel the surface (all by default); the others keep
+their constant immersed load (:mod:`jaxnet.terms.gravity`) wherever they are. Hexagonal netting floats as
+diamond netting does, its three families' twines lumped a third at each vertex.
+
 Derivatives. f and phi carry analytic derivative rules (``jax.custom_jvp``): differentiating acos and
 sqrt by automatic differentiation near |t| = 1 cancels terms of size 1/sqrt(1 - t²), and is NaN at
 |t| = 1. The rules phi' = f, f' = -(2/pi) sqrt(1 - t²) are exact and finite everywhere, so grad and
