@@ -197,8 +197,9 @@ def test_pelagic_trawl_matches_femnet():
     assert printed["Boat X force (N)"][0] == pytest.approx(total[0]) and printed["Boat Z force (N)"][0] == pytest.approx(total[2])
 
 
-@pytest.mark.parametrize("name, femnet_z, tolerance, box_at_surface", [("12purse_seine/p1", -8026.35353, 0.001, True),
-                                                                      ("12purse_seine/u1", -4655.64163, 0.005, False)])
+@pytest.mark.parametrize("name, femnet_z, tolerance, box_at_surface",
+                         [("12purse_seine/p1", -8026.35353, 0.001, True),
+                          ("12purse_seine/u1", -4655.64163, 0.005, False)])
 def test_purse_seine_floats_at_femnets_surface(name, femnet_z, tolerance, box_at_surface):
     """Purse seines float at the surface, p1 on a box (a node type of Length Z > 0: a box above its node) partly out
     of the water, u1 on its float line: FEMNET floats a box by its part under z = 0 (flotteur2.c) and a bar by its

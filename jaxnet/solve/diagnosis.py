@@ -33,8 +33,9 @@ COMPRESSED_STRAIN = 1e-9
 def compressed_struts(scene, x):
     """The cables whose bars are pushed into compression with a compression stiffness, at positions x (N, 3)
     (m), and whose compressed bars meet at a free hinge (a node of exactly two bars, not fixed on every axis,
-    where no cable joint with a bending stiffness resists their turn): hinged struts that buckle. Returns ``[(cable name, bars in compression, largest compressive strain,
-    one such joint)]``, the cable with the most compressed bars first; [] when there are none."""
+    where no cable joint with a bending stiffness resists their turn): hinged struts that buckle. Returns
+    ``[(cable name, bars in compression, largest compressive strain, one such joint)]``, the cable with the most
+    compressed bars first; [] when there are none."""
     bars = scene.bars
     if bars is None:
         return []
