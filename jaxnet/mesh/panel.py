@@ -355,14 +355,16 @@ def mesh_panel(corners_uv, corners_xyz, step, l0, divisions=None, name="panel", 
     weights = np.concatenate([w_b, w_i], axis=0)
     nodes = weights @ uv_c
     tri = _triangulate(nodes, uv_c, area, segs, scale, name)
+    return _panel_mesh(weights, uv_c, xyz_c, tri, sides)
 
-    xyz = weights @ xyz_c
-    arrays = dict(uv=nodes, xyz=xyz, triangles=tri, corner_nodes=np.arange(C, dtype=np.int64),
-                  weights=weights)
-    for a in arrays.values():
+
+def _panel_mesh(weights, uv_c, xyz_c, triangles, sides) -> PanelMesh:
+    """The :class:`PanelMesh` of nodes given by their ``weights`` (N, C) over the C corners: twine coordinates
+    and start positions interpolated from the corners', every array read-only."""
+    arrays = dict(uv=weights @ uv_c, xyz=weights @ xyz_c, triangles=triangles,
+                  corner_nodes=np.arange(len(uv_c), dtype=np.int64), weights=weights)
+    for a in [*arrays.values(), *sides]:
         a.setflags(write=False)
-    for s in sides:
-        s.setflags(write=False)
     return PanelMesh(side_nodes=sides, **arrays)
 
 
@@ -433,14 +435,7 @@ def _mesh_on_lattice(corners_uv, corners_xyz, lattice, divisions, name) -> Panel
     t_c = s_c @ shear.T
     t_scale = float(np.max(np.abs(t_c - t_c.mean(axis=0)))) or 1.0
     tri = _triangulate((weights @ s_c) @ shear.T, t_c, area, segs, t_scale, name)
-
-    arrays = dict(uv=weights @ uv_c, xyz=weights @ xyz_c, triangles=tri, corner_nodes=np.arange(C, dtype=np.int64),
-                  weights=weights)
-    for a in arrays.values():
-        a.setflags(write=False)
-    for s in sides:
-        s.setflags(write=False)
-    return PanelMesh(side_nodes=sides, **arrays)
+    return _panel_mesh(weights, uv_c, xyz_c, tri, sides)
 
 
 def _orient(p, a, b, c):
