@@ -56,6 +56,9 @@ def _case(args, dynamic):
 
     if args.mesh is not None and (args.scene is None or not str(args.scene).endswith(".don")):
         raise SceneError("--mesh (FEMNET's .mdg mesh) goes with a FEMNET case CASE.don")
+    if args.refine is not None and (args.scene is None or not str(args.scene).endswith(".don") or args.mesh):
+        raise SceneError("--refine (a mesh finer than the file's) goes with a FEMNET case CASE.don meshed by jaxnet "
+                         "(not with --mesh)")
     if args.scene is None:
         if dynamic:
             name = args.builtin if args.builtin in DYNAMIC else DYNAMIC_DEFAULT
@@ -68,7 +71,7 @@ def _case(args, dynamic):
     if str(args.scene).endswith(".don"):
         laws = not args.jaxnet_laws
         case = (femnet.read_mdg(args.mesh, args.scene, femnet_laws=laws) if args.mesh is not None
-                else femnet.read_don(args.scene, femnet_laws=laws))
+                else femnet.read_don(args.scene, femnet_laws=laws, refine=1.0 if args.refine is None else args.refine))
         return case, case.label
     case = scene_file.read(args.scene)
     return case, case.label
@@ -202,6 +205,8 @@ def argument_parser() -> argparse.ArgumentParser:
                          description=f"Built-in scenes ({DEFAULT} by default): {listing}.")
     run.add_argument("scene", nargs="?", help="scene file (.json or .toml) or FEMNET case (.don)")
     run.add_argument("--mesh", help="with a FEMNET case: solve on FEMNET's mesh (CASE.mdg) instead of jaxnet's")
+    run.add_argument("--refine", type=float, help="with a FEMNET case: mesh it this many times finer than its file "
+                                                  "says (nodes grow about as its square; for mesh convergence)")
     run.add_argument("--scene", dest="builtin", choices=sorted(set(BUILT_IN) | set(DYNAMIC)), default=DEFAULT,
                      help=f"built-in scene to solve when no file is given (default: {DEFAULT})")
     run.add_argument("--out", default="jaxnet-out", help="output directory (default: jaxnet-out)")

@@ -9,10 +9,13 @@ few of :data:`EXTRA` (``--solvers all`` adds them), ~15 minutes on 2 cores once 
 What it measures. The matrices are Newton tangents K + mu S of static solves, on the tangent's CSR pattern
 (what :func:`jaxnet.solve.statics.host_loop` factorises): the FEMNET cod-end ``c2`` and panel
 ``nr_netting`` (small stand-ins for a trawl, ~1e3 nodes), the fish cage (:func:`jaxnet.scenes.cage.fish_cage`)
-at four meshing steps (~1e3, 1e4, 3e4, 1e5 nodes) and the framed panel
-(:func:`jaxnet.scenes.panel.framed_panel`, 100 meshes a side) at ~1e4, 3e4 and 1e5 nodes. Each scene gives
-an early iterate (5 Newton iterations, mu = 1e-3); the FEMNET cases and the cage up to 3e4 nodes also a late
-one (the solve's end, or 60 iterations, mu = 1e-8). At 1e5 nodes a solve of 60 iterations takes too long
+at four meshing steps (~1e3, 1e4, 3e4, 1e5 nodes), the framed panel
+(:func:`jaxnet.scenes.panel.framed_panel`, 100 meshes a side) at ~1e4, 3e4 and 1e5 nodes, and FEMNET's pelagic
+trawl ``1pelagic_trawl/s3`` of the corpus meshed 2, 5, 9 and 15 times finer than its file
+(``read_don(refine=...)``: ~1.5e3, 1e4, 3e4, 1e5 nodes). Each scene gives
+an early iterate (5 Newton iterations, mu = 1e-3); the FEMNET cases, the cage up to 3e4 nodes and the trawl up
+to 1e4 also a late one (the solve's end, or 60 iterations, mu = 1e-8).
+At 1e5 nodes a solve of 60 iterations takes too long
 (~17 s a factorisation at 3e4 nodes already, late in the solve), so only the early iterate is taken there;
 the panel converges in 7 iterations, to a tangent alike to its early one, so only that is taken. The
 right-hand side is the residual of the same iterate. The tangents are computed once (a static solve of
@@ -108,7 +111,15 @@ MATRICES = {
     "panel0.025-it5": ("3e4", "panel", 0.025, 5, 1e-3),
     "cage0.053-it5": ("1e5", "cage", 0.053, 5, 1e-3),
     "panel0.0125-it5": ("1e5", "panel", 0.0125, 5, 1e-3),
+    "trawl-s3x2-it5": ("1e3", "trawl", 2.0, 5, 1e-3),
+    "trawl-s3x2-it60": ("1e3", "trawl", 2.0, 60, 1e-8),
+    "trawl-s3x5-it5": ("1e4", "trawl", 5.0, 5, 1e-3),
+    "trawl-s3x5-it60": ("1e4", "trawl", 5.0, 60, 1e-8),
+    "trawl-s3x9-it5": ("3e4", "trawl", 9.0, 5, 1e-3),
+    "trawl-s3x15-it5": ("1e5", "trawl", 15.0, 5, 1e-3),
 }
+#: the trawl of the ``trawl`` tangents: FEMNET's pelagic trawl s3 (424 nodes on its own mesh), meshed finer
+TRAWL = ROOT.parent / "shared" / "femnet-corpus" / "1pelagic_trawl" / "s3.don"
 
 
 # -- the tangents -------------------------------------------------------------------------------------------
@@ -120,6 +131,9 @@ def make_case(kind, arg):
     if kind == "cage":
         from jaxnet.scenes.cage import fish_cage
         return fish_cage(step=arg)
+    if kind == "trawl":
+        from jaxnet.io import femnet
+        return femnet.read_don(TRAWL, refine=arg)
     from jaxnet.scenes.panel import framed_panel
     return framed_panel(meshes=100, step=arg)
 

@@ -1,6 +1,6 @@
 """Benchmark of the static solver against size: panels, the cage in a current, FEMNET's cases, from their drawn start.
 
-    python validation/bench_statics.py [--scene framed|hanging|cage|femnet] [--sizes 100 1000 10000 100000]
+    python validation/bench_statics.py [--scene framed|hanging|cage|trawl|femnet] [--sizes 100 1000 10000 100000]
                                        [--ea-compression EA_C] [--current U] [--max-iter N]
 
 Scenes:
@@ -11,9 +11,12 @@ Scenes:
   bar (twines EA_c = EA by default);
 * ``cage`` (jaxnet.scenes.cage): the fish cage (physical twine, EA_c = 0) in a current of ``--current`` m/s
   (default 0.5), meshed finer for more nodes (step 0.5 m gives 1161 nodes; nodes grow as 1/step²);
+* ``trawl``: a trawl of FEMNET's corpus (``--trawl``, default the pelagic trawl ``1pelagic_trawl/s3``: 424
+  nodes on FEMNET's mesh), meshed finer for more nodes (``read_don(refine=...)``: nodes grow about as
+  refine²; the refinement that gives each size is found from the file's own node count), with FEMNET's
+  solver settings from the file (its threshold: 0.01 N for s3);
 * ``femnet``: FEMNET's worked cases that jaxnet reads (``--cases``: .don files, default the cod-end c2 and
-  nr_netting of ``tests/data/femnet``), each at its own size (``--sizes`` unused). No trawl of FEMNET's
-  corpus reads yet: the cod-end is the towed-gear case here.
+  nr_netting of ``tests/data/femnet``), each at its own size (``--sizes`` unused).
 
 The meshing step sets the node count. Each size runs in its own process (so that peak memory is that size's),
 with at most ``--max-iter`` Newton iterations. Printed per size, from the solve's own :class:`Timing`: nodes,
@@ -38,10 +41,13 @@ ROOT = pathlib.Path(__file__).resolve().parent.parent
 FEMNET_CASES = tuple(str(ROOT / "tests" / "data" / "femnet" / name) for name in ("c2.don", "nr_netting.don"))
 #: the cage's meshing step (m) and node count it gives: nodes grow as 1/step²
 CAGE_STEP, CAGE_NODES = 0.5, 1161
+#: the trawl timed by default (``--scene trawl``), a case of FEMNET's corpus
+TRAWL = ROOT.parent / "shared" / "femnet-corpus" / "1pelagic_trawl" / "s3.don"
 
 
-def build(scene_name, size, ea_compression, current):
-    """The scene of one row: a panel or the cage of about ``size`` nodes, or the FEMNET case at path ``size``."""
+def build(scene_name, size, ea_compression, current, trawl=TRAWL):
+    """The scene of one row: a panel, the cage or the trawl of about ``size`` nodes, or the FEMNET case at path
+    ``size``."""
     import numpy as np
 
     from jaxnet.io.femnet import read_don
@@ -51,6 +57,9 @@ def build(scene_name, size, ea_compression, current):
 
     if scene_name == "femnet":
         return read_don(size)
+    if scene_name == "trawl":
+        own = read_don(trawl).scene.n_nodes
+        return read_don(trawl, refine=max(1.0, float(np.sqrt(int(size) / own))))
     if scene_name == "cage":
         return fish_cage(step=CAGE_STEP * float(np.sqrt(CAGE_NODES / int(size))), current=current)
     meshes, l0 = 100, 0.025
@@ -64,13 +73,13 @@ def build(scene_name, size, ea_compression, current):
     return hanging_panel(meshes=meshes, l0=l0, step=step, twine=twine)
 
 
-def one(size, scene_name, ea_compression, current, max_iter):
+def one(size, scene_name, ea_compression, current, max_iter, trawl=TRAWL):
     """Solve one scene in this process; its row (a dict)."""
     import jaxnet as jn
 
-    case = build(scene_name, size, ea_compression, current)
+    case = build(scene_name, size, ea_compression, current, trawl)
     scene = case.scene
-    eq = jn.solve_static(case, throw=False, max_iter=max_iter)
+    eq = jn.solve_static(case, throw=False, max_iter=max_iter)  # FEMNET's threshold for its cases
     t = eq.timing
     from jaxnet import assemble, model
 
@@ -102,7 +111,8 @@ def one(size, scene_name, ea_compression, current, max_iter):
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--sizes", type=int, nargs="*", default=[100, 1000, 10000, 100000])
-    parser.add_argument("--scene", choices=("framed", "hanging", "cage", "femnet"), default="framed")
+    parser.add_argument("--scene", choices=("framed", "hanging", "cage", "trawl", "femnet"), default="framed")
+    parser.add_argument("--trawl", default=str(TRAWL), help="with --scene trawl: the .don case refined")
     parser.add_argument("--cases", nargs="*", default=list(FEMNET_CASES), help="with --scene femnet: .don files")
     parser.add_argument("--ea-compression", type=float, default=None, help="panels' twine EA_c (N); default per scene")
     parser.add_argument("--current", type=float, default=0.5, help="the cage's current (m/s)")
@@ -110,7 +120,7 @@ def main():
     parser.add_argument("--one", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.one:
-        print(json.dumps(one(args.one, args.scene, args.ea_compression, args.current, args.max_iter)))
+        print(json.dumps(one(args.one, args.scene, args.ea_compression, args.current, args.max_iter, args.trawl)))
         return
     import numpy as np
 
@@ -119,8 +129,10 @@ def main():
                "it/(asm+fac)", "total/(it*fac)", "residual N", "peak MB")
     print({"framed": "framed panel, flat stress-free start", "hanging": "hanging panel, flat stress-free start",
            "cage": f"fish cage in a {args.current:g} m/s current, drawn start",
+           "trawl": f"FEMNET's trawl {pathlib.Path(args.trawl).parent.name}/{pathlib.Path(args.trawl).stem} meshed "
+                    f"finer, drawn start, FEMNET's threshold",
            "femnet": "FEMNET's cases, drawn start"}[args.scene]
-          + ("" if args.scene in ("cage", "femnet") else
+          + ("" if args.scene in ("cage", "trawl", "femnet") else
              f", twine EA_c = {args.ea_compression if args.ea_compression is not None else 'scene default'} N")
           + f"; at most {args.max_iter} Newton iterations\n")
     print("| " + " | ".join(columns) + " |\n|" + "---|" * len(columns))
@@ -128,7 +140,7 @@ def main():
     for size in sizes:
         extra = [] if args.ea_compression is None else ["--ea-compression", str(args.ea_compression)]
         out = subprocess.run([sys.executable, __file__, "--one", size, "--scene", args.scene, "--current",
-                              str(args.current), "--max-iter", str(args.max_iter), *extra],
+                              str(args.current), "--max-iter", str(args.max_iter), "--trawl", args.trawl, *extra],
                              capture_output=True, text=True)
         if out.returncode != 0:
             print(f"| {size} | failed: {out.stderr.strip().splitlines()[-1] if out.stderr else out.returncode} |")

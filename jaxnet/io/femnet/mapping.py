@@ -378,32 +378,44 @@ def catch_of(case: DonFile, position, netting_nodes, planes, env: Environment, d
     return volume * copies, case.catch["catch_cd"].value, copies, center, axis
 
 
-def _describe(case: DonFile, env: Environment, plan: JoinPlan, femnet_laws: bool = True) -> Net:
-    """The panels and cables of the (joined) case on a new Net, sewn as ``plan`` says."""
+def _describe(case: DonFile, env: Environment, plan: JoinPlan, femnet_laws: bool = True, refine: float = 1.0) -> Net:
+    """The panels and cables of the (joined) case on a new Net, sewn as ``plan`` says, meshed ``refine`` times
+    finer than the file says (:func:`read_don`)."""
     net = Net(environment=env, merge_tolerance=MERGE_TOLERANCE)
     case = _with_cable_bending(case)
     twines = numerical_twines(case, femnet_laws)
     lattices = meshing_lattices(case)
     for kind, k, p, name in all_panels(case):
+        step = p.material["step"].value / refine
         if kind == "pa":
             corners = np.concatenate([p.corners[:, :3], twine_coordinates(p.corners[:, 3:5])], axis=1)
-            net.panel(name, corners, twine_of(p, case, femnet_laws), p.material["step"].value, twines=twines.get(k),
-                      lattice=lattices.get(k))
+            lattice, numerical = lattices.get(k), twines.get(k)
+            if lattice is not None:
+                lattice = (lattice[0] / refine, lattice[1] / refine)
+            if numerical is not None:
+                numerical = dataclasses.replace(numerical, bars=_finer(numerical.bars, refine))
+            net.panel(name, corners, twine_of(p, case, femnet_laws), step, twines=numerical, lattice=lattice)
         else:
             # hexagonal: FEMNET's (U, V) count base meshes, as jaxnet's (see the package's docstring)
-            net.panel(name, p.corners, _hextwine(p), p.material["step"].value)
+            net.panel(name, p.corners, _hextwine(p), step)
     for a, b in plan.seams:
         net.seam(a, b)
     for k, c in enumerate(case.cables):
         name, length = f"cable {k + 1}", c.material["l0"].value
         if k in plan.along:
             side, n_bars = plan.along[k]
-            net.cable(name, along=side, rope=rope_of(c), length=length, n_bars=n_bars)
+            net.cable(name, along=side, rope=rope_of(c), length=length,
+                      n_bars=None if n_bars is None else _finer(n_bars, refine))
         else:
             net.cable(name, start=tuple(c.ends[0]), end=tuple(c.ends[1]), rope=rope_of(c), length=length,
-                      n_bars=plan.n_bars[k])
+                      n_bars=_finer(plan.n_bars[k], refine))
     _weld_cables(case, net)
     return net
+
+
+def _finer(count: int, refine: float) -> int:
+    """A number of bars ``refine`` times larger (rounded up; the file's own count at ``refine`` 1)."""
+    return int(count) if refine == 1.0 else max(1, int(math.ceil(count * refine - 1e-9)))
 
 
 def _with_cable_bending(case: DonFile) -> DonFile:
@@ -465,12 +477,19 @@ def _culprit_line(case: DonFile, message: str) -> int:
     return min((t.line for t in case.types.values()), default=1)
 
 
-def read_don(path, femnet_laws=True):
+def read_don(path, femnet_laws=True, refine=1.0):
     """Read FEMNET's ``.don`` case ``path`` into jaxnet.
 
     ``femnet_laws``: use FEMNET's own laws where they differ from the book (knot contact; netting drag in a
     case with a catch; ``docs/errata.md``), so that jaxnet gives FEMNET's answers (the default); False for
     jaxnet's own physics (the book's laws, corrected).
+
+    ``refine``: mesh the case this many times finer than its file says (> 0; 1, the default, is FEMNET's
+    mesh): every panel's meshing step and ``Meshing_UV`` lattice divided by it, the bars of every cable and
+    of every numerical twine's period multiplied by it (rounded up). Nodes grow about as ``refine²``. For
+    studies of mesh convergence (is FEMNET's mesh fine enough for a figure?) and of cost against size on
+    real gear (``validation/bench_statics.py --scene trawl``); node types, fixings and loads go where the
+    file puts them, on the finer mesh.
 
     Returns:
       a :class:`~jaxnet.case.Case`: its ``net`` the :class:`~jaxnet.net.Net` (jaxnet meshes it) and ``scene``
@@ -482,6 +501,14 @@ def read_don(path, femnet_laws=True):
     Raises:
       SceneError naming the file and line (see the package's docstring).
     """
+    try:
+        finite = bool(np.isfinite(refine) and refine > 0) and not isinstance(refine, bool)
+    except TypeError:
+        finite = False
+    if not finite:
+        raise SceneError(f"{path}: refine (how many times finer than the file's mesh) must be a number > 0, got "
+                         f"{refine!r}")
+    refine = float(refine)
     case = translated(parse_don(path))
     if femnet_laws:
         case = spheres_folded(case)
@@ -493,7 +520,7 @@ def read_don(path, femnet_laws=True):
     # a first build, held at every corner and cable end, tells where jaxnet's mesher put the nodes: their
     # FEMNET types (and so the fixings and loads of the real net) follow from where they were created
     with _located(case, "meshing the case"):
-        probe = _describe(case, env, plan, femnet_laws)
+        probe = _describe(case, env, plan, femnet_laws, refine)
         for kind, k, p, name in all_panels(case):
             for xyz in p.corners[:, :3]:
                 probe.fix(tuple(xyz))
@@ -501,7 +528,7 @@ def read_don(path, femnet_laws=True):
             for xyz in c.ends:
                 probe.fix(tuple(xyz))
         scene = probe.build()
-        net = _describe(case, env, plan, femnet_laws)
+        net = _describe(case, env, plan, femnet_laws, refine)
     warnings = list(plan.warnings)
     node_type = _node_types(case, scene, warnings)
     position = np.asarray(scene.nodes.position)
