@@ -115,20 +115,22 @@ def test_global_tangents_agree():
     assert np.max(np.abs(soft["autodiff"] - k["autodiff"])) > 1e-3 * scale
 
 
-def panel_with_bodies(profile=True):
-    """A panel in a current (its speed falling with depth if ``profile``), with bodies (node drag) and a rope."""
+def panel_with_bodies(profile=True, surface_level=float("nan")):
+    """A panel in a current (its speed falling with depth if ``profile``), with bodies (node drag) and a rope
+    along its top side at z = 0 (a free surface at ``surface_level``, m, if finite)."""
     from jaxnet.net import Net, Rope
     from jaxnet.scene import Environment
 
     depth, factor = (np.array([0.0, 0.5, 2.0]), np.array([1.0, 0.7, 0.2])) if profile else (np.zeros(0), np.zeros(0))
     net = Net(environment=Environment(current_speed=1.0, current_direction=np.array([1.0, 0.3, 0.0]),
-                                      profile_depth=depth, profile_factor=factor))
+                                      profile_depth=depth, profile_factor=factor, surface_level=surface_level))
     twine = Twine(l0=0.05, ea=2000.0, diameter=2e-3, ea_compression=500.0)
     panel = net.panel("netting", [(0.0, 0.0, -1.0, 0, 0), (1.0, 0.0, -1.0, 10, -10), (1.0, 0.0, 0.0, 20, 0),
                                   (0.0, 0.0, 0.0, 10, 10)], twine, 0.2)
     net.cable("headline", along=panel.side(2), rope=Rope(ea=5e4, diameter=8e-3))
     net.attach(panel.corner(0), mass=2.0, drag_area=0.05)
     net.attach(panel.corner(1), mass=2.0, drag_area=0.05)
+    net.attach(panel.corner(2), drag_area=0.02, volume=1e-3, size=0.1)  # a float on the headline
     net.fix(panel.side(2))
     return net.build()
 
@@ -152,6 +154,35 @@ def test_global_tangents_agree_in_a_current_varying_with_depth():
     assert np.max(np.abs(k["closed_form"] - k["autodiff"])) <= 1e-10 * scale
     # the profile does change the tangent here (speed and slope), so the agreement above is not vacuous
     assert np.max(np.abs(tangents[False]["closed_form"] - k["closed_form"])) > 1e-8 * scale
+
+
+def test_global_tangents_agree_at_a_free_surface():
+    """At a free surface the drags load only the immersed part of each vertex's share (``wetted``): the product
+    rule of the closed forms against autodiff, the surface put through a row of free netting nodes, those and the
+    headline's float within their immersion bands (2 mm and 0.1 m)."""
+    dry = panel_with_bodies(profile=True)
+    x0 = np.asarray(dry.nodes.position)
+    free = ~np.asarray(dry.nodes.fixed).any(axis=1)
+    level = float(x0[free, 2][np.argmin(np.abs(x0[free, 2] + 0.4))])  # a row of free nodes, 0.4 m down
+    scene = panel_with_bodies(profile=True, surface_level=level)
+    m = model.active_terms(scene)
+    options = {t.name: t.kwargs() for t in m}
+    assert all(options[name].get("wetted") for name in ("netting_drag", "bar_drag", "node_drag"))
+    assert model.stiffness_paths(m)["bar_drag"] == "closed_form"
+    rng = np.random.default_rng(7)
+    near = np.abs(x0[:, 2] - level) < 1e-2
+    x = jnp.asarray(x0 + np.where(near[:, None], 5e-4, 2e-2) * rng.normal(size=x0.shape))
+    inside = free & (np.abs(np.asarray(x)[:, 2] - level) < 1e-3)
+    assert inside.sum() >= 2  # free vertices inside the twines' band, where the share has a slope
+    pattern = assemble.build_pattern(scene, m)
+    k = {path: np.asarray(TANGENT(x, scene, pattern=pattern, model=m, stiffness=path))
+         for path in assemble.STIFFNESS_PATHS}
+    scale = np.max(np.abs(k["autodiff"]))
+    assert np.max(np.abs(k["closed_form"] - k["autodiff"])) <= 1e-10 * scale
+    # the surface does change the tangent (not a vacuous agreement): the same scene without it
+    m_dry = model.active_terms(dry)
+    k_dry = np.asarray(TANGENT(x, dry, pattern=assemble.build_pattern(dry, m_dry), model=m_dry, stiffness="autodiff"))
+    assert np.max(np.abs(k_dry - k["autodiff"])) > 1e-6 * scale
 
 
 @pytest.mark.parametrize("name", ["hanging", "codend"])

@@ -497,3 +497,69 @@ def test_model_code_3_is_femnet_catch():
     a = drag_term.NETTING_DRAG.arguments(p, SimpleNamespace(water_density=RHO), models=(3,), shielded=False)
     force = model.force(x, a["uv"], a["l0"], a["diameter"], a["cd_normal"], a["cd_tangential"], c, RHO)
     np.testing.assert_allclose(force, femnet_catch_jit(x, uv, c), rtol=1e-13)
+
+
+# -- at a free surface: the water drags only what is in it ----------------------------------------------------
+
+
+def _surface_env(level=0.3):
+    from jaxnet.scene import Environment
+
+    return Environment(current_speed=1.2, current_direction=np.array([1.0, 0.0, 0.0]), surface_level=level)
+
+
+@pytest.mark.parametrize("h_over_d", [-3.0, -0.5, -0.2, 0.0, 0.35, 0.5, 2.0])
+def test_a_horizontal_bar_at_the_surface_is_dragged_by_its_immersed_part(h_over_d):
+    # A horizontal pipe (a collar) across the current, its axis h above the water plane: each end's half of the
+    # drag is that of the immersed part of the pipe's section, the fraction by which it floats
+    # (surface.immersed_fraction, checked against the wetted chord area in test_surface.py): all of it from
+    # h = -D/2 down, exactly half with its axis on the surface, none from h = D/2 up.
+    from jaxnet.terms import surface
+
+    env, diameter, rest = _surface_env(), 0.25, 3.0
+    h = h_over_d * diameter
+    x = jnp.array([[0.0, 0.0, 0.3 + h], [0.0, rest, 0.3 + h]])
+    deep = drag.bar_drag_on_element(x - jnp.array([0.0, 0.0, 5.0]), None, rest, diameter, 1.0, 0.1, env)
+    wet = drag.bar_drag_on_element(x, None, rest, diameter, 1.0, 0.1, env, wetted=True)
+    exact = {-3.0: 1.0, -0.5: 1.0, 0.0: 0.5, 0.5: 0.0, 2.0: 0.0}
+    share = exact[h_over_d] if h_over_d in exact else float(surface.immersed_fraction(h, diameter))
+    assert h_over_d in exact or 0.0 < share < 1.0
+    np.testing.assert_allclose(wet, share * np.asarray(deep), rtol=1e-14, atol=1e-14 * float(np.abs(deep).max()))
+    assert float(np.abs(deep).max()) > 1.0  # ½ ρ Cd D L c² / 2 = 138 N at each end
+
+
+def test_netting_and_bodies_at_the_surface_keep_the_drag_of_their_immersed_vertices():
+    # a triangle with a vertex deep, one on the water plane and one high above it: its vertices keep 1, 1/2 and 0
+    # of their thirds; a float of size 0.1 m on the plane half its drag
+    env = _surface_env()
+    x, uv = random_element()
+    x = x.at[:, 2].set(jnp.array([-1.0, 0.3, 1.5]))
+    args = dict(uv=uv, l0=L0, diameter=D, cd_normal=jnp.asarray(CN), cd_tangential=jnp.asarray(CT),
+                drag_model=jnp.asarray(0), env=env, models=(0,), shielded=False)
+    dry = drag.netting_drag_on_element(x, None, **args)
+    wet = drag.netting_drag_on_element(x, None, **args, wetted=True)
+    np.testing.assert_allclose(wet, np.asarray(dry) * np.array([1.0, 0.5, 0.0])[:, None], rtol=1e-14, atol=1e-18)
+    assert float(np.abs(dry).min()) > 0.0
+    node = jnp.array([[2.0, 1.0, 0.3]])
+    body = drag.node_drag_on_element(node, None, 0.02, env)
+    np.testing.assert_allclose(drag.node_drag_on_element(node, None, 0.02, env, wetted=True, band=0.1),
+                               0.5 * np.asarray(body), rtol=1e-14)
+
+
+def test_the_wetted_bar_drag_stiffness_is_its_derivative_across_the_surface():
+    # ends inside the pipe's band, where the share changes with height: autodiff and the closed form's product
+    # rule against central differences of the force
+    from jaxnet.closed_form.drag_elements import bar_drag_on_element_stiffness
+
+    env, diameter, rest = _surface_env(), 0.25, 2.0
+    force = jax.jit(lambda y: drag.bar_drag_on_element(y, None, rest, diameter, 1.0, 0.1, env, wetted=True))
+    for _ in range(4):
+        x = jnp.array([[0.0, 0.0, 0.3], [0.3, 1.9, 0.3]]) + jnp.asarray(RNG.uniform(-0.1, 0.1, size=(2, 3)))
+        fd = central_differences(lambda y: force(y.reshape(2, 3)).ravel(), x.ravel(), 1e-6)
+        auto = np.asarray(jax.jacfwd(force)(x)).reshape(6, 6)
+        closed = np.asarray(bar_drag_on_element_stiffness(x, None, rest, diameter, 1.0, 0.1, env, wetted=True))
+        np.testing.assert_allclose(auto, fd, rtol=1e-6, atol=1e-7 * np.abs(fd).max())
+        np.testing.assert_allclose(-closed, auto, rtol=1e-12, atol=1e-12 * np.abs(fd).max())
+        # the height's share is part of it: a column along z that the dry drag does not have
+        dry = np.asarray(jax.jacfwd(lambda y: drag.bar_drag_on_element(y, None, rest, diameter, 1.0, 0.1, env))(x))
+        assert np.abs(auto - dry.reshape(6, 6)).max() > 1e-3 * np.abs(auto).max()

@@ -5,8 +5,9 @@ and the others) and returns the element matrix K = -∂F/∂x (N/m), vertex-majo
 :mod:`jaxnet.closed_form.drag`: the water's velocity where the term takes it (the current at the centroid in
 statics, with its slope over depth; the relative velocity at each vertex in a time step, with the gradient of
 the water's velocity there and the damping of the vertex's own), the netting's drag model per triangle, and
-the shielding of the netting behind a catch front (the front held fixed, as :mod:`jaxnet.assemble` says).
-No automatic differentiation here either.
+the shielding of the netting behind a catch front (the front held fixed, as :mod:`jaxnet.assemble` says), and
+at a free surface the immersed share of each vertex's drag (:func:`wetted_stiffness`). No automatic differentiation here
+either.
 """
 
 from __future__ import annotations
@@ -20,7 +21,21 @@ from jaxnet.closed_form.drag import (bar_drag_stiffness, current_slope, moving_b
                                      netting_drag_femnet_catch_stiffness, netting_drag_stiffness,
                                      netting_drag_zhan_stiffness, node_drag_stiffness)
 from jaxnet.closed_form.pressure import clipped_shape_integrals_jacobian
-from jaxnet.terms import drag as drag_term, pressure as pressure_term
+from jaxnet.terms import drag as drag_term, pressure as pressure_term, surface as surface_term
+
+
+def wetted_stiffness(stiffness, force, x, band, env):
+    """The stiffness of the wetted drag w_i(h_i) F_i (:func:`jaxnet.terms.drag.wetted_shares`) from that of the
+    drag F: ``stiffness`` (3k, 3k) = -∂F/∂x (N/m, with its damping in a time step: w does not depend on the
+    velocities), ``force`` (k, 3) = F (N), x (k, 3) the vertices, ``band`` (m) their immersion band. Product
+    rule, w_i depending on vertex i's height h_i = x_i·up - s only:
+
+        K^w_ij = w_i K_ij - δ_ij F_i (w_i' up)^T,      w_i' = dw_i/dh_i (1/m)."""
+    k = x.shape[0]
+    w = surface_term.immersed_shares(x, band, env.up, env.surface_level)
+    slope = surface_term.immersed_shares_slope(x, band, env.up, env.surface_level)
+    own = jnp.einsum("ij,ia,i,b->iajb", jnp.eye(k), force, slope, env.up).reshape(3 * k, 3 * k)
+    return w.repeat(3)[:, None] * stiffness - own
 
 
 def _water(x, env):
@@ -59,7 +74,7 @@ _MOVING_NETTING = {0: moving_netting_drag_stiffness, 3: moving_netting_drag_femn
 
 def netting_drag_on_element_stiffness(x, state, uv, l0, diameter, cd_normal, cd_tangential, drag_model, env, models,
                                       shielded, moving=False, waves=False, velocity=None, time_step=None,
-                                      selective=False):
+                                      selective=False, wetted=False):
     """(9, 9) stiffness (N/m) of :func:`jaxnet.terms.drag.netting_drag_on_element` (same arguments; in a time
     step also ``time_step`` Δt, s: the matrix then holds the damping -(1/Δt) ∂F/∂c), the catch front held
     fixed. Only the twine drag models (codes 0, 3 and 4, Zhan's) have one."""
@@ -94,25 +109,42 @@ def netting_drag_on_element_stiffness(x, state, uv, l0, diameter, cd_normal, cd_
         # d(1 - 3 w_i)/dx_j = -3 dw_i/dh_j axis: K_i,j = keep_i K_i,j + 3 f_i (dw_i/dh_j axis)^T
         correction = 3.0 * force[:, :, None, None] * (dw[:, None, :, None] * state["axis"][None, None, None, :])
         stiffness = keep.repeat(3)[:, None] * stiffness + correction.reshape(9, 9)
+    if wetted:
+        drag = drag_term.netting_drag_on_element(x, state, uv, l0, diameter, cd_normal, cd_tangential, drag_model, env,
+                                                 models, shielded, moving, waves, velocity, selective)
+        stiffness = wetted_stiffness(stiffness, drag, x, surface_term.immersion_band(diameter), env)
     return stiffness
 
 
 def bar_drag_on_element_stiffness(x, state, rest_length, diameter, cd_normal, cd_tangential, env, moving=False,
-                                  waves=False, velocity=None, time_step=None):
+                                  waves=False, velocity=None, time_step=None, wetted=False):
     """(6, 6) stiffness (N/m) of :func:`jaxnet.terms.drag.bar_drag_on_element` (same arguments, and Δt)."""
     if moving:
         w, gradient = _water_at_vertices(x, env, waves)
-        return moving_bar_drag_stiffness(x, rest_length, diameter, cd_normal, cd_tangential, w - velocity, gradient,
-                                         time_step, env.water_density)
-    c, slope = _water(x, env)
-    return bar_drag_stiffness(x, rest_length, diameter, cd_normal, cd_tangential, c, env.water_density, slope, env.up)
+        stiffness = moving_bar_drag_stiffness(x, rest_length, diameter, cd_normal, cd_tangential, w - velocity,
+                                              gradient, time_step, env.water_density)
+    else:
+        c, slope = _water(x, env)
+        stiffness = bar_drag_stiffness(x, rest_length, diameter, cd_normal, cd_tangential, c, env.water_density, slope,
+                                       env.up)
+    if wetted:
+        drag = drag_term.bar_drag_on_element(x, state, rest_length, diameter, cd_normal, cd_tangential, env, moving,
+                                             waves, velocity)
+        stiffness = wetted_stiffness(stiffness, drag, x, surface_term.immersion_band(diameter), env)
+    return stiffness
 
 
 def node_drag_on_element_stiffness(x, state, drag_area, env, moving=False, waves=False, velocity=None,
-                                   time_step=None):
+                                   time_step=None, wetted=False, band=None):
     """(3, 3) stiffness (N/m) of :func:`jaxnet.terms.drag.node_drag_on_element` (same arguments, and Δt)."""
     if moving:
         w, gradient = _water_at_vertices(x, env, waves)
-        return moving_node_drag_stiffness(drag_area, w[0] - velocity[0], gradient[0], time_step, env.water_density)
-    c, slope = _water(x, env)
-    return node_drag_stiffness(drag_area, c, env.water_density, slope, env.up)
+        stiffness = moving_node_drag_stiffness(drag_area, w[0] - velocity[0], gradient[0], time_step,
+                                               env.water_density)
+    else:
+        c, slope = _water(x, env)
+        stiffness = node_drag_stiffness(drag_area, c, env.water_density, slope, env.up)
+    if wetted:
+        drag = drag_term.node_drag_on_element(x, state, drag_area, env, moving, waves, velocity)
+        stiffness = wetted_stiffness(stiffness, drag, x, band, env)
+    return stiffness

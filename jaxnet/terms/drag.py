@@ -37,6 +37,12 @@ Conventions and choices:
   sign for clockwise triangles (d < 0), as in the tension forces.
 * Spreading. A triangle's drag is spread one third per vertex (text after 4.117); a bar's one half per
   end, as FEMNET does.
+* Free surface. Water drags only what is in it: where the scene has a free surface (option ``wetted``), each
+  vertex's share of a drag is weighed by the immersed fraction by which that share floats
+  (:func:`wetted_shares`; :mod:`jaxnet.terms.surface`), whatever ``Environment.floating`` says of weight and
+  buoyancy. A collar pipe floating half out of the water has half its drag, netting above the surface none.
+  The share changes with height only within the band (a twine's or bar's diameter, a body's height) about the
+  surface, where the tangent has the product rule's extra column.
 * Relative velocity. ``water_velocity`` is the water velocity relative to the element (m/s): the current
   in statics (evaluated by the caller where it chooses, e.g. at the element's centroid, with
   :func:`jaxnet.current.current_velocity`); in dynamics the current minus the element's velocity. The
@@ -141,7 +147,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxnet import current, geometry
-from jaxnet.terms import pressure, screen
+from jaxnet.terms import pressure, screen, surface
 from jaxnet.scene import has_free_surface
 from jaxnet.terms.term import (DRAG_CABLES, DRAG_NETTING, DRAG_NODES, FORCE, ClosedForm, Term, any_nonzero, flowing, moving_options, register)
 
@@ -447,13 +453,14 @@ NETTING_DRAG_MODELS = (
 
 
 def netting_drag_on_element(x, state, uv, l0, diameter, cd_normal, cd_tangential, drag_model, env, models,
-                            shielded, moving=False, waves=False, velocity=None, selective=False):
+                            shielded, moving=False, waves=False, velocity=None, selective=False, wetted=False):
     """Drag (3, 3) in N on one netting triangle, by its drag model (``drag_model``: a code of
     :data:`NETTING_DRAG_MODELS`; ``models``: the codes present in the scene that load it, static; ``selective``:
     some triangles have a model not in ``models``, which gives them no drag, static). In statics the water's
     velocity is the current at the centroid; in dynamics (``moving``) each vertex takes its share with the
     velocity relative to it (:func:`per_vertex`). ``shielded``: the scene has a catch, whose front is in
-    ``state`` (:func:`jaxnet.catch.catch_state`)."""
+    ``state`` (:func:`jaxnet.catch.catch_state`). ``wetted``: the scene has a free surface; each vertex's share
+    is then that of its immersed part (:func:`wetted_shares`, the twine diameter its band)."""
     rho = env.water_density
     total = jnp.zeros((3, 3))
     for code in models:
@@ -471,16 +478,21 @@ def netting_drag_on_element(x, state, uv, l0, diameter, cd_normal, cd_tangential
         # its drag, spread as the consistent load of that part (continuous as the front sweeps the element).
         behind = pressure.clipped_shape_integrals(pressure.front_heights(x, state["front"], state["axis"]))
         total = total * (1.0 - 3.0 * behind)[:, None]
+    if wetted:
+        total = total * wetted_shares(x, surface.immersion_band(diameter), env)[:, None]
     return total
 
 
 def bar_drag_on_element(x, state, rest_length, diameter, cd_normal, cd_tangential, env, moving=False, waves=False,
-                        velocity=None):
-    """Drag (2, 3) in N on one cable bar: at the current at its middle in statics, per end in dynamics."""
+                        velocity=None, wetted=False):
+    """Drag (2, 3) in N on one cable bar: at the current at its middle in statics, per end in dynamics; with
+    ``wetted`` (a free surface) each end's half is that of its immersed part (:func:`wetted_shares`, the bar's
+    diameter its band)."""
     def force(c):
         return bar_drag(x, rest_length, diameter, cd_normal, cd_tangential, c, env.water_density)
 
-    return per_vertex(force, x, env, velocity, waves) if moving else force(water_velocity(x, env))
+    f = per_vertex(force, x, env, velocity, waves) if moving else force(water_velocity(x, env))
+    return f * wetted_shares(x, surface.immersion_band(diameter), env)[:, None] if wetted else f
 
 
 def node_water_velocity(x, env, moving, waves, velocity):
@@ -489,10 +501,23 @@ def node_water_velocity(x, env, moving, waves, velocity):
     return water_velocity_at(x[0], env, waves) - velocity[0] if moving else water_velocity(x, env)
 
 
-def node_drag_on_element(x, state, drag_area, env, moving=False, waves=False, velocity=None):
-    """Drag (1, 3) in N on a node's body of drag area Cd·A (:func:`node_drag`)."""
+def node_drag_on_element(x, state, drag_area, env, moving=False, waves=False, velocity=None, wetted=False, band=None):
+    """Drag (1, 3) in N on a node's body of drag area Cd·A (:func:`node_drag`); with ``wetted`` (a free surface)
+    that of its immersed part (:func:`wetted_shares`; ``band``, m: the body's height, by which it floats)."""
     c = node_water_velocity(x, env, moving, waves, velocity)
-    return node_drag(drag_area, c, env.water_density)[None, :]
+    f = node_drag(drag_area, c, env.water_density)[None, :]
+    return f * wetted_shares(x, band, env)[:, None] if wetted else f
+
+
+def wetted_shares(x, band, env):
+    """(k,) the immersed fraction of each vertex's share of an element's drag, x (k, 3) its vertices (m): the
+    water drags only what is in it. The fraction is that by which the same share floats
+    (:func:`jaxnet.terms.surface.immersed_shares`: a horizontal cylinder of diameter ``band``, m, centred on the
+    vertex), so that what floats half out of the water has half its drag, and what is out of it none. The
+    surface is the mean water plane ``env.surface_level``, as for buoyancy (waves move the water, not the plane,
+    in this version). FEMNET weighs its bars' and its netting's drag alike, vertex by vertex (``pondFS``,
+    ``miseajourPondFS.c``), with a linear ramp over the side of the cube of the vertex's lumped volume."""
+    return surface.immersed_shares(x, band, env.up, env.surface_level)
 
 
 def box_drag_on_element(x, state, length, drag_coefficient, env, floating, moving=False, waves=False, velocity=None):
@@ -518,6 +543,12 @@ def _bar_arguments(p, env, **motion):
             "cd_tangential": p.tangential_ratio * p.cd_normal, "env": env, **motion}
 
 
+def _node_arguments(p, env, wetted=False, **motion):
+    # the band of a body (its height) matters only where it can cross a free surface
+    band = {"band": surface.node_band(p.size, p.volume), "wetted": True} if wetted else {}
+    return {"drag_area": p.drag_area, "env": env, **band, **motion}
+
+
 def _netting_active(scene, dynamic):
     net = scene.netting
     if net is None or not flowing(scene, dynamic) or net.drag_model is None:
@@ -532,18 +563,25 @@ def _netting_active(scene, dynamic):
     # a triangle whose model is left out (no force, or twine drag with Cd = 0 in every triangle of it) gets none
     selective = present != set(models)
     return {"models": models, "shielded": scene.catch is not None, **({"selective": True} if selective else {}),
-            **moving_options(scene, dynamic)}
+            **_wetted(scene), **moving_options(scene, dynamic)}
 
 
 def _bar_active(scene, dynamic):
     bars = scene.bars
     if bars is None or not flowing(scene, dynamic) or not any_nonzero(bars.cd_normal):
         return None
-    return moving_options(scene, dynamic)
+    return {**_wetted(scene), **moving_options(scene, dynamic)}
 
 
 def _node_active(scene, dynamic):
-    return moving_options(scene, dynamic) if flowing(scene, dynamic) and any_nonzero(scene.nodes.drag_area) else None
+    if not flowing(scene, dynamic) or not any_nonzero(scene.nodes.drag_area):
+        return None
+    return {**_wetted(scene), **moving_options(scene, dynamic)}
+
+
+def _wetted(scene):
+    """Option ``wetted`` of the drags where the scene has a free surface: only the immersed part is dragged."""
+    return {"wetted": True} if has_free_surface(scene) else {}
 
 
 def _box_active(scene, dynamic):
@@ -567,7 +605,7 @@ BAR_DRAG = register(Term(
     closed_form=ClosedForm("jaxnet.closed_form.drag_elements:bar_drag_on_element_stiffness")))
 NODE_DRAG = register(Term(
     name="node_drag", family="nodes", kind=FORCE, element=node_drag_on_element,
-    arguments=lambda p, env, **motion: {"drag_area": p.drag_area, "env": env, **motion},
+    arguments=_node_arguments,
     active=_node_active, group=DRAG_NODES, moving=True,
     closed_form=ClosedForm("jaxnet.closed_form.drag_elements:node_drag_on_element_stiffness")))
 NODE_BOX_DRAG = register(Term(

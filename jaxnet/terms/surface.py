@@ -182,10 +182,30 @@ def box_fraction_integral(height, vertical_length, surface_level):
     return jnp.where(flat, jnp.minimum(-d, 0.0), box)
 
 
-def _band(diameter):
+def immersion_band(diameter):
     """The immersion band (m) of a bar or twine: its diameter; 1 m where the diameter is 0 (a link of no volume,
-    common in FEMNET's files: it then has no weight or buoyancy at all, and the band only keeps h / band finite)."""
+    common in FEMNET's files: it then has no weight, buoyancy nor drag at all, and the band only keeps h / band
+    finite)."""
     return jnp.where(diameter > 0.0, diameter, 1.0)
+
+
+def node_band(size, volume):
+    """The immersion band (m) of a body lumped at a node: its ``size`` (m) where given (> 0; None: nowhere), else
+    the diameter of the sphere of its ``volume`` (m³), 1 mm at least."""
+    sphere = jnp.cbrt(6.0 * volume / jnp.pi)
+    return jnp.maximum(sphere if size is None else jnp.where(size > 0, size, sphere), 1e-3)
+
+
+def immersed_shares(x, band, up, surface_level):
+    """(k,) the immersed fraction (dimensionless) of what an element lumps at each of its vertices x (k, 3) (m):
+    :func:`immersed_fraction` of a cylinder of diameter ``band`` (m) centred on the vertex, the profile by which
+    the element floats here. The drag of :mod:`jaxnet.terms.drag` takes it: water drags only what is in it."""
+    return immersed_fraction(_height(x, up, surface_level), band)
+
+
+def immersed_shares_slope(x, band, up, surface_level):
+    """(k,) the derivative (1/m) of :func:`immersed_shares` with each vertex's height."""
+    return fraction_slope(2.0 * _height(x, up, surface_level) / band) * 2.0 / band
 
 
 def _height(x, up, surface_level):
@@ -232,7 +252,7 @@ def bar_gravity_energy(x, rest_length, diameter, density, water_density, g, up, 
     h = _height(x, up, surface_level)
     return jnp.sum(
         density * half_volume * g * (x @ up)
-        - water_density * g * half_volume * immersed_fraction_integral(h, _band(diameter))
+        - water_density * g * half_volume * immersed_fraction_integral(h, immersion_band(diameter))
     )
 
 
@@ -252,7 +272,7 @@ def netting_gravity_energy(x, uv, l0, diameter, density, water_density, g, up, s
     """
     d = geometry.twine_determinant(uv)
     vertex_volume = geometry.twine_volume(jnp.abs(d), l0, diameter) / 3.0
-    band = _band(diameter) if thickness is None else thickness
+    band = immersion_band(diameter) if thickness is None else thickness
     h = _height(x, up, surface_level)
     return jnp.sum(
         density * vertex_volume * g * (x @ up)
@@ -283,9 +303,8 @@ def _bar_arguments(p, env):
 
 def _node_arguments(p, env, boxes=False):
     # a body given no size is taken as the sphere of its volume (1 mm at least) for its waterline band
-    sphere = jnp.cbrt(6.0 * p.volume / jnp.pi)
-    size = jnp.maximum(jnp.where(p.size > 0, p.size, sphere), 1e-3)
-    return {"mass": p.mass, "volume": p.volume, "thickness": size, "water_density": env.water_density,
+    return {"mass": p.mass, "volume": p.volume, "thickness": node_band(p.size, p.volume),
+            "water_density": env.water_density,
             "g": env.gravity, "up": env.up, "surface_level": env.surface_level,
             **({"box_height": p.drag_length[2]} if boxes else {})}
 
