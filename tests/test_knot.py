@@ -162,13 +162,18 @@ def test_penalty_bounds_and_smoothness():
 @pytest.mark.parametrize("clockwise", [False, True])
 def test_forces_and_stiffness_in_contact_by_finite_differences(clockwise):
     for _ in range(4):
-        uv = RNG.uniform(-4, 4, size=(3, 2))
-        if (geometry.twine_determinant(uv) < 0) != clockwise:
-            uv = uv[[0, 2, 1]]
-        # a nearly closed net (deep in contact, or in the band), rotated, twines stretched unequally
-        alpha = RNG.uniform(ALPHA_MIN - 3 * BAND, ALPHA_MIN - 0.2 * BAND)
-        x = lattice_positions(uv, alpha, L0, random_rotation()) * RNG.uniform(0.9, 1.1, size=3)
-        x = x.ravel() + RNG.normal(size=9) * 1e-4
+        # a nearly closed net (deep in contact, or in the band), rotated, twines stretched unequally; the
+        # unequal stretch moves the half angle, so draws that leave the contact are drawn again (how many
+        # depends on the generator's state, which the order of the tests sets)
+        for _ in range(100):
+            uv = RNG.uniform(-4, 4, size=(3, 2))
+            if (geometry.twine_determinant(uv) < 0) != clockwise:
+                uv = uv[[0, 2, 1]]
+            alpha = RNG.uniform(ALPHA_MIN - 3 * BAND, ALPHA_MIN - 0.2 * BAND)
+            x = lattice_positions(uv, alpha, L0, random_rotation()) * RNG.uniform(0.9, 1.1, size=3)
+            x = x.ravel() + RNG.normal(size=9) * 1e-4
+            if float(opening.half_angle(x.reshape(3, 3), uv)[0]) < ALPHA_MIN:
+                break
         assert float(opening.half_angle(x.reshape(3, 3), uv)[0]) < ALPHA_MIN
         e, f, K = evaluate(x, uv, BAND)
         h = 1e-8
