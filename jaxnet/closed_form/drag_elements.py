@@ -32,8 +32,7 @@ def wetted_stiffness(stiffness, force, x, band, env):
 
         K^w_ij = w_i K_ij - δ_ij F_i (w_i' up)^T,      w_i' = dw_i/dh_i (1/m)."""
     k = x.shape[0]
-    w = surface_term.immersed_shares(x, band, env.up, env.surface_level)
-    slope = surface_term.immersed_shares_slope(x, band, env.up, env.surface_level)
+    w, slope = drag_term.wetted_shares(x, band, env), drag_term.wetted_shares_slope(x, band, env)
     own = jnp.einsum("ij,ia,i,b->iajb", jnp.eye(k), force, slope, env.up).reshape(3 * k, 3 * k)
     return w.repeat(3)[:, None] * stiffness - own
 

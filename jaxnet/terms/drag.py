@@ -38,11 +38,10 @@ Conventions and choices:
 * Spreading. A triangle's drag is spread one third per vertex (text after 4.117); a bar's one half per
   end, as FEMNET does.
 * Free surface. Water drags only what is in it: where the scene has a free surface (option ``wetted``), each
-  vertex's share of a drag is weighed by the immersed fraction by which that share floats
-  (:func:`wetted_shares`; :mod:`jaxnet.terms.surface`), whatever ``Environment.floating`` says of weight and
-  buoyancy. A collar pipe floating half out of the water has half its drag, netting above the surface none.
-  The share changes with height only within the band (a twine's or bar's diameter, a body's height) about the
-  surface, where the tangent has the product rule's extra column.
+  vertex's share of a drag is weighed by the wetted part of the area it shows the flow (:func:`wetted_shares`),
+  whatever ``Environment.floating`` says of weight and buoyancy. A collar pipe with its axis on the surface has
+  half its drag, netting above the surface none. The share changes with height only within the band (a twine's
+  or bar's diameter, a body's height) about the surface, where the tangent has the product rule's extra column.
 * Relative velocity. ``water_velocity`` is the water velocity relative to the element (m/s): the current
   in statics (evaluated by the caller where it chooses, e.g. at the element's centroid, with
   :func:`jaxnet.current.current_velocity`); in dynamics the current minus the element's velocity. The
@@ -510,14 +509,26 @@ def node_drag_on_element(x, state, drag_area, env, moving=False, waves=False, ve
 
 
 def wetted_shares(x, band, env):
-    """(k,) the immersed fraction of each vertex's share of an element's drag, x (k, 3) its vertices (m): the
-    water drags only what is in it. The fraction is that by which the same share floats
-    (:func:`jaxnet.terms.surface.immersed_shares`: a horizontal cylinder of diameter ``band``, m, centred on the
-    vertex), so that what floats half out of the water has half its drag, and what is out of it none. The
-    surface is the mean water plane ``env.surface_level``, as for buoyancy (waves move the water, not the plane,
-    in this version). FEMNET weighs its bars' and its netting's drag alike, vertex by vertex (``pondFS``,
-    ``miseajourPondFS.c``), with a linear ramp over the side of the cube of the vertex's lumped volume."""
-    return surface.immersed_shares(x, band, env.up, env.surface_level)
+    """(k,) the wetted part (dimensionless) of each vertex's share of an element's drag, x (k, 3) its vertices (m):
+    the water drags only what is in it. A drag is that of the area a body shows the flow, and of a body of height
+    ``band`` (m: a twine's or a bar's diameter, a float's height) centred on the vertex, h above the water plane,
+    the water holds the depth band/2 - h of that area: the share is clip(1/2 - h/band, 0, 1), all of it from
+    h = -band/2 down, half with the body's axis on the surface, none from h = band/2 up. (The part of a cylinder's
+    *section* under water, by which it floats (:mod:`jaxnet.terms.surface`), is another function of h: the drag
+    sees the depth, not the section.) It is piecewise linear in the height, as FEMNET's (``pondFS``,
+    ``miseajourPondFS.c``: the same ramp over the side of the cube of the vertex's lumped volume) and as the box
+    bodies' immersed height (:func:`box_immersed_fraction`): the stiffness jumps where a body just emerges or
+    submerges, the force does not. The surface is the mean water plane ``env.surface_level``, as for buoyancy
+    (waves move the water, not the plane, in this version)."""
+    h = x @ env.up - env.surface_level
+    return jnp.where(h <= -0.5 * band, 1.0, jnp.where(h >= 0.5 * band, 0.0, 0.5 - h / band))
+
+
+def wetted_shares_slope(x, band, env):
+    """(k,) the derivative (1/m) of :func:`wetted_shares` with each vertex's height: -1/band inside the band, 0
+    outside it and on its edges (where :func:`wetted_shares` takes its constant branch)."""
+    h = x @ env.up - env.surface_level
+    return jnp.where(jnp.abs(h) < 0.5 * band, -1.0 / band, 0.0)
 
 
 def box_drag_on_element(x, state, length, drag_coefficient, env, floating, moving=False, waves=False, velocity=None):

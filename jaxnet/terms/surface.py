@@ -196,18 +196,6 @@ def node_band(size, volume):
     return jnp.maximum(sphere if size is None else jnp.where(size > 0, size, sphere), 1e-3)
 
 
-def immersed_shares(x, band, up, surface_level):
-    """(k,) the immersed fraction (dimensionless) of what an element lumps at each of its vertices x (k, 3) (m):
-    :func:`immersed_fraction` of a cylinder of diameter ``band`` (m) centred on the vertex, the profile by which
-    the element floats here. The drag of :mod:`jaxnet.terms.drag` takes it: water drags only what is in it."""
-    return immersed_fraction(_height(x, up, surface_level), band)
-
-
-def immersed_shares_slope(x, band, up, surface_level):
-    """(k,) the derivative (1/m) of :func:`immersed_shares` with each vertex's height."""
-    return fraction_slope(2.0 * _height(x, up, surface_level) / band) * 2.0 / band
-
-
 def _height(x, up, surface_level):
     """Height (m) above the water plane of points x (..., 3)."""
     return x @ up - surface_level
