@@ -512,15 +512,32 @@ def _surface_env(level=0.3):
 def test_a_horizontal_bar_at_the_surface_is_dragged_by_its_immersed_part(h_over_d):
     # A horizontal pipe (a collar) across the current, its axis h above the water plane: each end's half of the
     # drag is that of the area it shows the flow under water, its wetted depth D/2 - h over D: all of it from
-    # h = -D/2 down, exactly half with its axis on the surface, none from h = D/2 up.
+    # h = -3D/4 down, exactly half with its axis on the surface, none from h = 3D/4 up; the ramp's corners
+    # rounded over D/4 on either side of h = ∓D/2 by the parabolas tangent to both sides (1 - e/4 and e/4 at
+    # the corners, e = 1/4; (0.35 - 0.75)² = 0.16 at h = 0.35 D).
     env, diameter, rest = _surface_env(), 0.25, 3.0
     h = h_over_d * diameter
     x = jnp.array([[0.0, 0.0, 0.3 + h], [0.0, rest, 0.3 + h]])
     deep = drag.bar_drag_on_element(x - jnp.array([0.0, 0.0, 5.0]), None, rest, diameter, 1.0, 0.1, env)
     wet = drag.bar_drag_on_element(x, None, rest, diameter, 1.0, 0.1, env, wetted=True)
-    share = {-3.0: 1.0, -0.5: 1.0, -0.2: 0.7, 0.0: 0.5, 0.35: 0.15, 0.5: 0.0, 2.0: 0.0}[h_over_d]
+    share = {-3.0: 1.0, -0.5: 1.0 - 1.0 / 16.0, -0.2: 0.7, 0.0: 0.5, 0.35: 0.16, 0.5: 1.0 / 16.0, 2.0: 0.0}[h_over_d]
     np.testing.assert_allclose(wet, share * np.asarray(deep), rtol=1e-14, atol=1e-14 * float(np.abs(deep).max()))
     assert float(np.abs(deep).max()) > 1.0  # ½ ρ Cd D L c² / 2 = 138 N at each end
+
+
+def test_the_wetted_share_is_smooth_and_keeps_the_ramps_integral():
+    # C¹ (its slope, the closed form's, is the derivative of the share and continuous across the corners), within
+    # e/4 of the ramp clip(1/2 - h/D, 0, 1), and of the same integral over the heights (the corners' differences
+    # cancel): the drag of a body summed over the heights of its axis is the ramp's
+    env, band = _surface_env(0.0), 0.1
+    h = np.linspace(-0.1, 0.1, 40001)
+    x = jnp.asarray(np.stack([np.zeros_like(h), np.zeros_like(h), h], axis=1))
+    share, slope = np.asarray(drag.wetted_shares(x, band, env)), np.asarray(drag.wetted_shares_slope(x, band, env))
+    ramp = np.clip(0.5 - h / band, 0.0, 1.0)
+    assert np.abs(share - ramp).max() == pytest.approx(drag.WETTED_ROUNDING / 4.0, rel=1e-6)
+    np.testing.assert_allclose(np.trapezoid(share - ramp, h), 0.0, atol=1e-10)
+    np.testing.assert_allclose(np.gradient(share, h)[1:-1], slope[1:-1], atol=1e-4 / band)
+    assert np.abs(np.diff(slope)).max() < 1e-3 / band  # no jump anywhere
 
 
 def test_netting_and_bodies_at_the_surface_keep_the_drag_of_their_immersed_vertices():

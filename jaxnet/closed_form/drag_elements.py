@@ -6,8 +6,8 @@ and the others) and returns the element matrix K = -∂F/∂x (N/m), vertex-majo
 statics, with its slope over depth; the relative velocity at each vertex in a time step, with the gradient of
 the water's velocity there and the damping of the vertex's own), the netting's drag model per triangle, and
 the shielding of the netting behind a catch front (the front held fixed, as :mod:`jaxnet.assemble` says), and
-at a free surface the immersed share of each vertex's drag (:func:`wetted_stiffness`). No automatic differentiation here
-either.
+at a free surface the wetted share of each vertex's drag (:func:`wetted_stiffness`). No automatic
+differentiation here either.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ from jaxnet.terms import drag as drag_term, pressure as pressure_term, surface a
 def wetted_stiffness(stiffness, force, x, band, env):
     """The stiffness of the wetted drag w_i(h_i) F_i (:func:`jaxnet.terms.drag.wetted_shares`) from that of the
     drag F: ``stiffness`` (3k, 3k) = -∂F/∂x (N/m, with its damping in a time step: w does not depend on the
-    velocities), ``force`` (k, 3) = F (N), x (k, 3) the vertices, ``band`` (m) their immersion band. Product
+    velocities), ``force`` (k, 3) = F (N), x (k, 3) the vertices, ``band`` (m) their bodies' height. Product
     rule, w_i depending on vertex i's height h_i = x_i·up - s only:
 
         K^w_ij = w_i K_ij - δ_ij F_i (w_i' up)^T,      w_i' = dw_i/dh_i (1/m)."""

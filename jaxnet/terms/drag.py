@@ -459,7 +459,7 @@ def netting_drag_on_element(x, state, uv, l0, diameter, cd_normal, cd_tangential
     velocity is the current at the centroid; in dynamics (``moving``) each vertex takes its share with the
     velocity relative to it (:func:`per_vertex`). ``shielded``: the scene has a catch, whose front is in
     ``state`` (:func:`jaxnet.catch.catch_state`). ``wetted``: the scene has a free surface; each vertex's share
-    is then that of its immersed part (:func:`wetted_shares`, the twine diameter its band)."""
+    is then that of its wetted part (:func:`wetted_shares`, the twine diameter its band)."""
     rho = env.water_density
     total = jnp.zeros((3, 3))
     for code in models:
@@ -485,7 +485,7 @@ def netting_drag_on_element(x, state, uv, l0, diameter, cd_normal, cd_tangential
 def bar_drag_on_element(x, state, rest_length, diameter, cd_normal, cd_tangential, env, moving=False, waves=False,
                         velocity=None, wetted=False):
     """Drag (2, 3) in N on one cable bar: at the current at its middle in statics, per end in dynamics; with
-    ``wetted`` (a free surface) each end's half is that of its immersed part (:func:`wetted_shares`, the bar's
+    ``wetted`` (a free surface) each end's half is that of its wetted part (:func:`wetted_shares`, the bar's
     diameter its band)."""
     def force(c):
         return bar_drag(x, rest_length, diameter, cd_normal, cd_tangential, c, env.water_density)
@@ -502,33 +502,49 @@ def node_water_velocity(x, env, moving, waves, velocity):
 
 def node_drag_on_element(x, state, drag_area, env, moving=False, waves=False, velocity=None, wetted=False, band=None):
     """Drag (1, 3) in N on a node's body of drag area Cd·A (:func:`node_drag`); with ``wetted`` (a free surface)
-    that of its immersed part (:func:`wetted_shares`; ``band``, m: the body's height, by which it floats)."""
+    that of its wetted part (:func:`wetted_shares`; ``band``, m: the body's height,
+    :func:`jaxnet.terms.surface.node_band`)."""
     c = node_water_velocity(x, env, moving, waves, velocity)
     f = node_drag(drag_area, c, env.water_density)[None, :]
     return f * wetted_shares(x, band, env)[:, None] if wetted else f
+
+
+#: half-width of the rounded corners of the wetted share (:func:`wetted_shares`), as a fraction of the band
+WETTED_ROUNDING = 0.25
 
 
 def wetted_shares(x, band, env):
     """(k,) the wetted part (dimensionless) of each vertex's share of an element's drag, x (k, 3) its vertices (m):
     the water drags only what is in it. A drag is that of the area a body shows the flow, and of a body of height
     ``band`` (m: a twine's or a bar's diameter, a float's height) centred on the vertex, h above the water plane,
-    the water holds the depth band/2 - h of that area: the share is clip(1/2 - h/band, 0, 1), all of it from
-    h = -band/2 down, half with the body's axis on the surface, none from h = band/2 up. (The part of a cylinder's
-    *section* under water, by which it floats (:mod:`jaxnet.terms.surface`), is another function of h: the drag
-    sees the depth, not the section.) It is piecewise linear in the height, as FEMNET's (``pondFS``,
-    ``miseajourPondFS.c``: the same ramp over the side of the cube of the vertex's lumped volume) and as the box
-    bodies' immersed height (:func:`box_immersed_fraction`): the stiffness jumps where a body just emerges or
-    submerges, the force does not. The surface is the mean water plane ``env.surface_level``, as for buoyancy
-    (waves move the water, not the plane, in this version)."""
-    h = x @ env.up - env.surface_level
-    return jnp.where(h <= -0.5 * band, 1.0, jnp.where(h >= 0.5 * band, 0.0, 0.5 - h / band))
+    the water holds the depth band/2 - h of that area: the share is the ramp clip(1/2 - t, 0, 1), t = h/band, all
+    of it from t = -1/2 down, half with the body's axis on the surface, none from t = 1/2 up. (The part of a
+    cylinder's *section* under water, by which it floats (:mod:`jaxnet.terms.surface`), is another function of h:
+    the drag sees the depth, not the section.) FEMNET weighs its bars' and netting's drag with the same ramp
+    (``pondFS``, ``miseajourPondFS.c``, over the side of the cube of the vertex's lumped volume).
+
+    Why rounded. The ramp's corners are kinks of the force, jumps of the tangent: a float or a collar that sits
+    near a corner makes Newton chatter across it (FEMNET's cage ``10fish_cage/f1`` went from 694 iterations,
+    with a smooth share, to its cap of 3000, as FEMNET's own solve does). So each corner is replaced by the
+    parabola tangent to both its sides over |t ∓ 1/2| < e, e = :data:`WETTED_ROUNDING`: the share is C¹,
+    differs from the ramp by at most e/4 (at the corners) and nowhere beyond them, and keeps the ramp's integral
+    over the heights (the two corners' differences cancel). The surface is the mean water plane
+    ``env.surface_level``, as for buoyancy (waves move the water, not the plane, in this version)."""
+    t = (x @ env.up - env.surface_level) / band
+    e = WETTED_ROUNDING
+    low, high = 1.0 - (t + 0.5 + e) ** 2 / (4.0 * e), (t - 0.5 - e) ** 2 / (4.0 * e)
+    return jnp.where(t <= -0.5 - e, 1.0, jnp.where(t < -0.5 + e, low, jnp.where(
+        t <= 0.5 - e, 0.5 - t, jnp.where(t < 0.5 + e, high, 0.0))))
 
 
 def wetted_shares_slope(x, band, env):
-    """(k,) the derivative (1/m) of :func:`wetted_shares` with each vertex's height: -1/band inside the band, 0
-    outside it and on its edges (where :func:`wetted_shares` takes its constant branch)."""
-    h = x @ env.up - env.surface_level
-    return jnp.where(jnp.abs(h) < 0.5 * band, -1.0 / band, 0.0)
+    """(k,) the derivative (1/m) of :func:`wetted_shares` with each vertex's height (continuous: -1/band on the
+    ramp, 0 beyond the corners)."""
+    t = (x @ env.up - env.surface_level) / band
+    e = WETTED_ROUNDING
+    low, high = -(t + 0.5 + e) / (2.0 * e), (t - 0.5 - e) / (2.0 * e)
+    return jnp.where(t <= -0.5 - e, 0.0, jnp.where(t < -0.5 + e, low, jnp.where(
+        t <= 0.5 - e, -1.0, jnp.where(t < 0.5 + e, high, 0.0)))) / band
 
 
 def box_drag_on_element(x, state, length, drag_coefficient, env, floating, moving=False, waves=False, velocity=None):

@@ -40,8 +40,9 @@ floats as that box, not as a cylinder centred on the node: the box stands on its
 below for L_z < 0), its waterplane area is constant, so its immersed fraction is linear in the height and its
 stiffness rho g L_x L_y while it crosses the surface (:func:`box_fraction_integral`, FEMNET's ``flotteur2.c``).
 
-Families. ``Environment.floating`` names the families that feel the surface (all by default); the others keep
-their constant immersed load (:mod:`jaxnet.terms.gravity`) wherever they are. Hexagonal netting floats as
+Families. ``Environment.floating`` names the families whose weight and buoyancy feel the surface (all by
+default); the others keep their constant immersed load (:mod:`jaxnet.terms.gravity`) wherever they are. The
+drag of every family sees the surface whatever ``floating`` says (:func:`jaxnet.terms.drag.wetted_shares`). Hexagonal netting floats as
 diamond netting does, its three families' twines lumped a third at each vertex.
 
 Derivatives. f and phi carry analytic derivative rules (``jax.custom_jvp``): differentiating acos and
