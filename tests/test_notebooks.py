@@ -119,6 +119,7 @@ def test_quickstart(monkeypatch):
 
 def test_fish_cage_in_current(monkeypatch):
     import jaxnet as jn
+    from jaxnet.terms import drag
 
     ns = run_notebook("fish_cage_in_current.ipynb", monkeypatch)
     rows, table, exponent = ns["rows"], ns["table"], ns["exponent"]
@@ -131,7 +132,8 @@ def test_fish_cage_in_current(monkeypatch):
         assert row["balance"] <= scene.n_nodes * tol
     # the collar is held in plan, so its drag is a rigid body's, Morison's on each bar, times the part of it in
     # the water: each end's half of ½ ρ D l0 U² (Cn sin³α + Ct |cos α|³) along x (α the bar's angle to the
-    # current) weighed by its wetted depth, clip(1/2 - z/D, 0, 1) of the pipe's diameter D. Its exponent then
+    # current) weighed by its wetted depth, about clip(1/2 - z/D, 0, 1) of the pipe's diameter D (its corners
+    # rounded: jaxnet.terms.drag.wetted_shares, checked against the ramp in test_drag.py). Its exponent then
     # differs from 2 by how the draught changes with the speed; the netting gives way, so its drag grows no
     # faster than U² and faster than U (measured 1.99 on the small, stiff cage, 1.55-1.93 at full size)
     rho = 1025.0
@@ -144,7 +146,7 @@ def test_fish_cage_in_current(monkeypatch):
         sin = np.sqrt(1.0 - cos**2)
         d, cn = np.asarray(bars.diameter), np.asarray(bars.cd_normal)
         ct = cn * np.asarray(bars.tangential_ratio)
-        wet = np.clip(0.5 - x[:, 2] / d[0], 0.0, 1.0)
+        wet = np.asarray(drag.wetted_shares(x, d[0], scene.environment))
         morison = 0.5 * rho * d * np.asarray(bars.rest_length) * row["speed"] ** 2 * (cn * sin**3 + ct * np.abs(cos) ** 3)
         expected = np.sum(morison * 0.5 * (wet[a] + wet[b]))
         assert 0.0 < wet[a].mean() < 1.0  # the pipe floats partly out of the water
