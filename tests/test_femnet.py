@@ -308,6 +308,7 @@ def test_a_case_meshed_finer_keeps_its_net_and_converges_to_the_same_answer():
     # convergence, not a different net.
     coarse = femnet.read_don(DATA / "c2.don")
     fine = femnet.read_don(DATA / "c2.don", refine=2)
+    assert fine.label.endswith("c2.don, meshed 2 times finer than its file") and coarse.label.endswith("c2.don")
     assert 3.5 < fine.scene.n_nodes / coarse.scene.n_nodes < 4.2
     assert len(fine.scene.bars.ends) == 2 * len(coarse.scene.bars.ends)
     for case in (coarse, fine):  # the triangles' total area in twine coordinates (U, V)
@@ -337,7 +338,7 @@ def test_cli_refines_a_femnet_case_only_where_jaxnet_meshes_it(tmp_path):
         assert cli.main(["run", str(DATA / "links_hub.don"), "--refine", refine, "--out", str(out), "--quiet",
                          "--no-cache"]) == 0
         result = json.loads((out / "result.json").read_text())
-        assert result["converged"]
+        assert result["converged"] and result["femnet_case"]["refine"] == float(refine)
         nodes[refine] = result["n_nodes"]
     assert 3.0 < nodes["2"] / nodes["1"] < 4.5
     assert cli.main(["run", str(DATA / "c2.don"), "--mesh", str(DATA / "c2.mdg"), "--refine", "2",

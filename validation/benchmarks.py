@@ -39,6 +39,8 @@ SCRIPTS = {
     "design_gradient_cost.py": ("Design gradients: the adjoint against one forward solve", ["--quick"], []),
     "newton_oracle.py": ("The static solver against a textbook trust-region Newton on still-water curtains",
                          ["--nodes", "100"], []),
+    "newton_locality.py": ("Where the static solver's iterations go: the cage from its drawn shape, from near its "
+                           "answer, from a coarser mesh's answer", ["--kicks", "1e-3", "1e-2"], []),
 }
 
 

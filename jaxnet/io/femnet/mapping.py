@@ -488,8 +488,10 @@ def read_don(path, femnet_laws=True, refine=1.0):
     mesh): every panel's meshing step and ``Meshing_UV`` lattice divided by it, the bars of every cable and
     of every numerical twine's period multiplied by it (rounded up). Nodes grow about as ``refine²``. For
     studies of mesh convergence (is FEMNET's mesh fine enough for a figure?) and of cost against size on
-    real gear (``validation/bench_statics.py --scene trawl``); node types, fixings and loads go where the
-    file puts them, on the finer mesh.
+    real gear (``validation/bench_statics.py --scene trawl``). Node types go where the file puts them, on the
+    finer mesh: a type's mass, force and body are per node, as in FEMNET, so where a side or a panel's interior
+    has a loaded type, the finer mesh's more nodes carry more of it in all (as FEMNET's own mesh of a finer step
+    would); corners and cable ends keep theirs.
 
     Returns:
       a :class:`~jaxnet.case.Case`: its ``net`` the :class:`~jaxnet.net.Net` (jaxnet meshes it) and ``scene``
@@ -497,7 +499,7 @@ def read_don(path, femnet_laws=True, refine=1.0):
       in N, max_iter, max_step = FEMNET's displacement limit in m); for a dynamic case (an end time > 0) its
       ``time`` settings (:func:`time_settings`); ``info`` a dict of what the reader decided (symmetry planes
       and copies, FEMNET's solver settings, the inputs and outputs, the depth, the joined points, seams and
-      sewn cables, the added masses per node type, the sea bed and the node bodies read).
+      sewn cables, the added masses per node type, the sea bed and the node bodies read, ``refine``).
     Raises:
       SceneError naming the file and line (see the package's docstring).
     """
@@ -566,9 +568,11 @@ def read_don(path, femnet_laws=True, refine=1.0):
             net.catch(volume, drag_coefficient=cd, symmetry=copies, center=tuple(center), axis=tuple(axis),
                       density=density)
         scene = net.build()
-    out = result(case, scene, net, planes, catch, femnet_laws, plan, label=f"FEMNET case {case.path}",
+    finer = "" if refine == 1.0 else f", meshed {refine:g} times finer than its file"
+    out = result(case, scene, net, planes, catch, femnet_laws, plan, label=f"FEMNET case {case.path}{finer}",
                  warnings=warnings, node_type=node_type)
     out.info["global_nodes"] = _global_nodes(plan, np.asarray(scene.nodes.position))
+    out.info["refine"] = refine  # the mesh, this many times finer than the file's
     if gauge is not None:
         out.info["gauge"] = {"node": gauge[0], "axes": gauge[1]}
     return out
