@@ -16,8 +16,8 @@ TITLE = "Benchmarks: FEMNET's cases, dynamics, cost against size"
 
 HERE = pathlib.Path(__file__).parent
 
-#: script -> (what it measures, arguments for --quick, arguments for the full study); ``{plots}`` is the
-#: report's folder of plots
+#: script (with the arguments every run of it takes, when one script gives several studies) -> (what it
+#: measures, arguments for --quick, arguments for the full study); ``{plots}`` is the report's folder of plots
 SCRIPTS = {
     "femnet_cases.py": ("FEMNET's cases: FEMNET's figures beside jaxnet's, iterations, cold and warm times",
                         ["--repeat", "1"], []),
@@ -32,6 +32,15 @@ SCRIPTS = {
                          ["--plot", "{plots}/dynamics_work_precision.png"]),
     "bench_statics.py": ("Static solver against size: panels from a flat start, iterations, assembly and "
                          "factorisation times, growth exponents", ["--sizes", "100", "1000", "10000"], []),
+    "bench_statics.py --scene trawl": ("Static solver against size on real gear: FEMNET's pelagic trawl s3 meshed "
+                                       "finer", ["--sizes", "424", "1700", "--max-iter", "2000"],
+                                       ["--sizes", "424", "1700", "6800", "--max-iter", "2000"]),
+    "bench_factorisation.py": ("Sparse direct factorisations side by side on the cage's and a FEMNET trawl's "
+                               "tangents", ["--matrices", "cage0.5-it5", "trawl-s3x2-it5", "trawl-s3x2-it60",
+                                            "--solvers", "HostSolver", "PARDISO-11nm", "MUMPS", "UMFPACK"],
+                               ["--matrices", "cage0.5-it5", "trawl-s3x2-it5", "trawl-s3x2-it60", "cage0.17-it5",
+                                "trawl-s3x5-it5", "trawl-s3x5-it60", "cage0.1-it5", "trawl-s3x9-it5",
+                                "cage0.053-it5", "trawl-s3x15-it5"]),
     "stiffness_cost.py": ("Closed-form and autodiff stiffness side by side, per term",
                           ["--elements", "1000", "10000", "--repeats", "3"], []),
     "bench_terms.py": ("The cage at several refinements and the cost of every term",
@@ -69,10 +78,11 @@ def run(report, quick):
     report.text(__doc__.split("\n", 2)[2])
     report.plots.mkdir(parents=True, exist_ok=True)
     failed = []
-    for script, (what, quick_args, full_args) in SCRIPTS.items():
-        args = [a.format(plots=report.plots) for a in (quick_args if quick else full_args)]
+    for key, (what, quick_args, full_args) in SCRIPTS.items():
+        script, *fixed = key.split()
+        args = fixed + [a.format(plots=report.plots) for a in (quick_args if quick else full_args)]
         command = [sys.executable, str(HERE / script), *args]
-        report.heading(f"`{script}`: {what}")
+        report.heading(f"`{key}`: {what}")
         print(f"  [benchmarks] {' '.join(command[1:])}", flush=True)
         t0 = time.perf_counter()
         out = subprocess.run(command, capture_output=True, text=True, cwd=HERE.parent)
