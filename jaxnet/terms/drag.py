@@ -40,8 +40,9 @@ Conventions and choices:
 * Free surface. Water drags only what is in it: where the scene has a free surface (option ``wetted``), each
   vertex's share of a drag is weighed by the wetted part of the area it shows the flow (:func:`wetted_shares`),
   whatever ``Environment.floating`` says of weight and buoyancy. A collar pipe with its axis on the surface has
-  half its drag, netting above the surface none. The share changes with height only within the band (a twine's
-  or bar's diameter, a body's height) about the surface, where the tangent has the product rule's extra column.
+  half its drag, netting above the surface none. The share changes with height only within 3/4 of the band (a
+  twine's or bar's diameter, a body's height) of the surface, where the tangent has the product rule's extra
+  column.
 * Relative velocity. ``water_velocity`` is the water velocity relative to the element (m/s): the current
   in statics (evaluated by the caller where it chooses, e.g. at the element's centroid, with
   :func:`jaxnet.current.current_velocity`); in dynamics the current minus the element's velocity. The

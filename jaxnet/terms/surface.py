@@ -42,8 +42,8 @@ stiffness rho g L_x L_y while it crosses the surface (:func:`box_fraction_integr
 
 Families. ``Environment.floating`` names the families whose weight and buoyancy feel the surface (all by
 default); the others keep their constant immersed load (:mod:`jaxnet.terms.gravity`) wherever they are. The
-drag of every family sees the surface whatever ``floating`` says (:func:`jaxnet.terms.drag.wetted_shares`). Hexagonal netting floats as
-diamond netting does, its three families' twines lumped a third at each vertex.
+drag of every family sees the surface whatever ``floating`` says (:func:`jaxnet.terms.drag.wetted_shares`).
+Hexagonal netting floats as diamond netting does, its three families' twines lumped a third at each vertex.
 
 Derivatives. f and phi carry analytic derivative rules (``jax.custom_jvp``): differentiating acos and
 sqrt by automatic differentiation near |t| = 1 cancels terms of size 1/sqrt(1 - t²), and is NaN at
