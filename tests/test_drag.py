@@ -575,3 +575,27 @@ def test_the_wetted_bar_drag_stiffness_is_its_derivative_across_the_surface():
         # the height's share is part of it: a column along z that the dry drag does not have
         dry = np.asarray(jax.jacfwd(lambda y: drag.bar_drag_on_element(y, None, rest, diameter, 1.0, 0.1, env))(x))
         assert np.abs(auto - dry.reshape(6, 6)).max() > 1e-3 * np.abs(auto).max()
+
+
+@pytest.mark.parametrize("models", [(0,), (0, 3)])
+def test_the_wetted_netting_stiffness_behind_a_catch_front_is_its_derivative(models):
+    # both product rules at once: a triangle cut by a catch front (its part behind it shielded) with two vertices
+    # inside the twines' band at the surface; the closed form (the drag from its own intermediate values) against
+    # autodiff, and autodiff against central differences
+    from jaxnet.closed_form.drag_elements import netting_drag_on_element_stiffness
+
+    env = _surface_env(0.3)
+    x, uv = random_element()
+    x = x.at[:, 2].set(jnp.array([0.3 + 3e-4, 0.3 - 4e-4, 0.28]))
+    axis = jnp.array([1.0, 0.0, 0.0])
+    state = {"front": jnp.median(x @ axis), "axis": axis}
+    args = dict(uv=uv, l0=L0, diameter=D, cd_normal=jnp.asarray(CN), cd_tangential=jnp.asarray(CT),
+                drag_model=jnp.asarray(models[-1]), env=env, models=models, shielded=True, wetted=True)
+    force = jax.jit(lambda y: drag.netting_drag_on_element(y, state, **args))
+    auto = np.asarray(jax.jacfwd(force)(x)).reshape(9, 9)
+    closed = np.asarray(netting_drag_on_element_stiffness(x, state, **args))
+    fd = central_differences(lambda y: force(y.reshape(3, 3)).ravel(), x.ravel(), 1e-8)
+    np.testing.assert_allclose(auto, fd, rtol=1e-5, atol=1e-6 * np.abs(fd).max())
+    np.testing.assert_allclose(-closed, auto, rtol=1e-10, atol=1e-12 * np.abs(auto).max())
+    keep = np.asarray(force(x))
+    assert 0.0 < np.abs(keep[0]).max() < np.abs(keep[2]).max()  # the wetted shares and the front both act

@@ -84,18 +84,20 @@ def netting_drag_on_element_stiffness(x, state, uv, l0, diameter, cd_normal, cd_
         relative = w - velocity
     else:
         c, slope = _water(x, env)
+    # the product rules of the shielding and of the wetted share need the drag itself
+    needs_force = shielded or wetted
     stiffness, force = 0.0, 0.0
     for code in models:
         drag_force = drag_term.NETTING_DRAG_MODELS[code].force
         if moving:
             k = _MOVING_NETTING[code](x, uv, l0, diameter, cd_normal, cd_tangential, relative, gradient, time_step, rho)
             f = (jnp.stack([drag_force(x, uv, l0, diameter, cd_normal, cd_tangential, relative[i], rho)[i]
-                            for i in range(3)]) if shielded else 0.0)
+                            for i in range(3)]) if needs_force else 0.0)
         else:
-            # the shielding's product rule needs the drag itself: from the closed form's own intermediate values
+            # from the closed form's own intermediate values
             k = _NETTING[code](x, uv, l0, diameter, cd_normal, cd_tangential, c, rho, slope, env.up,
-                               with_force=shielded)
-            k, f = k if shielded else (k, 0.0)
+                               with_force=needs_force)
+            k, f = k if needs_force else (k, 0.0)
         if len(models) > 1 or selective:
             k, f = jnp.where(drag_model == code, k, 0.0), jnp.where(drag_model == code, f, 0.0)
         stiffness, force = stiffness + k, force + f
@@ -108,10 +110,9 @@ def netting_drag_on_element_stiffness(x, state, uv, l0, diameter, cd_normal, cd_
         # d(1 - 3 w_i)/dx_j = -3 dw_i/dh_j axis: K_i,j = keep_i K_i,j + 3 f_i (dw_i/dh_j axis)^T
         correction = 3.0 * force[:, :, None, None] * (dw[:, None, :, None] * state["axis"][None, None, None, :])
         stiffness = keep.repeat(3)[:, None] * stiffness + correction.reshape(9, 9)
+        force = keep[:, None] * force
     if wetted:
-        drag = drag_term.netting_drag_on_element(x, state, uv, l0, diameter, cd_normal, cd_tangential, drag_model, env,
-                                                 models, shielded, moving, waves, velocity, selective)
-        stiffness = wetted_stiffness(stiffness, drag, x, surface_term.immersion_band(diameter), env)
+        stiffness = wetted_stiffness(stiffness, force, x, surface_term.immersion_band(diameter), env)
     return stiffness
 
 
