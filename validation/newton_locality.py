@@ -34,13 +34,15 @@ TOL_REFERENCE, TOL_N = 1e-8, 1e-3
 
 
 def cage(step, current, linear):
-    from jaxnet.net import Twine
-    from jaxnet.scenes import fish_cage
+    """The built-in cage, its twines physical (its own) or ``linear`` (compression stiffness = EA)."""
+    import dataclasses
 
-    ea = 5000.0
-    twine = Twine(l0=0.05, ea=ea, ea_compression=ea if linear else 0.0, diameter=2.5e-3, density=1140.0,
-                  cd_normal=1.2, tangential_ratio=0.08)
-    return fish_cage(step=step, current=current, twine=twine)
+    from jaxnet.scenes import fish_cage
+    from jaxnet.scenes.cage import netting_twine
+
+    twine = netting_twine()
+    return fish_cage(step=step, current=current,
+                     twine=dataclasses.replace(twine, ea_compression=twine.ea) if linear else None)
 
 
 def prolongation(coarse, x_coarse, fine):

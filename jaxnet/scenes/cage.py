@@ -46,9 +46,15 @@ def fish_cage(radius: float = 5.0, depth: float = 5.0, sides: int = 8, l0: float
     return from_net(net, label=f"cylindrical fish cage (floating collar, bottom, sinkers) in a {current:g} m/s current")
 
 
+def netting_twine(l0: float = 0.05) -> Twine:
+    """The cage's netting material by default: polyamide twine 2.5 mm across, EA 5000 N, Cd 1.2, f 0.08, mesh
+    side ``l0`` (m), no compression stiffness."""
+    return Twine(l0=l0, ea=5000.0, diameter=2.5e-3, density=1140.0, cd_normal=1.2, tangential_ratio=0.08)
+
+
 def _describe(radius, depth, sides, l0, step, current, sinker_kg, twine) -> Net:
     """The cage's description (:func:`fish_cage`'s arguments)."""
-    twine = twine or Twine(l0=l0, ea=5000.0, diameter=2.5e-3, density=1140.0, cd_normal=1.2, tangential_ratio=0.08)
+    twine = twine or netting_twine(l0)
     env = Environment(current_speed=current, current_direction=np.array([1.0, 0.0, 0.0]), surface_level=0.0)
     net = Net(environment=env)
     mesh_width = l0 * np.sqrt(2.0)  # a square mesh is l0 * sqrt(2) across and high
