@@ -125,6 +125,41 @@ def test_node_retyping_window_and_missing_drag_coefficient():
     assert any("s1.don:519: 'panel 26: normal Cd' has no value" in w for w in case.info["warnings"])
 
 
+def test_node_loads_on_a_symmetry_plane_are_halved_as_femnets_equilibrium_has_them():
+    """A node type's force, mass and box are the whole structure's (FEMNET's manual, "Symmetry"): a node on a symmetry
+    plane carries half of them in the modelled half. The bottom seine s1 gives its type 5 (10000 N along x, on the
+    plane y = 0) to two nodes and its type 4 (20000 N along y, off the plane) to one: on FEMNET's own mesh and at its
+    equilibrium (s1.mdg, s1.sta) jaxnet's residual is then below 0.5 N (the .sta's digits) at every free node but the
+    sea-bed contacts, and below 0.2 N at those two; with the whole 10000 N it was 5000 N along x there."""
+    import jax.numpy as jnp
+
+    from jaxnet import assemble
+    from jaxnet import model as model_lib
+
+    don = _don("11bottom_seine/s1")
+    parsed = femnet.parse_don(don)
+    node_type = [int(line.split()[5]) for line in don.with_suffix(".mdg").read_text().splitlines()[7:158]]
+    share = mapping.symmetry_share(parsed, node_type)
+    assert sorted(set(share.tolist())) == [0.5, 1.0]
+    case = femnet.read_mdg(don.with_suffix(".mdg"), don)
+    scene = case.scene
+    force = np.asarray(scene.nodes.force)
+    on_plane = np.array([t == 5 for t in node_type])
+    assert on_plane.sum() == 2
+    np.testing.assert_allclose(force[on_plane], [[5000.0, 0.0, 0.0]] * 2)
+    pos, *_ = femnet.read_sta(don.with_suffix(".sta"), scene.n_nodes, scene.bars.ends.shape[0], 0)
+    model = model_lib.active_terms(scene)
+    residual = np.asarray(assemble.nodal_force(jnp.asarray(pos), scene, model, assemble.loads(scene, model)))
+    residual = np.linalg.norm(np.where(np.asarray(scene.nodes.fixed), 0.0, residual), axis=1)
+    on_bed = pos[:, 2] < -30.0 + 1e-3  # the sea bed at z = -30 m (the types' limits): the contact's penalty
+    assert residual[~on_bed].max() < 0.5, np.sort(residual[~on_bed])[-3:]
+    assert residual[on_plane].max() < 0.2
+    # the read from the .don (jaxnet's mesh) halves them too; the type-4 node off the plane keeps its 20000 N
+    own = np.asarray(femnet.read_don(don).scene.nodes.force)
+    np.testing.assert_allclose(np.sort(own[:, 0])[-2:], [5000.0, 5000.0])
+    assert own[:, 1].max() == 20000.0
+
+
 def test_translations_move_parts_before_meshing():
     """``input add_z_pan D FIRST LAST`` moves panels FIRST..LAST by D along z (and only those)."""
     case = femnet.parse_don(_don("1pelagic_trawl/s2"))

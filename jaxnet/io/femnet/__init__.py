@@ -35,7 +35,9 @@ Conventions established from the files (see ``tests/test_femnet.py``):
   Fixity "Displacement X,Y,Z" = 1 holds that coordinate; "Symmetry" = 1 means the node lies on a
   symmetry plane normal to that axis, so that coordinate is held too (the plane is a mirror: the
   node's out-of-plane displacement is zero by symmetry). FEMNET reports no reaction there and zeroes
-  the total force along symmetry axes; :func:`femnet_figures` does the same.
+  the total force along symmetry axes; :func:`femnet_figures` does the same. A type's mass, force and box
+  are the whole structure's: a node on a symmetry plane carries half of them (a quarter on two planes;
+  :func:`~jaxnet.io.femnet.mapping.symmetry_share`).
 * **Links** ("Links number", phobos ``chargement_don.c``): one line per link, ``nb_pt: N`` then N
   points ``pa: k nd: c`` (corner c of diamond panel k), ``ha: k nd: c`` (hexagonal panel) or ``el: k
   nd: e`` (end e of cable k); FEMNET goes by the first letter, ``c`` and ``w`` being sliding cables and

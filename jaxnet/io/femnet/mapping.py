@@ -164,14 +164,31 @@ def environment_of(case: DonFile) -> Environment:
                        bottom_band=0.0, waves=waves, surface_level=0.0, floating=("bars", "nodes"))
 
 
+def symmetry_share(case: DonFile, node_type):
+    """(N,) the share of its type's loads that each node carries in the modelled part of a symmetric net: 1/2 per
+    symmetry plane the node lies on (its type's "Symmetry X,Y,Z" flags), 1 elsewhere.
+
+    FEMNET's manual (its "Symmetry" section) defines a node type's mass, added mass, box ("Length") and external
+    force for the whole structure: a node on a symmetry plane is shared by the modelled half and its mirror, so
+    the half carries half of them (a quarter on two planes). Its statics do so by doubling, at such a node, the
+    netting's and the bars' forces in the plane (``symetrie2.c``: ``wasurf`` and ``waelem`` times 2, the node's own
+    loads ``wanoeud`` not), which gives the same equilibrium as halving the node's loads, as here. Measured on
+    the bottom seines s1-s3 (FEMNET's equilibrium holds 5000 N at their two type-5 nodes of 10000 N along x)."""
+    return np.array([0.5 ** sum(int(bool(s.value)) for s in case.types[t].symmetry) for t in node_type])
+
+
 def node_type_fields(case: DonFile, position, node_type):
     """The nodes' box bodies, float volumes and limits from their types: {Nodes field: array}, a field absent when
     no node has a body (a float, a limit), so that its term is not compiled. FEMNET drags and floats the immersed
     part of a box under its surface z = 0, and so do jaxnet's scenes from FEMNET (their free surface is z = 0,
-    :func:`environment_of`); ``info["boxes"]``: the nodes with a box and the height of its top above them."""
+    :func:`environment_of`); ``info["boxes"]``: the nodes with a box and the height of its top above them. A box
+    on a symmetry plane is the whole structure's (:func:`symmetry_share`): its volume and its drag coefficients
+    (its drag is linear in them) are scaled by the node's share, its lengths, which set where it meets the
+    surface, are kept."""
     types = [case.types[t] for t in node_type]
+    share = symmetry_share(case, node_type)
     fields = {}
-    volume = np.array([nt.box_volume for nt in types])
+    volume = share * np.array([nt.box_volume for nt in types])
     if volume.any():
         # a box with a volume floats: FEMNET's buoyancy rho g L_x L_y h (flotteur2.c), h its immersed height under
         # the surface z = 0: the node's volume V = |L_x L_y L_z|, floated as a box by the surface term (the box's
@@ -179,7 +196,8 @@ def node_type_fields(case: DonFile, position, node_type):
         fields["volume"] = volume
     if any(nt.has_body for nt in types):
         length = np.array([[v.value for v in nt.length] if nt.has_body else [0.0] * 3 for nt in types])
-        cd = np.array([[v.value for v in nt.drag_coefficient] if nt.has_body else [0.0] * 3 for nt in types])
+        cd = share[:, None] * np.array([[v.value for v in nt.drag_coefficient] if nt.has_body else [0.0] * 3
+                                        for nt in types])
         fields.update(drag_length=length, drag_coefficient=cd)
     if any(nt.has_limit for nt in types):
         fields["limit"] = np.array([[v.value if s.value else 0.0 for v, s in zip(nt.limit, nt.sense)] for nt in types])
@@ -548,10 +566,12 @@ def read_don(path, femnet_laws=True, refine=1.0):
         net.fix(tuple(position[gauge[0]]), gauge[1])
     fields = node_type_fields(case, position, node_type)
     volume = fields.pop("volume", np.zeros(len(position)))
+    share = symmetry_share(case, node_type)
     for i, t in enumerate(node_type):
         nt = case.types[t]
         if nt.mass[0] > 0 or any(nt.force) or volume[i] > 0:
-            net.attach(tuple(position[i]), mass=nt.mass[0], force=nt.force, volume=volume[i])
+            net.attach(tuple(position[i]), mass=share[i] * nt.mass[0], force=tuple(share[i] * np.asarray(nt.force)),
+                       volume=volume[i])
     for i, t in enumerate(node_type):
         if "drag_length" in fields and case.types[t].has_body:
             net.body(tuple(position[i]), fields["drag_length"][i], fields["drag_coefficient"][i])

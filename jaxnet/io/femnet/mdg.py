@@ -13,7 +13,7 @@ import numpy as np
 
 from jaxnet.io.femnet.grammar import twine_coordinates
 from jaxnet.io.femnet.mapping import (catch_of, check_types, environment_of, gravity_catch_density, node_type_fields,
-                                      result, rope_of, spheres_folded, symmetry_planes, twine_of)
+                                      result, rope_of, spheres_folded, symmetry_planes, symmetry_share, twine_of)
 from jaxnet.io.femnet.parse import parse_don
 from jaxnet.io.femnet.twines import mdg_twine_bars, numerical_twines
 from jaxnet.materials import bar_rows, netting_rows
@@ -92,8 +92,9 @@ def read_mdg(path, don=None, femnet_laws=True):
     planes = symmetry_planes(case, position, node_type)
     fixed = np.array([[case.types[t].fixed[a].value or case.types[t].symmetry[a].value for a in range(3)]
                       for t in node_type], dtype=bool)
-    mass = np.array([case.types[t].mass[0] for t in node_type])
-    force = np.array([case.types[t].force for t in node_type], dtype=float)
+    share = symmetry_share(case, node_type)
+    mass = share * np.array([case.types[t].mass[0] for t in node_type])
+    force = share[:, None] * np.array([case.types[t].force for t in node_type], dtype=float)
     fields = node_type_fields(case, position, node_type)
     nodes = Nodes(position=position, fixed=fixed, mass=mass, volume=fields.pop("volume", np.zeros(n_nodes)), force=force,
                   drag_area=np.zeros(n_nodes), size=np.zeros(n_nodes), **fields)
