@@ -160,6 +160,28 @@ def test_node_loads_on_a_symmetry_plane_are_halved_as_femnets_equilibrium_has_th
     assert own[:, 1].max() == 20000.0
 
 
+def test_mass_and_box_of_a_node_on_a_symmetry_plane_are_halved(tmp_path):
+    """The same rule for a type's mass and box (GOV a1/a2 put 3 kg floats of 0.215 m on their plane): s1's type 5
+    given a mass of 4 kg and a 0.2 m box carries 2 kg, half the box's volume and half its drag coefficients at each
+    of its two nodes on the plane y = 0, while the box keeps its lengths (where it meets the surface)."""
+    text = _don("11bottom_seine/s1").read_text()
+    block = text.index("No du type :\t\t\t5")
+    typed = text[block:].replace("Mass X,Y,Z (kg):\t\t0.000000  0.000000  0.000000",
+                                 "Mass X,Y,Z (kg):\t\t4.000000  4.000000  4.000000", 1)
+    typed = typed.replace("Length X,Y,Z (m):\t\t0.000000  0.000000  0.000000",
+                          "Length X,Y,Z (m):\t\t0.200000  0.200000  0.200000", 1)
+    path = tmp_path / "s1.don"
+    path.write_text(text[:block] + typed)
+    nodes = femnet.read_don(path).scene.nodes
+    on_plane = np.flatnonzero(np.asarray(nodes.force)[:, 0] > 0)
+    assert on_plane.size == 2
+    np.testing.assert_allclose(np.asarray(nodes.mass)[on_plane], 2.0)
+    np.testing.assert_allclose(np.asarray(nodes.volume)[on_plane], 0.5 * 0.2 ** 3)
+    np.testing.assert_allclose(np.asarray(nodes.drag_coefficient)[on_plane], 0.6)
+    np.testing.assert_allclose(np.asarray(nodes.drag_length)[on_plane], 0.2)
+    assert float(np.asarray(nodes.mass).sum()) == pytest.approx(4.0)
+
+
 def test_translations_move_parts_before_meshing():
     """``input add_z_pan D FIRST LAST`` moves panels FIRST..LAST by D along z (and only those)."""
     case = femnet.parse_don(_don("1pelagic_trawl/s2"))
