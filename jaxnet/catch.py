@@ -102,15 +102,25 @@ class CatchFront(NamedTuple):
     passes: jax.Array
 
 
-def _solve_front(x, triangles, axis, volume, symmetry, sign, guess, rtol, max_iter):
+def _extent(x, triangles, axis, members):
+    """(s_min, s_max): the abscissae along ``axis`` of the most upstream and the rearmost vertex of the triangles
+    (of the ``members`` among them, (E,) bool, when not None)."""
+    abscissae = x[triangles] @ axis
+    if members is None:
+        return jnp.min(abscissae), jnp.max(abscissae)
+    inside = members[:, None]
+    return jnp.min(jnp.where(inside, abscissae, jnp.inf)), jnp.max(jnp.where(inside, abscissae, -jnp.inf))
+
+
+def _solve_front(x, triangles, axis, volume, symmetry, sign, guess, rtol, max_iter, members=None):
     """Newton on V(s) = volume, safeguarded by bisection. Returns (s, V(s), holds, converged, passes).
 
     One loop, one pass over the elements per step: the first at s_min (does the net hold the volume at
     all?), the second at the start, then up to ``max_iter`` Newton or bisection steps while the net holds
     it. So the program holds the element sums once, not three times (the front is a large part of a catch
-    solve's compilation)."""
-    abscissae = x[triangles] @ axis
-    s_min, s_max = jnp.min(abscissae), jnp.max(abscissae)
+    solve's compilation). ``members``: (E,) bool, the triangles that hold this catch (their ``sign`` is that
+    of the others times 0), or None for all."""
+    s_min, s_max = _extent(x, triangles, axis, members)
 
     def volume_and_slope(s):
         v, section = _element_sums(x, triangles, s, axis, sign)
@@ -155,18 +165,18 @@ def _solve_front(x, triangles, axis, volume, symmetry, sign, guess, rtol, max_it
 
 
 @jax.custom_jvp
-def _implicit_front(x, triangles, axis, volume, symmetry, sign, solved, holds):
-    """The solved front abscissa, differentiated by the implicit function theorem (not through the loop)."""
+def _implicit_front(x, triangles, axis, volume, symmetry, sign, solved, holds, members):
+    """The solved front abscissa, differentiated by the implicit function theorem (not through the loop).
+    ``members``: (E,) bool, the triangles holding the catch (all of them: an array of True)."""
     return solved
 
 
 @_implicit_front.defjvp
 def _implicit_front_jvp(primals, tangents):
-    x, triangles, axis, volume, symmetry, sign, solved, holds = primals
-    dx, _, daxis, dvolume, dsymmetry, _, _, _ = tangents
-    abscissae = lambda x_, a_: x_[triangles] @ a_  # noqa: E731
-    _, d_min = jax.jvp(lambda x_, a_: jnp.min(abscissae(x_, a_)), (x, axis), (dx, daxis))
-    _, d_max = jax.jvp(lambda x_, a_: jnp.max(abscissae(x_, a_)), (x, axis), (dx, daxis))
+    x, triangles, axis, volume, symmetry, sign, solved, holds, members = primals
+    dx, _, daxis, dvolume, dsymmetry, _, _, _, _ = tangents
+    _, d_min = jax.jvp(lambda x_, a_: _extent(x_, triangles, a_, members)[0], (x, axis), (dx, daxis))
+    _, d_max = jax.jvp(lambda x_, a_: _extent(x_, triangles, a_, members)[1], (x, axis), (dx, daxis))
     # symmetry V(x, axis, s) = volume with dV/ds = -symmetry section: ds = (dV|_s - dvolume) / (symmetry section)
     (v, section), (dv, _) = jax.jvp(lambda x_, a_: _element_sums(x_, triangles, solved, a_, sign), (x, axis),
                                     (dx, daxis))
@@ -177,7 +187,8 @@ def _implicit_front_jvp(primals, tangents):
     return solved, ds
 
 
-def catch_front(x, triangles, axis, volume, symmetry=1.0, sign=1.0, guess=None, rtol=1e-10, max_iter=100):
+def catch_front(x, triangles, axis, volume, symmetry=1.0, sign=1.0, guess=None, rtol=1e-10, max_iter=100,
+                members=None):
     """Front abscissa s (m) such that the netting behind the plane {y·axis = s} encloses ``volume``.
 
     Args:
@@ -189,6 +200,8 @@ def catch_front(x, triangles, axis, volume, symmetry=1.0, sign=1.0, guess=None, 
       guess: a starting abscissa (m), e.g. the previous front; ignored when outside the net.
       rtol: relative tolerance on the volume (and on the bracket, relative to the net's length).
       max_iter: most Newton/bisection steps.
+      members: (E,) bool, the triangles that hold the catch (the others count neither in its volume nor in
+        its extent), or None for all of them.
     Returns:
       :class:`CatchFront` (position, volume, holds, converged). ``position`` is differentiable in x, axis,
       volume and symmetry (implicit function theorem, not through the iteration).
@@ -200,9 +213,13 @@ def catch_front(x, triangles, axis, volume, symmetry=1.0, sign=1.0, guess=None, 
     symmetry = jnp.asarray(symmetry, dtype=x.dtype)
     sign = jnp.asarray(sign, dtype=x.dtype)
     guess = jnp.asarray(jnp.nan if guess is None else guess, dtype=x.dtype)
+    if members is not None:
+        members = jnp.asarray(members, dtype=bool)
+        sign = jnp.where(members, jnp.broadcast_to(sign, members.shape), 0.0)
     solved, _, holds, converged, passes = jax.lax.stop_gradient(
-        _solve_front(x, triangles, axis, volume, symmetry, sign, guess, rtol, max_iter))
-    s = _implicit_front(x, triangles, axis, volume, symmetry, sign, solved, holds)
+        _solve_front(x, triangles, axis, volume, symmetry, sign, guess, rtol, max_iter, members))
+    every = jnp.ones(triangles.shape[:1], dtype=bool) if members is None else members
+    s = _implicit_front(x, triangles, axis, volume, symmetry, sign, solved, holds, every)
     v = symmetry * _element_sums(x, triangles, s, axis, sign)[0]
     return CatchFront(s, v, holds, converged, passes)
 
@@ -292,3 +309,28 @@ def catch_state(x, scene, previous=None):
     p = catch_pressure_term.dynamic_pressure(env.water_density, c.drag_coefficient, env.current_speed)
     return {"front": front.position, "pressure": p, "axis": c.axis,
             "specific_weight": jnp.asarray(c.density, dtype=x.dtype) * env.gravity}
+
+
+def panel_catch_state(x, scene, previous=None):
+    """The fronts of the scene's panel catches (:class:`jaxnet.scene.PanelCatches`) for positions x (N, 3):
+    ``{"fronts": (K,) abscissae along the axis (m), "pressure": ½ ρ Cd v² (Pa), "axis": (3,), "catch_of_panel":
+    (P,) int}``, or None without them. Each front is :func:`catch_front` on the triangles of its own panels
+    only (their volume, their extent), as FEMNET's ``catch2_volume.c`` places each; the K searches run side by
+    side (one batched loop). ``previous``: this state at the solver's last iterate, whose fronts start the
+    searches."""
+    pc, env = scene.panel_catches, scene.environment
+    if pc is None:
+        return None
+    catch_of_panel = jnp.asarray(pc.panel_catch)
+    holder = catch_of_panel[jnp.asarray(scene.netting.panel)]  # (E,) the catch each triangle holds, -1 none
+    volume = jnp.asarray(pc.volume, dtype=x.dtype)
+    guess = jnp.full(volume.shape, jnp.nan, dtype=x.dtype) if previous is None else previous["fronts"]
+
+    def front(k, volume_k, guess_k):
+        return catch_front(x, scene.netting.vertices, pc.axis, volume_k, pc.symmetry, sign=scene.netting.outward,
+                           guess=guess_k, members=holder == k).position
+
+    fronts = jax.vmap(front)(jnp.arange(volume.shape[0]), volume, guess)
+    p = catch_pressure_term.dynamic_pressure(env.water_density, pc.drag_coefficient, env.current_speed)
+    return {"fronts": fronts, "pressure": p, "axis": jnp.asarray(pc.axis, dtype=x.dtype),
+            "catch_of_panel": catch_of_panel}

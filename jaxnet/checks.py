@@ -236,6 +236,43 @@ def _check_catch(scene):
         raise SceneError("catch: the scene has no diamond-mesh netting to hold the catch")
 
 
+def _check_panel_catches(scene):
+    """The panel catches' numbers (finite volumes > 0, Cd >= 0, symmetry >= 1, unit axis), one entry per panel
+    naming a catch or -1, every catch held by some panel, and oriented netting to hold them."""
+    pc = scene.panel_catches
+    volume = np.asarray(pc.volume, dtype=float)
+    if volume.ndim != 1 or volume.size == 0:
+        raise SceneError(f"panel_catches: volume must be a list of one volume per catch (m³), got {pc.volume!r}")
+    bad = np.flatnonzero(~(np.isfinite(volume) & (volume > 0)))
+    if bad.size:
+        raise SceneError(f"panel_catches: catch {int(bad[0])}: volume must be finite and > 0 (m³), got {volume[bad[0]]!r}")
+    cd, symmetry = _scalar(pc.drag_coefficient, "panel_catches: drag_coefficient"), _scalar(pc.symmetry, "panel_catches: symmetry")
+    if not (np.isfinite(cd) and cd >= 0):
+        raise SceneError(f"panel_catches: drag_coefficient must be finite and >= 0, got {pc.drag_coefficient!r}")
+    if not (np.isfinite(symmetry) and symmetry >= 1):
+        raise SceneError(f"panel_catches: symmetry (copies of the modelled part) must be finite and >= 1, got {pc.symmetry!r}")
+    if abs(np.linalg.norm(_vector(pc.axis, "panel_catches: axis")) - 1.0) > 1e-9:
+        raise SceneError(f"panel_catches: axis must be a unit vector, got {pc.axis!r}")
+    if scene.netting is None:
+        raise SceneError("panel_catches: the scene has no diamond-mesh netting to hold the catches")
+    holder = np.asarray(pc.panel_catch)
+    panels = int(np.max(np.asarray(scene.netting.panel), initial=-1)) + 1
+    if holder.ndim != 1 or holder.size < panels or not np.issubdtype(holder.dtype, np.integer):
+        raise SceneError(f"panel_catches: panel_catch must hold one integer per panel ({panels} at least), got "
+                         f"{holder.size} of dtype {holder.dtype}")
+    wrong = np.flatnonzero((holder < -1) | (holder >= volume.size))
+    if wrong.size:
+        raise SceneError(f"panel_catches: panel {int(wrong[0])} holds catch {int(holder[wrong[0]])}, not among the "
+                         f"{volume.size} catches (or -1 for none)")
+    held = set(holder[np.asarray(scene.netting.panel)].tolist())
+    empty = [k for k in range(volume.size) if k not in held]
+    if empty:
+        raise SceneError(f"panel_catches: catch {empty[0]} is held by no netting panel")
+    if scene.netting.outward is None:
+        raise SceneError("panel_catches: the netting has no outward side (Netting.outward), which orients the "
+                         "catches' pressure; Net.panel_catch sets it")
+
+
 def _check_enclosure(enclosure):
     _vector(enclosure.center, "enclosure: center")
     if abs(np.linalg.norm(_vector(enclosure.axis, "enclosure: axis")) - 1.0) > 1e-9:
@@ -384,6 +421,8 @@ def validate(scene: Scene) -> None:
 
     if scene.catch is not None:
         _check_catch(scene)
+    if scene.panel_catches is not None:
+        _check_panel_catches(scene)
     if scene.enclosure is not None:
         _check_enclosure(scene.enclosure)
 

@@ -184,6 +184,8 @@ class Net:
         self.environment = environment or Environment()
         self.merge_tolerance = merge_tolerance
         self._catch = None
+        self._panel_catches: list[tuple] = []   # (volume m³, panel names, centre m or None), in call order
+        self._panel_catch_options = None   # (drag_coefficient, symmetry, axis or None): the last call's
         self._enclosure = None
         self._panels: dict[str, _Panel] = {}
         self._cables: dict[str, _Cable] = {}
@@ -420,6 +422,32 @@ class Net:
                            center=_point(center, "catch: center"), axis=None if axis is None else _unit(axis, "catch: axis"),
                            density=float(density))
 
+    def panel_catch(self, volume, panels, drag_coefficient=1.4, symmetry=1.0, axis=None, center=None):
+        """Fill the netting of ``panels`` (their names) with ``volume`` m³ of catch of its own, behind its own
+        front (FEMNET's ``input catch2_volume``: twin cod-ends, the compartments of a grid section). Each call adds
+        one catch; a panel holds at most one. ``center``: a point (m) on the axis of the cod-end these panels
+        form, from which their netting is oriented outward (:meth:`catch`'s ``center``); default the mean of their
+        nodes' start positions, inside a cod-end drawn whole (give it for a quarter or half model, whose nodes
+        lie on one side of the axis). ``drag_coefficient``, ``symmetry`` (copies of the modelled part in the whole
+        net: ``volume`` is the whole net's) and ``axis`` (downstream; default the current's direction) are shared
+        by the panel catches: the last call's hold. See :class:`jaxnet.scene.PanelCatches` and
+        :mod:`jaxnet.terms.panel_catch`."""
+        if not (np.isfinite(volume) and volume > 0) or not drag_coefficient >= 0 or not symmetry >= 1:
+            raise SceneError(f"panel_catch: volume must be finite and > 0, drag_coefficient >= 0 and symmetry >= 1, "
+                             f"got {volume!r}, {drag_coefficient!r}, {symmetry!r}")
+        names = tuple(panels)
+        if not names:
+            raise SceneError("panel_catch: give the panels that hold the catch")
+        for name in names:
+            self._panel(name, "panel_catch")
+        taken = {n for _, held, _ in self._panel_catches for n in held}
+        twice = [n for n in names if n in taken or names.count(n) > 1]
+        if twice:
+            raise SceneError(f"panel_catch: panel '{twice[0]}' already holds a catch (a panel holds at most one)")
+        self._panel_catches.append((float(volume), names, None if center is None else _point(center, "panel_catch: center")))
+        self._panel_catch_options = (float(drag_coefficient), float(symmetry),
+                                     None if axis is None else _unit(axis, "panel_catch: axis"))
+
     def enclose(self, center, axis):
         """Declare the net closed but for the opening through ``center`` (m) normal to ``axis`` (pointing into
         the net): the result reports the volume it holds. See :class:`jaxnet.scene.Enclosure`."""
@@ -477,6 +505,9 @@ class Net:
             center = (catch or enclosure).center
             netting = dataclasses.replace(netting, outward=_outward(position, np.asarray(netting.vertices), center,
                                                                     np.asarray(netting.uv), np.asarray(netting.panel)))
+        panel_catches = self._panel_catches_of(environment)
+        if netting is not None and panel_catches is not None and netting.outward is None:
+            netting = dataclasses.replace(netting, outward=self._panel_catch_outward(netting, position, panel_catches))
         fixed = np.zeros((n, 3), dtype=bool)
         mass, volume, force = np.zeros(n), np.zeros(n), np.zeros((n, 3))
         drag_area, size = np.zeros(n), np.zeros(n)
@@ -514,6 +545,7 @@ class Net:
             hexagonal=hexagonal,
             catch=catch,
             enclosure=enclosure,
+            panel_catches=panel_catches,
             environment=environment,
             panel_names=tuple(self._panels),
             cable_names=tuple(self._cables) + tuple(f"{p.name} twines" for p in self._twine_panels()),
@@ -553,6 +585,37 @@ class Net:
         if self._enclosure is not None:
             enclosure = Enclosure(**self._enclosure)
         return catch, enclosure
+
+    def _panel_catches_of(self, environment):
+        from jaxnet.scene import PanelCatches
+
+        if not self._panel_catches:
+            return None
+        cd, symmetry, axis = self._panel_catch_options
+        if axis is None:
+            if not environment.current_speed > 0:
+                raise SceneError("panel_catch: give its axis, or a current (the axis defaults to its direction)")
+            axis = np.asarray(environment.current_direction, dtype=float)
+        index = {name: k for k, name in enumerate(self._panels)}
+        panel_catch = np.full(len(self._panels), -1, dtype=np.int32)
+        for k, (_, names, _) in enumerate(self._panel_catches):
+            panel_catch[[index[n] for n in names]] = k
+        return PanelCatches(volume=np.array([v for v, _, _ in self._panel_catches]), panel_catch=panel_catch,
+                            drag_coefficient=cd, axis=axis, symmetry=symmetry)
+
+    def _panel_catch_outward(self, netting, position, panel_catches):
+        """``Netting.outward`` for panel catches alone: the triangles of each catch's panels oriented away from
+        its centre (:meth:`panel_catch`), panel by panel (:func:`_outward`); +1 elsewhere."""
+        vertices, uv, panel = np.asarray(netting.vertices), np.asarray(netting.uv), np.asarray(netting.panel)
+        holder = np.asarray(panel_catches.panel_catch)[panel]
+        out = np.ones(len(vertices))
+        for k, (_, _, center) in enumerate(self._panel_catches):
+            rows = np.flatnonzero(holder == k)
+            if rows.size:
+                if center is None:
+                    center = position[np.unique(vertices[rows])].mean(axis=0)
+                out[rows] = _outward(position, vertices[rows], center, uv[rows], panel[rows])
+        return out
 
     def _panel(self, name, what):
         if name not in self._panels:

@@ -228,6 +228,27 @@ class Catch(eqx.Module):
     density: float = 0.0
 
 
+class PanelCatches(eqx.Module):
+    """Catches held by chosen panels (FEMNET's ``input catch2_volume V N P1 .. PN``): each a volume of catch
+    filling the netting of its own panels from the rear, behind its own front, with the pressure ½ ρ Cd v² of
+    :class:`Catch` on that netting (:mod:`jaxnet.terms.panel_catch`). Twin cod-ends, or the compartments of a
+    grid section, each take one. Independent of :class:`Catch` (the scene's main catch, on all its netting).
+
+    volume: (K,) catch volume (m³) of each catch, for the whole net (``symmetry`` copies of the modelled part).
+    panel_catch: (P,) int, for each panel of the scene (``Netting.panel``) the catch it holds (0..K-1), or -1
+      for none; a panel holds at most one.
+    drag_coefficient: Cd of the catches. axis: (3,) unit vector along which the fronts advance, downstream.
+    symmetry: copies of the modelled part in the whole net (as :class:`Catch`'s).
+    The netting's outward side is ``Netting.outward``.
+    """
+
+    volume: np.ndarray
+    panel_catch: np.ndarray
+    drag_coefficient: float
+    axis: np.ndarray
+    symmetry: float = 1.0
+
+
 class Enclosure(eqx.Module):
     """The opening of a closed net (a cage's collar): the result reports the volume the net holds behind
     the plane through ``center`` (m) normal to ``axis`` (unit, pointing into the net, e.g. down for a
@@ -302,6 +323,7 @@ class Scene(eqx.Module):
     hexagonal: HexagonalNetting | None = None
     catch: Catch | None = None
     enclosure: Enclosure | None = None
+    panel_catches: PanelCatches | None = None
     panel_names: tuple = eqx.field(static=True, default=())
     cable_names: tuple = eqx.field(static=True, default=())
 

@@ -237,12 +237,14 @@ def test_g1_bad_gravity_catch_names_its_line(tmp_path, old, new, message):
     assert bad.read_text().split("\n")[line - 1].startswith("input catch_gravity")
 
 
-def test_extra_catch_volumes_are_still_refused_at_their_line(tmp_path):
-    """``input catch2_volume VOLUME N PANEL...`` is not modelled yet (15grid/avril_4 uses it; that file stops earlier,
-    at a text-output label the reader does not know): refused at its line."""
+def test_panel_catches_beside_a_gravity_catch_carry_nothing(tmp_path):
+    """``input catch2_volume VOLUME N PANEL...`` beside a gravity catch: FEMNET's statics call its panel catches only
+    without one (``unix.c``: ``nb_catch2_volume != 0 && catch_gravity == 0``); jaxnet reads them, and with no current
+    (the gravity catch's case) their pressure term is not even active."""
     text = G1.read_text().replace("input link 0.001", "input link 0.001\ninput catch2_volume 0.01 2 1 2", 1)
-    bad = tmp_path / "g1.don"
-    bad.write_text(text)
-    line = text.split("\n").index("input catch2_volume 0.01 2 1 2") + 1
-    with pytest.raises(SceneError, match=rf"g1\.don:{line}: 'input catch2_volume': extra catch volumes"):
-        femnet.read_don(bad)
+    path = tmp_path / "g1.don"
+    path.write_text(text)
+    case = femnet.read_don(path)
+    assert case.scene.panel_catches is not None and case.scene.environment.current_speed == 0.0
+    names = [t.name for t in model.active_terms(case.scene)]
+    assert "gravity_catch" in names and "panel_catch_pressure" not in names

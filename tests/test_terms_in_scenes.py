@@ -99,11 +99,12 @@ def hexagonal_curtain(net, name, y0, hex_twine):
 
 
 def small_scene(twine=BASE_TWINE, rope=None, current=0.0, surface=float("nan"), mass=0.0, volume=0.0,
-                force=(0.0, 0.0, 0.0), drag_area=0.0, catch=False, second_twine=None, hexagonal=None, catch_density=0.0):
+                force=(0.0, 0.0, 0.0), drag_area=0.0, catch=False, second_twine=None, hexagonal=None, catch_density=0.0,
+                panel_catch=False):
     """The base scene with one knob turned: a curtain of 3 x 3 meshes (~25 nodes), optionally a rope
     along its foot, a body at its lower corner, a catch, a current along x, a free surface, a second
     curtain of another netting, a hexagonal-mesh curtain of 2 x 2 base meshes; ``catch_density`` > 0 makes the catch a
-    gravity catch."""
+    gravity catch; ``panel_catch``: the curtain holds a panel catch of its own."""
     net = Net(Environment(current_speed=current, surface_level=surface))
     p = curtain(net, "netting", 0.0, twine)
     if second_twine is not None:
@@ -115,6 +116,8 @@ def small_scene(twine=BASE_TWINE, rope=None, current=0.0, surface=float("nan"), 
     net.attach(p.corner(0), mass=mass, volume=volume, force=force, drag_area=drag_area)
     if catch:
         net.catch(1.0, center=(-1.0, 0.0, -0.5 * WIDTH), density=catch_density)
+    if panel_catch:
+        net.panel_catch(1.0, ["netting"], center=(-1.0, 0.0, -0.5 * WIDTH))
     return net.build()
 
 
@@ -166,6 +169,8 @@ ON_OFF = {
                         lambda: node_types(small_scene(twine(cd_normal=0.0), current=0.5), {"bottom_stiffness": 1e6}, **SEA_BED)),
     "catch_pressure": (lambda: small_scene(twine(cd_normal=0.0), current=0.5, catch=True),
                        lambda: small_scene(twine(cd_normal=0.0), current=0.5)),
+    "panel_catch_pressure": (lambda: small_scene(twine(cd_normal=0.0), current=0.5, panel_catch=True),
+                             lambda: small_scene(twine(cd_normal=0.0), current=0.5)),
     "tarp_pressure": (lambda: small_scene(twine(cd_normal=0.0, tarp_cd=1.0), current=0.5),
                       lambda: small_scene(twine(cd_normal=0.0), current=0.5)),
     "gravity_catch": (lambda: small_scene(catch=True, catch_density=1000.0), lambda: small_scene()),

@@ -135,3 +135,11 @@ def catch_pressure_on_element_stiffness(x, state, sign):
     """(9, 9) stiffness (N/m) of :func:`jaxnet.terms.pressure.catch_pressure_on_element` (same arguments): the
     catch front of ``state`` held fixed (:mod:`jaxnet.assemble` says why)."""
     return catch_pressure_stiffness(x, state["pressure"], state["front"], state["axis"], sign)
+
+
+def panel_catch_pressure_stiffness(x, state, sign, panel):
+    """(9, 9) stiffness (N/m) of :func:`jaxnet.terms.panel_catch.panel_catch_pressure` (same arguments): that of
+    the catch its panel holds, its front held fixed, or zero where the panel holds none."""
+    k = state["catch_of_panel"][panel]
+    stiffness = catch_pressure_stiffness(x, state["pressure"], state["fronts"][jnp.maximum(k, 0)], state["axis"], sign)
+    return jnp.where(k >= 0, stiffness, 0.0)

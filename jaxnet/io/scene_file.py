@@ -19,6 +19,8 @@ The format mirrors the Python API (see README, "Scene files"). Top-level keys::
     bodies       [{at: REF, drag_length: [lx, ly, lz], drag_coefficient: [cx, cy, cz]}]  box drag
     limits       [{at: REF, limit: [x, y, z], sense: [sx, sy, sz]}]          sea bed, ceilings
     catch        {volume, drag_coefficient?, symmetry?, axis?}              fish catch in a cod-end
+    panel_catches [{volume, panels: [NAME, ...], drag_coefficient?, symmetry?, axis?, center?}]
+                                                                              catches held by chosen panels
     solver       {tol, max_iter, max_step, ...}                               Newton options
 
 ``bodies`` and ``limits`` are FEMNET's node types (see :class:`jaxnet.scene.Nodes`): *every* node of the
@@ -46,7 +48,7 @@ from jaxnet.scene import Environment, SceneError
 from jaxnet.solve.options import Newton
 
 _TOP = {"environment", "twines", "ropes", "panels", "cables", "seams", "fix", "attach", "sinkers", "floats", "catch",
-        "bodies", "limits", "solver", "description"}
+        "panel_catches", "bodies", "limits", "solver", "description"}
 _STRINGS = {"drag_model"}  # material fields that are not numbers
 
 
@@ -230,6 +232,17 @@ def from_dict(doc: dict, label: str = "scene document") -> Case:
         c = _keys(doc["catch"], {"volume", "drag_coefficient", "symmetry", "axis"}, "catch", ("volume",))
         numbers = {k: _number(c[k], f"catch.{k}") for k in ("volume", "drag_coefficient", "symmetry") if k in c}
         net.catch(**numbers, axis=_triple(c["axis"], "catch.axis") if "axis" in c else None)
+    for i, entry in enumerate(doc.get("panel_catches", [])):
+        where = f"panel_catches[{i}]"
+        c = _keys(entry, {"volume", "panels", "drag_coefficient", "symmetry", "axis", "center"}, where, ("volume", "panels"))
+        numbers = {k: _number(c[k], f"{where}.{k}") for k in ("volume", "drag_coefficient", "symmetry") if k in c}
+        if not isinstance(c["panels"], list) or not all(isinstance(n, str) for n in c["panels"]):
+            raise SceneError(f"{where}.panels: expected a list of panel names, got {c['panels']!r}")
+        try:
+            net.panel_catch(**numbers, panels=c["panels"], axis=_triple(c["axis"], f"{where}.axis") if "axis" in c else None,
+                            center=_triple(c["center"], f"{where}.center") if "center" in c else None)
+        except SceneError as err:
+            raise SceneError(f"{where}: {err}") from None
     return from_net(net, _solver(doc.get("solver", {})), label=label)
 
 

@@ -17,6 +17,7 @@ term's declaration (:mod:`jaxnet.terms.term` says what a declaration holds). The
   screen      screen models of netting drag (used by ``drag``)
   bottom      sea-bed contact and friction
   pressure    the catch's pressure behind its front (4.246-4.264)
+  panel_catch catches held by chosen panels, each behind its own front (FEMNET's catch2_volume)
   gravity_catch  the weight of a catch out of the water: hydrostatic pressure below its level (FEMNET)
   tarp        the current's pressure on an impermeable panel, in place of its twines' drag (FEMNET)
   inertia     inertia of a moving net (4.265-4.271; used by the dynamic solver)
@@ -28,4 +29,4 @@ entry: modules not listed come after, by name.
 
 #: the modules of the package in registry order (module docstring)
 CONTENTS = ("tension", "cable", "gravity", "surface", "applied", "hexagonal", "opening", "knot", "bending", "drag",
-            "screen", "bottom", "pressure", "inertia", "cable_bending", "gravity_catch", "tarp")
+            "screen", "bottom", "pressure", "inertia", "cable_bending", "gravity_catch", "tarp", "panel_catch")

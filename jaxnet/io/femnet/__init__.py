@@ -145,7 +145,12 @@ Conventions established from the files (see ``tests/test_femnet.py``):
   the current's direction, through the intersection of the symmetry planes. ``input catch_gravity RHO_C`` makes it
   a gravity catch (``Catch.density``, :mod:`jaxnet.terms.gravity_catch`): the axis points down, the level is solved
   for the same volume and the pressure is FEMNET's hydrostatic one; refused in a current (FEMNET then gives the
-  netting no drag at all).
+  netting no drag at all). Each ``input catch2_volume V N P1 .. PN`` is a catch of its own held by the listed
+  diamond panels (:meth:`~jaxnet.net.Net.panel_catch`, :mod:`jaxnet.terms.panel_catch`), its front along x as
+  FEMNET places it, its netting on FEMNET's side (the catch on the U ^ V side of every panel,
+  :func:`~jaxnet.io.femnet.mapping.femnet_panel_catch_sides`), the main catch's Cd. FEMNET's current statics give
+  a case with such catches no netting drag (their loop calls neither its netting drag nor the drag ahead of the
+  fronts); its stored answer of 15grid/avril_4 has it, and so has jaxnet.
 * **Convergence.** FEMNET stops when the *mean* nodal residual norm is below its threshold; jaxnet's
   Newton tests the *largest* nodal residual. The threshold is passed unchanged as jaxnet's ``tol``:
   max <= tol implies mean <= tol, so jaxnet's answer is at least as converged as FEMNET's.

@@ -497,6 +497,22 @@ def _drag_forces_type(values):
     return None if n in (1, 2, 3, 4) else f"'input drag_forces_type': the law must be 1, 2, 3 or 4, got {n!r}"
 
 
+def _catch2_volume(values):
+    """``input catch2_volume V N P1 .. PN`` (FEMNET's ``chargement_don.c``, ``catch2_volume.c``): a catch of V m³
+    (> 0) held by the N diamond panels listed (whole numbers >= 1), N >= 1 and exactly N of them."""
+    what = "'input catch2_volume'"
+    volume, count, panels = values[0], values[1], values[2:]
+    if not (np.isfinite(volume) and volume > 0):
+        return f"{what}: the catch's volume must be > 0 (m³), got {volume!r}"
+    if count != int(count) or count < 1 or len(panels) != count:
+        return (f"{what} {volume:g}: the number of panels must be a whole number >= 1 followed by that many panel "
+                f"numbers, got {count!r} and {len(panels)} number(s)")
+    bad = [p for p in panels if p != int(p) or p < 1]
+    if bad:
+        return f"{what} {volume:g}: a panel number must be a whole number >= 1, got {bad[0]!r}"
+    return None
+
+
 def _catch_gravity(values):
     """``input catch_gravity RHO_C``: the gravity catch's density, finite and > 0 (kg/m³; FEMNET reads 0 as no
     gravity catch, which a line asking for one does not mean)."""
@@ -527,7 +543,6 @@ COMMANDS = (
     # FEMNET's current code has no handler for it (its reader skips the line)
     Command("input", "node_position", 1, use="ignored"),
     *(Command("input", name, tuple(range(0, 12)), use="unsupported", reason=reason) for name, reason in (
-        ("catch2_volume", "extra catch volumes on listed panels: " + _UNSUPPORTED),
         ("spheric_limit", "a spherical limit: " + _UNSUPPORTED),
         ("deck", "a deck: " + _UNSUPPORTED))),
     # the netting's drag law: 1 Morison, 2 Zhan, 3 drop pressure, 4 Aarnes (jaxnet.terms.drag's docstring)
@@ -544,6 +559,8 @@ COMMANDS = (
     Command("input", "link_flexion_elem2", 3, _link_flexion_elem2, repeatable=True),
     # the gravity catch (jaxnet.terms.gravity_catch): the catch's density (kg/m³) weighing on a bag out of the water
     Command("input", "catch_gravity", 1, _catch_gravity),
+    # a catch held by listed diamond panels (jaxnet.terms.panel_catch): VOLUME (m³) N PANEL1 .. PANELN, one line each
+    Command("input", "catch2_volume", tuple(range(3, 3 + 64)), _catch2_volume, repeatable=True),
 )
 INPUTS = {c.name: c for c in COMMANDS if c.kind == "input"}
 #: FEMNET's output commands (``output NAME ...``) print figures or draw: all are read and none changes the case;

@@ -13,6 +13,7 @@ import re
 
 import numpy as np
 
+from jaxnet import geometry
 from jaxnet import waves as waves_lib
 from jaxnet.io.femnet.grammar import INPUTS, DonCable, DonFile, DonPanel, twine_coordinates
 from jaxnet.io.femnet.links import MERGE_TOLERANCE, JoinPlan, all_panels, at_joined_positions, plan_joins
@@ -396,6 +397,47 @@ def catch_of(case: DonFile, position, netting_nodes, planes, env: Environment, d
     return volume * copies, case.catch["catch_cd"].value, copies, center, axis
 
 
+#: the axis along which FEMNET advances the fronts of its panel catches: x (``catch2_volume.c`` places each front
+#: among the x coordinates of its panels' vertices, whatever the current's direction)
+CATCH2_AXIS = (1.0, 0.0, 0.0)
+
+
+def panel_catches(case: DonFile, net: Net, planes):
+    """Each ``input catch2_volume V N P1 .. PN`` line as a panel catch of the net (:meth:`Net.panel_catch`): V m³
+    of the modelled part (FEMNET compares its panels' volume with V as it is), the whole net's V x 2 per symmetry
+    plane with as many copies, the main catch's Cd (FEMNET's ``Prise.cd``), fronts along x (:data:`CATCH2_AXIS`).
+    SceneError at the line naming a panel the case does not have, or a panel already holding a catch."""
+    if "catch2_volume" not in case.inputs:
+        return
+    copies = 2.0 ** len(planes)
+    for occurrence in case.inputs["catch2_volume"].value:
+        volume, panels = occurrence.values[0], [int(v) for v in occurrence.values[2:]]
+        where = f"{case.path}:{occurrence.line}: 'input catch2_volume {volume:g}'"
+        missing = [k for k in panels if k > len(case.panels)]
+        if missing:
+            raise SceneError(f"{where}: panel {missing[0]} does not exist (diamond panels: 1..{len(case.panels)})")
+        try:
+            net.panel_catch(volume * copies, [f"panel {k}" for k in panels], drag_coefficient=case.catch["catch_cd"].value,
+                            symmetry=copies, axis=CATCH2_AXIS)
+        except SceneError as error:
+            raise SceneError(f"{where}: {error}") from None
+
+
+def femnet_panel_catch_sides(scene):
+    """The scene with the triangles of its panel catches oriented as FEMNET orients them: from the twine
+    coordinates alone, not from the drawn shape (FEMNET's cases draw their cod-ends flat, in the design plane,
+    where no side of a panel is outward). FEMNET's catch pressure is -p (12 ^ 13)/6 and 12 ^ 13 = d U ^ V (4.7), so
+    the catch lies on the U ^ V side of every panel: ``Netting.outward`` = -sign(d), d the triangle's twine
+    determinant in jaxnet's vertex order (:mod:`jaxnet.terms.pressure`, "Orientation")."""
+    pc, netting = scene.panel_catches, scene.netting
+    if pc is None or netting is None:
+        return scene
+    held = np.asarray(pc.panel_catch)[np.asarray(netting.panel)] >= 0
+    sides = -np.sign(np.asarray(geometry.twine_determinant(np.asarray(netting.uv))))
+    outward = np.where(held, sides, np.asarray(netting.outward))
+    return dataclasses.replace(scene, netting=dataclasses.replace(netting, outward=outward))
+
+
 def _describe(case: DonFile, env: Environment, plan: JoinPlan, femnet_laws: bool = True, refine: float = 1.0) -> Net:
     """The panels and cables of the (joined) case on a new Net, sewn as ``plan`` says, meshed ``refine`` times
     finer than the file says (:func:`read_don`)."""
@@ -582,12 +624,13 @@ def read_don(path, femnet_laws=True, refine=1.0):
     netting_nodes = np.unique(np.asarray(scene.netting.vertices)) if scene.netting is not None else np.arange(len(position))
     density = gravity_catch_density(case, env)
     catch = catch_of(case, position, netting_nodes, planes, env, density)
+    panel_catches(case, net, planes)
     with _located(case, "the net with its node types"):
         if catch is not None:
             volume, cd, copies, center, axis = catch
             net.catch(volume, drag_coefficient=cd, symmetry=copies, center=tuple(center), axis=tuple(axis),
                       density=density)
-        scene = net.build()
+        scene = femnet_panel_catch_sides(net.build())
     finer = "" if refine == 1.0 else f", meshed {refine:g} times finer than its file"
     out = result(case, scene, net, planes, catch, femnet_laws, plan, label=f"FEMNET case {case.path}{finer}",
                  warnings=warnings, node_type=node_type)

@@ -37,6 +37,9 @@ def read_mdg(path, don=None, femnet_laws=True):
     if femnet_laws:
         case = spheres_folded(case)   # FEMNET's spheres are folded into their cables' materials
     check_types(case)
+    if "catch2_volume" in case.inputs:
+        raise SceneError(f"{don}:{case.inputs['catch2_volume'].line}: 'input catch2_volume': panel catches are read "
+                         "from the .don (read_don), not yet on FEMNET's mesh")
     if not path.exists():
         raise SceneError(f"FEMNET mesh {path} does not exist")
     lines = path.read_text(errors="replace").split("\n")
