@@ -245,3 +245,33 @@ def test_femnet_mesh_refuses_panel_catches(tmp_path):
     line = len(text.rstrip("\n").split("\n"))
     with pytest.raises(SceneError, match=rf"c2\.don:{line}: 'input catch2_volume': panel catches are read from the \.don"):
         femnet.read_mdg(C2.with_suffix(".mdg"), don)
+
+
+def test_equilibrium_derivative_in_the_catch_volume():
+    """d(equilibrium)/d(volume) of a cod-end holding a panel catch, by the implicit function theorem (its tangent
+    holds the front fixed, so the sensitivity solve is refined against the exact Jacobian), against central
+    differences of full solves."""
+    from jaxnet.solve import implicit
+    from jaxnet.solve.options import DIFFERENTIABLE
+
+    net = codend_net()
+    quarter_codend(net, "cod-end")
+    net.panel_catch(0.05, ["cod-end"], drag_coefficient=1.4, symmetry=4.0, center=(0.0, 0.0, 0.0))
+    scene = net.build()
+    first = jn.solve_static(scene, tol=1e-9, max_iter=400)
+    structure = implicit.structure_of(scene)
+    assert not structure.exact_tangent
+    x0 = np.asarray(first.x)
+    solver = dataclasses.replace(DIFFERENTIABLE, max_iter=400)
+
+    def rear(volume):
+        s = dataclasses.replace(scene, panel_catches=dataclasses.replace(scene.panel_catches,
+                                                                         volume=jnp.reshape(volume, (1,))))
+        x = implicit.equilibrium(s, structure, x0=x0, solver=solver).x
+        return jnp.max(x[:, 0])  # how far the cod-end reaches downstream (m)
+
+    grad = float(jax.grad(rear)(jnp.asarray(0.05)))
+    h = 1e-3
+    fd = (float(rear(jnp.asarray(0.05 + h))) - float(rear(jnp.asarray(0.05 - h)))) / (2 * h)
+    assert abs(grad) > 1e-3
+    assert grad == pytest.approx(fd, rel=1e-3)

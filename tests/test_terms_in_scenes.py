@@ -687,7 +687,6 @@ def test_catch_pressure_resultant_is_the_pressure_on_the_faces_that_close_the_ca
 def test_catch_shields_the_netting_behind_its_front_from_drag():
     # the adapter of the netting drag: ahead of the front the twine drag, behind it none (the catch pressure
     # replaces it), in between the consistent load of the part ahead, continuous as the front sweeps through
-    from jaxnet import model as model_lib
     from jaxnet.scene import Environment
     from jaxnet.terms import drag
 

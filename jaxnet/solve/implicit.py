@@ -87,11 +87,17 @@ class Structure(eqx.Module):
     exact_tangent: bool = eqx.field(static=True, default=True)
 
 
+def _without_fronts(*parts):
+    """True when none of the scenes (or parts of one) has a catch or panel catches: their fronts, global states
+    the assembled tangent holds fixed, move with the net."""
+    return all(p.catch is None and p.panel_catches is None for p in parts)
+
+
 def structure_of(scene, dynamic=False) -> Structure:
     """The :class:`Structure` of ``scene`` (validated here): its active terms and tangent pattern."""
     checks.validate(scene)
     model = model_lib.active_terms(scene, dynamic=dynamic)
-    return Structure(pattern=assemble.build_pattern(scene, model), model=model, exact_tangent=scene.catch is None)
+    return Structure(pattern=assemble.build_pattern(scene, model), model=model, exact_tangent=_without_fronts(scene))
 
 
 def residual(x_free, scene, structure: Structure, step=None):
@@ -166,7 +172,7 @@ def _root_jvp(model, solver, primals, tangents):
     params, rest, pattern, x0, step = primals
     d_params, d_step = tangents[0], tangents[4]
     x_free, info = _root(model, solver, params, rest, pattern, x0, step)
-    structure_ = Structure(pattern=pattern, model=model, exact_tangent=rest.catch is None and params.catch is None)
+    structure_ = Structure(pattern=pattern, model=model, exact_tangent=_without_fronts(rest, params))
     scene = eqx.combine(params, rest)
     # ∂F/∂θ dθ at the root: the residual's change with the design (and the step's past), the positions held
     _, rhs = jax.jvp(lambda p, st: residual(x_free, eqx.combine(p, rest), structure_, st), (params, step),

@@ -348,7 +348,7 @@ def reference(scene, end_time, loading=None, saveat=None, rtol=1e-6, atol=1e-9, 
         :class:`SparseLU`; factorised densely in JAX up to ``dense_limit`` states, by SuperLU on the host
         above), "sparse-host" (always SuperLU), "dense" (optx.Newton on lineax's dense LU), "chord"
         (diffrax's default: VeryChord on a dense LU), "gmres" (Newton + matrix-free GMRES with relative
-        tolerance ``gmres_rtol``), or "auto": "sparse", except with a catch, whose pressure couples every
+        tolerance ``gmres_rtol``), or "auto": "sparse", except with a catch (or panel catches), whose pressure couples every
         node of the cod-end through the volume (the element pattern does not hold): "dense" up to
         ``dense_limit`` states (twice the free coordinates), "gmres" above.
       dense_limit: see ``linear_solver``.
@@ -372,7 +372,8 @@ def reference(scene, end_time, loading=None, saveat=None, rtol=1e-6, atol=1e-9, 
     free_index, masses = free_masses(scene)
     model = model_lib.active_terms(scene, dynamic=True)
     if linear_solver == "auto":
-        linear_solver = "sparse" if scene.catch is None else "dense" if 2 * free_index.size <= dense_limit else "gmres"
+        fronts = scene.catch is not None or scene.panel_catches is not None
+        linear_solver = "sparse" if not fronts else "dense" if 2 * free_index.size <= dense_limit else "gmres"
     n_states = 2 * free_index.size
     if linear_solver not in LINEAR_SOLVERS:
         raise ValueError(f"reference: linear_solver must be 'auto' or one of {LINEAR_SOLVERS}, got {linear_solver!r}")
