@@ -428,7 +428,8 @@ class Net:
         one catch; a panel holds at most one. ``center``: a point (m) on the axis of the cod-end these panels
         form, from which their netting is oriented outward (:meth:`catch`'s ``center``); default the mean of their
         nodes' start positions, inside a cod-end drawn whole (give it for a quarter or half model, whose nodes
-        lie on one side of the axis). ``drag_coefficient``, ``symmetry`` (copies of the modelled part in the whole
+        lie on one side of the axis); with a main catch or an enclosure as well, theirs orients all the netting.
+        ``drag_coefficient``, ``symmetry`` (copies of the modelled part in the whole
         net: ``volume`` is the whole net's) and ``axis`` (downstream; default the current's direction) are shared
         by the panel catches: the last call's hold. See :class:`jaxnet.scene.PanelCatches` and
         :mod:`jaxnet.terms.panel_catch`."""
