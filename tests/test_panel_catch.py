@@ -185,7 +185,7 @@ def test_femnet_catch2_volume_lines_become_panel_catches(tmp_path):
     """``input catch2_volume V N P1..PN`` on FEMNET's cod-end c2 (a quarter model: its planes make 4 copies), its
     main catch removed: one panel catch of 4 V on panel 1 with the main catch's Cd, fronts along x, and the
     panel's triangles on FEMNET's side, -sign(d) (the catch on the U ^ V side). A panel the case does not have,
-    or a line whose count does not match its panels, is refused at its line; so is the command on FEMNET's mesh."""
+    or a line whose count does not match its panels, is refused at its line."""
     text = C2.read_text()
     parsed = femnet.parse_don(C2)
     volume_line = parsed.catch["catch_volume"].line
@@ -237,14 +237,30 @@ def test_scene_file_panel_catches(tmp_path):
         jn.read_scene(path)
 
 
-def test_femnet_mesh_refuses_panel_catches(tmp_path):
-    """On FEMNET's own mesh (read_mdg) the panel catches are not mapped yet: refused at the command's line."""
-    text = C2.read_text().rstrip("\n") + "\ninput catch2_volume 0.2 1 1\n"
-    don = tmp_path / "c2.don"
-    don.write_text(text)
-    line = len(text.rstrip("\n").split("\n"))
-    with pytest.raises(SceneError, match=rf"c2\.don:{line}: 'input catch2_volume': panel catches are read from the \.don"):
-        femnet.read_mdg(C2.with_suffix(".mdg"), don)
+AVRIL_4 = DATA / "femnet-corpus" / "15grid" / "avril_4"
+
+
+def test_femnets_panel_catches_at_femnets_equilibrium_give_its_catch_drag():
+    """15grid/avril_4 (two catches of 2 m³ in the two cod-ends of a grid trawl) on FEMNET's own mesh at its stored
+    equilibrium (avril_4.mdg, .sta): the pressure of jaxnet's panel catches pushes the net along x by FEMNET's
+    printed "catch drag" (7574 N, to the unit it prints), and its netting drag is FEMNET's "surface drag" (6269 N)."""
+    from jaxnet import figures
+
+    case = femnet.read_mdg(AVRIL_4.with_suffix(".mdg"), AVRIL_4.with_suffix(".don"))
+    scene = case.scene
+    np.testing.assert_allclose(scene.panel_catches.volume, [2.0, 2.0])
+    pos, _, _, summary = femnet.read_sta(AVRIL_4.with_suffix(".sta"), scene.n_nodes, scene.bars.ends.shape[0],
+                                         scene.netting.vertices.shape[0])
+    assert summary["catch drag (N)"][0] == 7574.0 and summary["surface drag (N)"][0] == 6269.0
+    forces = figures.force_breakdown(scene, pos)
+    assert forces["catch_N"][0] == pytest.approx(7574.0, abs=1.0)
+    assert forces["drag_netting_N"][0] == pytest.approx(6269.0, abs=1.0)
+    state = catch.panel_catch_state(jnp.asarray(pos), scene)
+    holder = np.asarray(scene.panel_catches.panel_catch)[np.asarray(scene.netting.panel)]
+    for k in range(2):
+        sign = np.where(holder == k, np.asarray(scene.netting.outward), 0.0)
+        enclosed = catch.enclosed_volume(jnp.asarray(pos), scene.netting.vertices, state["fronts"][k], AXIS, 1.0, sign)
+        assert float(enclosed) == pytest.approx(2.0, rel=1e-8)
 
 
 def test_equilibrium_derivative_in_the_catch_volume():

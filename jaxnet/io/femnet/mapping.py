@@ -21,7 +21,7 @@ from jaxnet.io.femnet.parse import parse_don
 from jaxnet.io.femnet.reader import Value
 from jaxnet.io.femnet.twines import numerical_twines
 from jaxnet.net import CableRef, HexTwine, Net, Rope, Twine
-from jaxnet.scene import Environment, SceneError
+from jaxnet.scene import Environment, PanelCatches, SceneError
 from jaxnet.case import Case, TimeSettings
 from jaxnet.solve.options import TIME_STEP, Implicit, Newton
 from jaxnet.terms import knot
@@ -402,25 +402,47 @@ def catch_of(case: DonFile, position, netting_nodes, planes, env: Environment, d
 CATCH2_AXIS = (1.0, 0.0, 0.0)
 
 
-def panel_catches(case: DonFile, net: Net, planes):
-    """Each ``input catch2_volume V N P1 .. PN`` line as a panel catch of the net (:meth:`Net.panel_catch`): V m³
-    of the modelled part (FEMNET compares its panels' volume with V as it is), the whole net's V x 2 per symmetry
-    plane with as many copies, the main catch's Cd (FEMNET's ``Prise.cd``), fronts along x (:data:`CATCH2_AXIS`).
-    SceneError at the line naming a panel the case does not have, or a panel already holding a catch."""
+def catch2_volumes(case: DonFile, planes):
+    """The case's ``input catch2_volume V N P1 .. PN`` lines as [(the whole net's volume V x 2 per symmetry plane (m³),
+    the 0-based diamond panels, the line)] (FEMNET compares its panels' volume with V as it is: V is the modelled
+    part's). SceneError at the line naming a panel the case does not have, or one already holding a catch."""
     if "catch2_volume" not in case.inputs:
-        return
-    copies = 2.0 ** len(planes)
+        return []
+    copies, out, held = 2.0 ** len(planes), [], {}
     for occurrence in case.inputs["catch2_volume"].value:
         volume, panels = occurrence.values[0], [int(v) for v in occurrence.values[2:]]
         where = f"{case.path}:{occurrence.line}: 'input catch2_volume {volume:g}'"
-        missing = [k for k in panels if k > len(case.panels)]
-        if missing:
-            raise SceneError(f"{where}: panel {missing[0]} does not exist (diamond panels: 1..{len(case.panels)})")
-        try:
-            net.panel_catch(volume * copies, [f"panel {k}" for k in panels], drag_coefficient=case.catch["catch_cd"].value,
-                            symmetry=copies, axis=CATCH2_AXIS)
-        except SceneError as error:
-            raise SceneError(f"{where}: {error}") from None
+        for k in panels:
+            if k > len(case.panels):
+                raise SceneError(f"{where}: panel {k} does not exist (diamond panels: 1..{len(case.panels)})")
+            if k in held:
+                raise SceneError(f"{where}: panel {k} already holds the catch of line {held[k]} (a panel holds at most one)")
+            held[k] = occurrence.line
+        out.append((volume * copies, [k - 1 for k in panels], occurrence.line))
+    return out
+
+
+def panel_catches(case: DonFile, net: Net, planes):
+    """Each ``input catch2_volume`` line (:func:`catch2_volumes`) as a panel catch of the net (:meth:`Net.panel_catch`):
+    the main catch's Cd (FEMNET's ``Prise.cd``), as many copies as the symmetry planes make, fronts along x
+    (:data:`CATCH2_AXIS`)."""
+    for volume, panels, _ in catch2_volumes(case, planes):
+        net.panel_catch(volume, [f"panel {k + 1}" for k in panels], drag_coefficient=case.catch["catch_cd"].value,
+                        symmetry=2.0 ** len(planes), axis=CATCH2_AXIS)
+
+
+def panel_catches_of(case: DonFile, planes, n_panels):
+    """The case's panel catches as a :class:`~jaxnet.scene.PanelCatches` over ``n_panels`` panels (as
+    :func:`panel_catches` gives the Net), or None without any: for a scene built without a Net (FEMNET's mesh)."""
+    volumes = catch2_volumes(case, planes)
+    if not volumes:
+        return None
+    panel_catch = np.full(n_panels, -1, dtype=np.int32)
+    for k, (_, panels, _) in enumerate(volumes):
+        panel_catch[panels] = k
+    return PanelCatches(volume=np.array([v for v, _, _ in volumes]), panel_catch=panel_catch,
+                        drag_coefficient=float(case.catch["catch_cd"].value), axis=np.array(CATCH2_AXIS),
+                        symmetry=2.0 ** len(planes))
 
 
 def femnet_panel_catch_sides(scene):
@@ -434,7 +456,8 @@ def femnet_panel_catch_sides(scene):
         return scene
     held = np.asarray(pc.panel_catch)[np.asarray(netting.panel)] >= 0
     sides = -np.sign(np.asarray(geometry.twine_determinant(np.asarray(netting.uv))))
-    outward = np.where(held, sides, np.asarray(netting.outward))
+    others = np.ones(held.shape) if netting.outward is None else np.asarray(netting.outward)
+    outward = np.where(held, sides, others)
     return dataclasses.replace(scene, netting=dataclasses.replace(netting, outward=outward))
 
 

@@ -12,8 +12,9 @@ import pathlib
 import numpy as np
 
 from jaxnet.io.femnet.grammar import twine_coordinates
-from jaxnet.io.femnet.mapping import (catch_of, check_types, environment_of, gravity_catch_density, node_type_fields,
-                                      result, rope_of, spheres_folded, symmetry_planes, symmetry_share, twine_of)
+from jaxnet.io.femnet.mapping import (catch_of, check_types, environment_of, femnet_panel_catch_sides,
+                                      gravity_catch_density, node_type_fields, panel_catches_of, result, rope_of,
+                                      spheres_folded, symmetry_planes, symmetry_share, twine_of)
 from jaxnet.io.femnet.parse import parse_don
 from jaxnet.io.femnet.twines import mdg_twine_bars, numerical_twines
 from jaxnet.materials import bar_rows, netting_rows
@@ -37,9 +38,6 @@ def read_mdg(path, don=None, femnet_laws=True):
     if femnet_laws:
         case = spheres_folded(case)   # FEMNET's spheres are folded into their cables' materials
     check_types(case)
-    if "catch2_volume" in case.inputs:
-        raise SceneError(f"{don}:{case.inputs['catch2_volume'].line}: 'input catch2_volume': panel catches are read "
-                         "from the .don (read_don), not yet on FEMNET's mesh")
     if not path.exists():
         raise SceneError(f"FEMNET mesh {path} does not exist")
     lines = path.read_text(errors="replace").split("\n")
@@ -155,8 +153,10 @@ def read_mdg(path, don=None, femnet_laws=True):
         netting = dataclasses.replace(netting, outward=outward(position, np.asarray(netting.vertices), center,
                                                                np.asarray(netting.uv), np.asarray(netting.panel)))
     scene = Scene(nodes=nodes, netting=netting, bars=bars, environment=env, catch=catch,
+                  panel_catches=panel_catches_of(case, planes, len(case.panels)),
                   panel_names=tuple(f"panel {k + 1}" for k in range(len(case.panels))),
                   cable_names=tuple(f"cable {k + 1}" for k in range(len(case.cables))) + twine_names)
+    scene = femnet_panel_catch_sides(scene)
     validate(scene)
     out = result(case, scene, None, planes, catch_spec, femnet_laws, label=f"FEMNET case {don} on FEMNET's mesh {path}",
                   node_type=node_type)
