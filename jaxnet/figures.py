@@ -110,6 +110,35 @@ def catch_report(scene, x):
     }
 
 
+def panel_catch_report(scene, x):
+    """For each panel catch (:class:`jaxnet.scene.PanelCatches`), in order: the panels holding it, and its front,
+    volume, drag, thickness and largest diameter as :func:`catch_report` gives the main catch's, computed on its
+    own panels' triangles (diameters: half the extent of its nodes behind the front); or None without any."""
+    pc = scene.panel_catches
+    if pc is None or scene.netting is None:
+        return None
+    net, env = scene.netting, scene.environment
+    holder = np.asarray(pc.panel_catch)[np.asarray(net.panel)]
+    p = pressure.dynamic_pressure(env.water_density, pc.drag_coefficient, env.current_speed)
+    names = scene.panel_names or tuple(f"panel {k}" for k in range(len(pc.panel_catch)))
+    out = []
+    for k, volume in enumerate(np.asarray(pc.volume)):
+        rows = holder == k
+        args = (np.asarray(x, dtype=float), np.asarray(net.vertices)[rows], pc.axis, volume, pc.symmetry,
+                np.asarray(net.outward)[rows], p, None, env.up)
+        front, summary = programs.obtain("catch_report", _catch_jit, args)(*args)
+        out.append({
+            "panels": [names[j] for j in np.flatnonzero(np.asarray(pc.panel_catch) == k)],
+            "front_m": float(front.position),
+            "holds_the_volume": bool(front.holds),
+            "volume_m3": float(summary.volume),
+            "drag_N": float(summary.drag),
+            "thickness_m": float(summary.thickness),
+            "diameter_m": float(summary.diameter),
+        })
+    return out
+
+
 def enclosed_volume(scene, x):
     """Volume (m³) the net holds behind its opening (scenes with an enclosure), or None."""
     e = scene.enclosure
@@ -152,6 +181,9 @@ def summary(scene, eq):
     report = catch_report(scene, eq.x)
     if report is not None:
         out["catch"] = report
+    panels = panel_catch_report(scene, eq.x)
+    if panels is not None:
+        out["panel_catches"] = panels
     if eq.timing is not None:
         out["wall_s"] = float(eq.timing.wall_s)
         out["compile_s"] = float(eq.timing.compile_s)

@@ -291,3 +291,23 @@ def test_equilibrium_derivative_in_the_catch_volume():
     fd = (float(rear(jnp.asarray(0.05 + h))) - float(rear(jnp.asarray(0.05 - h)))) / (2 * h)
     assert abs(grad) > 1e-3
     assert grad == pytest.approx(fd, rel=1e-3)
+
+
+def test_result_reports_each_panel_catch():
+    """result.json's ``panel_catches``: at the solved equilibrium of two cod-ends holding 0.01 and 0.03 m³, each entry
+    names its panel and holds its volume, and each catch's drag (p × its front's section, the whole net's) is the
+    axial force of its pressure on its own cod-end (the netting with the front and the symmetry planes closes the
+    catch), four times the modelled quarter's."""
+    from jaxnet import figures
+
+    scene = two_codends(0.01, 0.03)
+    eq = jn.solve_static(scene, max_iter=500)
+    report = figures.summary(scene, eq)["panel_catches"]
+    assert [r["panels"] for r in report] == [["port"], ["starboard"]]
+    holder = np.asarray(scene.panel_catches.panel_catch)[np.asarray(scene.netting.panel)]
+    force = term_force(scene, np.asarray(eq.x), "panel_catch_pressure")
+    for k, (r, volume) in enumerate(zip(report, (0.01, 0.03))):
+        assert r["holds_the_volume"] and r["volume_m3"] == pytest.approx(volume, rel=1e-8)
+        nodes = np.unique(np.asarray(scene.netting.vertices)[holder == k])
+        assert r["drag_N"] == pytest.approx(4.0 * force[nodes, 0].sum(), rel=1e-6)
+    assert report[1]["drag_N"] > report[0]["drag_N"] > 0.0
