@@ -70,3 +70,26 @@ def test_a_failed_solve_without_struts_claims_none():
     with pytest.raises(jn.SolveError) as failure:
         jn.solve_static(scene, max_iter=1)
     assert "compression" not in str(failure.value)
+
+
+def test_a_solve_stopped_while_converging_is_told_to_take_more_iterations():
+    """The built-in framed panel stopped by a cap of 4 iterations, its residual falling quadratically: the error says
+    by how much it fell over its last quarter (one iteration) and to give it more iterations; given them, it
+    converges. The same record with a flat history (a residual that did not halve) gets no such hint."""
+    import dataclasses
+
+    from jaxnet.scenes import framed_panel
+
+    case = framed_panel()
+    with pytest.raises(jn.SolveError) as failure:
+        jn.solve_static(case, max_iter=4)
+    eq = failure.value.equilibrium
+    k, before, last = diagnosis.still_falling(eq)
+    history = np.asarray(eq.history)
+    assert k == 1 and before == history[3] and last == history[4] and last * 2.0 <= before
+    message = str(failure.value)
+    assert "the residual was still falling when the iteration cap stopped it" in message
+    assert "over its last 1 iteration(s)" in message and "max_iter" in message
+    assert jn.solve_static(case).converged
+    flat = dataclasses.replace(eq, history=np.where(np.isfinite(history), history[4], np.nan))
+    assert diagnosis.still_falling(flat) is None and diagnosis.hints(case.scene, flat) == []

@@ -18,12 +18,22 @@ built-in hanging panel) whose sinker bar was a hinged strut stopped on it this w
 bar with its bending stiffness converges in nearly all (the set's records: a strut is one cause of failure,
 the one this module recognises).
 
+Still converging. A solve stopped by its iteration cap while its residual was still falling fast (large nets
+take more iterations than the default cap: the 10⁵-node cage of ``validation/REPORT.md`` converges in 635) needs
+more iterations, not another net: :func:`still_falling` says so, with the fall over the last iterations.
+
 Units: m, N.
 """
 
 from __future__ import annotations
 
 import numpy as np
+
+from jaxnet.solve.results import MAX_ITERATIONS
+
+#: a solve stopped by its cap is "still falling" when its largest residual fell by at least this factor over its
+#: last quarter of iterations
+STILL_FALLING = 2.0
 
 #: a bar is in compression when its strain is below minus this (dimensionless): not roundoff about its rest
 #: length
@@ -65,10 +75,30 @@ def compressed_struts(scene, x):
     return sorted(found, key=lambda f: -f[1])
 
 
+def still_falling(eq):
+    """(iterations k, residual k iterations before the end, last residual) (N) when ``eq`` stopped at its iteration
+    cap with its largest residual fallen at least :data:`STILL_FALLING` times over its last quarter of iterations
+    (k of them); else None."""
+    it = int(eq.iterations)
+    if int(eq.status) != MAX_ITERATIONS or it < 4:
+        return None
+    history = np.asarray(eq.history, dtype=float)
+    k = it // 4
+    before, last = float(history[it - k]), float(history[it])
+    if np.isfinite(before) and np.isfinite(last) and last * STILL_FALLING <= before:
+        return k, before, last
+    return None
+
+
 def hints(scene, eq):
     """Sentences saying what the stopping state of a failed static solve ``eq`` (an
     :class:`~jaxnet.solve.results.Equilibrium`) shows and what to try; [] when nothing is recognised."""
     out = []
+    falling = still_falling(eq)
+    if falling is not None:
+        k, before, last = falling
+        out.append(f"the residual was still falling when the iteration cap stopped it ({before:.3g} N -> {last:.3g} N "
+                   f"over its last {k} iteration(s)): give it more iterations (max_iter=..., e.g. twice as many)")
     struts = compressed_struts(scene, eq.x)
     if struts:
         name, count, strain, joint = struts[0]
