@@ -1,6 +1,7 @@
 """Catches held by chosen panels (jaxnet.terms.panel_catch, jaxnet.catch.panel_catch_state, Net.panel_catch, FEMNET's
 ``input catch2_volume``): one catch on a whole cod-end is the main catch, two catches fill their own panels, the
-stiffness is the force's Jacobian, the reader maps FEMNET's lines, and bad input is refused by name."""
+stiffness is the force's Jacobian, the readers map FEMNET's lines and give FEMNET's catch drag on its own mesh,
+result.json reports each catch, the equilibrium's derivative is right, and bad input is refused by name."""
 
 from __future__ import annotations
 
