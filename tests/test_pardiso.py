@@ -150,3 +150,25 @@ def test_a_solve_does_not_depend_on_the_solves_before_it():
     second = jn.solve_static(scene, max_iter=40, throw=False)
     assert int(first.iterations) == int(second.iterations) > 5
     assert np.array_equal(np.asarray(first.x), np.asarray(second.x))
+
+
+@needs_mkl
+def test_a_static_solve_counts_its_fallbacks():
+    """Timing.fallbacks: a hanging chain whose last node is held by a bar of no stiffness (a coordinate without any
+    stiffness, its tangent exactly singular) has every factorisation redone by SuperLU; the same chain with a stiff
+    last bar has none."""
+    import jaxnet as jn
+    from jaxnet.scene import Bars, Nodes, Scene
+
+    def chain(ea_last):
+        nodes = Nodes(position=np.array([[0.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 0.0, -2.0]]),
+                      fixed=np.array([[True] * 3, [False] * 3, [False] * 3]), mass=np.array([0.0, 1.0, 0.5]),
+                      volume=np.zeros(3), force=np.zeros((3, 3)))
+        bars = Bars(ends=np.array([[0, 1], [1, 2]]), rest_length=np.ones(2), ea_traction=np.array([1000.0, ea_last]),
+                    ea_compression=np.zeros(2), diameter=np.zeros(2), density=np.zeros(2), cable=np.array([0, 1]))
+        return Scene(nodes=nodes, bars=bars)
+
+    singular = jn.solve_static(chain(0.0), throw=False, max_iter=5).timing
+    assert singular.factorisations >= 1 and singular.fallbacks == singular.factorisations
+    held = jn.solve_static(chain(1000.0), throw=False, max_iter=50)
+    assert held.converged and held.timing.fallbacks == 0

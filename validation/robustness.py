@@ -390,15 +390,15 @@ def solve_record(eq):
     other = t.wall_s - t.compile_s - t.assembly_s - t.factorisation_s - t.evaluation_s
     return dict(converged=eq.converged, reason=eq.reason, iterations=int(eq.iterations),
                 residual_N=float(eq.residual_N), worst_node=int(eq.worst_node),
-                factorisations=t.factorisations, evaluations=t.evaluations, wall_s=t.wall_s, compile_s=t.compile_s,
-                assembly_s=t.assembly_s, factorisation_s=t.factorisation_s, evaluation_s=t.evaluation_s,
+                factorisations=t.factorisations, fallbacks=t.fallbacks, evaluations=t.evaluations, wall_s=t.wall_s,
+                compile_s=t.compile_s, assembly_s=t.assembly_s, factorisation_s=t.factorisation_s, evaluation_s=t.evaluation_s,
                 other_s=other, factorisation_each_s=t.factorisation_each_s,
                 nan=not _finite(eq.x, eq.force, eq.history[: int(eq.iterations) + 1], eq.energy))
 
 
 def _unsolved(reason):
     return dict(converged=False, reason=reason, iterations=0, residual_N=None, worst_node=None, factorisations=0,
-                evaluations=0, wall_s=None, compile_s=None, assembly_s=None, factorisation_s=None,
+                fallbacks=0, evaluations=0, wall_s=None, compile_s=None, assembly_s=None, factorisation_s=None,
                 evaluation_s=None, other_s=None, factorisation_each_s=None, nan=False)
 
 

@@ -43,6 +43,9 @@ class Timing:
       ordering, factors, the triangular solves and their accuracy checks).
     evaluation_s: evaluating the residual (once per line-search trial, and at the start).
     factorisations, evaluations: how many of each the solve made.
+    fallbacks: factorisations redone by SuperLU with partial pivoting (:class:`jaxnet.linalg.HostSolver`'s
+      ``fallbacks``: the first factor of a nearly singular tangent perturbed a pivot or left a solution
+      inaccurate); each costs several times a PARDISO factorisation at 10⁵ nodes.
     The rest of ``wall_s`` less ``compile_s`` is the loop's own bookkeeping on the host.
     """
 
@@ -53,6 +56,7 @@ class Timing:
     evaluation_s: float = 0.0
     factorisations: int = 0
     evaluations: int = 0
+    fallbacks: int = 0
 
     @property
     def factorisation_each_s(self):

@@ -297,7 +297,7 @@ def host_loop(start, scene, pattern, model, solver: Newton, pieces=None):
         **jax.device_put(dict(x=X, force=force, residual_N=nodal_f.max(), iterations=np.int64(it), status=np.int64(st),
                               worst_node=np.int64(np.argmax(nodal_f)), history=hist,
                               energy=np.float64(e_stored - float(np.sum((load + f_nc) * X))))),
-        timing=Timing(compile_s=0.0, wall_s=time.perf_counter() - t_start, **spent),
+        timing=Timing(compile_s=0.0, wall_s=time.perf_counter() - t_start, fallbacks=int(factor.fallbacks), **spent),
     )
 
 
