@@ -18,9 +18,9 @@ built-in hanging panel) whose sinker bar was a hinged strut stopped on it this w
 bar with its bending stiffness converges in nearly all (the set's records: a strut is one cause of failure,
 the one this module recognises).
 
-Still converging. A solve stopped by its iteration cap while its residual was still falling fast (large nets
-take more iterations than the default cap: the 10⁵-node cage of ``validation/REPORT.md`` converges in 635) needs
-more iterations, not another net: :func:`still_falling` says so, with the fall over the last iterations.
+Still converging. A solve stopped by its iteration cap while its residual was still falling fast (large nets can
+need more iterations than the default cap: the 10⁵-node cage of ``validation/REPORT.md``) needs more iterations, not
+another net: :func:`still_falling` says so, with the fall over the last iterations.
 
 Units: m, N.
 """
