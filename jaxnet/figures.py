@@ -91,14 +91,9 @@ def force_breakdown(scene, x):
             for group, terms in groups.items()}
 
 
-def catch_report(scene, x):
-    """Catch front, volume, drag, thickness and largest diameter (FEMNET's catch summary), or None."""
-    c = scene.catch
-    if c is None or scene.netting is None:
-        return None
-    net, env = scene.netting, scene.environment
-    p = pressure.dynamic_pressure(env.water_density, c.drag_coefficient, env.current_speed)
-    args = (np.asarray(x, dtype=float), net.vertices, c.axis, c.volume, c.symmetry, net.outward, p, c.center, env.up)
+def _catch_fields(x, vertices, axis, volume, symmetry, sign, pressure_, center, up):
+    """One catch's front and FEMNET's summary of it as result.json's fields (:func:`_catch`'s arguments)."""
+    args = (np.asarray(x, dtype=float), vertices, axis, volume, symmetry, sign, pressure_, center, up)
     front, summary = programs.obtain("catch_report", _catch_jit, args)(*args)
     return {
         "front_m": float(front.position),
@@ -108,6 +103,16 @@ def catch_report(scene, x):
         "thickness_m": float(summary.thickness),
         "diameter_m": float(summary.diameter),
     }
+
+
+def catch_report(scene, x):
+    """Catch front, volume, drag, thickness and largest diameter (FEMNET's catch summary), or None."""
+    c = scene.catch
+    if c is None or scene.netting is None:
+        return None
+    net, env = scene.netting, scene.environment
+    p = pressure.dynamic_pressure(env.water_density, c.drag_coefficient, env.current_speed)
+    return _catch_fields(x, net.vertices, c.axis, c.volume, c.symmetry, net.outward, p, c.center, env.up)
 
 
 def panel_catch_report(scene, x):
@@ -124,18 +129,9 @@ def panel_catch_report(scene, x):
     out = []
     for k, volume in enumerate(np.asarray(pc.volume)):
         rows = holder == k
-        args = (np.asarray(x, dtype=float), np.asarray(net.vertices)[rows], pc.axis, volume, pc.symmetry,
-                np.asarray(net.outward)[rows], p, None, env.up)
-        front, summary = programs.obtain("catch_report", _catch_jit, args)(*args)
-        out.append({
-            "panels": [names[j] for j in np.flatnonzero(np.asarray(pc.panel_catch) == k)],
-            "front_m": float(front.position),
-            "holds_the_volume": bool(front.holds),
-            "volume_m3": float(summary.volume),
-            "drag_N": float(summary.drag),
-            "thickness_m": float(summary.thickness),
-            "diameter_m": float(summary.diameter),
-        })
+        fields = _catch_fields(x, np.asarray(net.vertices)[rows], pc.axis, volume, pc.symmetry,
+                               np.asarray(net.outward)[rows], p, None, env.up)
+        out.append({"panels": [names[j] for j in np.flatnonzero(np.asarray(pc.panel_catch) == k)], **fields})
     return out
 
 
