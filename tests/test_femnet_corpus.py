@@ -296,3 +296,37 @@ def test_a_static_run_says_what_it_leaves_out(tmp_path, capsys):
     assert "note: " in printed and "normal Cd' has no value" in printed
     info = json.loads((out / "result.json").read_text())["femnet_case"]
     assert info["dynamic_only"] == ["input hauling_cable4 (line 722)"] and info["design_plane_axis"] == 2
+
+
+def test_purse_seine_difference_is_what_femnet_left_unbalanced():
+    """12purse_seine/t1: jaxnet's vertical force on the fixings is 1.6 % below FEMNET's (-10525.07 N against
+    -10361.19 N in its current code, -10362.12 N in its stored .sta). FEMNET stops when its *mean* nodal residual is
+    below its threshold (1 N here), and what it leaves unbalanced on the free nodes is missing from its total. On
+    FEMNET's own mesh (t1.mdg) and at its stored equilibrium (t1.sta): jaxnet's total on the fixings is the .sta's
+    printed total (the two programs compute the same forces there), the free nodes carry -162.9 N of vertical force
+    out of balance, and the .sta's total plus that is jaxnet's converged total on the same mesh
+    (``validation/femnet_differences.py`` does this for every case more than 1 % off)."""
+    import jax.numpy as jnp
+
+    from jaxnet import assemble
+    from jaxnet import model as model_lib
+    from jaxnet.solve.statics import solve
+
+    don = _don("12purse_seine/t1")
+    case = femnet.read_mdg(don.with_suffix(".mdg"), don)
+    scene, info = case.scene, case.info
+    pos, _, _, summary = femnet.read_sta(don.with_suffix(".sta"), scene.n_nodes, scene.bars.ends.shape[0], 0)
+    printed = np.array(summary["forces along X Y and Z axes (N)"])
+    model = model_lib.active_terms(scene)
+    force = np.asarray(assemble.nodal_force(jnp.asarray(pos), scene, model, assemble.loads(scene, model)))
+    held = np.zeros(force.shape, bool)
+    for i, j in info["fixity"]:
+        held[i, j] = True
+    scale = np.linalg.norm(printed)
+    np.testing.assert_allclose(np.where(held, force, 0.0).sum(axis=0), printed, atol=1e-3 * scale)
+    leftover = np.where(np.asarray(scene.nodes.fixed), 0.0, force).sum(axis=0)
+    assert leftover[2] < -100.0, leftover  # FEMNET's mean-residual stop leaves a net vertical force unbalanced
+    eq = solve(scene, case.solver)
+    total = np.array(femnet.femnet_figures(scene, eq, info["symmetry_axes"], info["fixity"])["total_force_N"])
+    assert abs(total[2] - printed[2]) > 0.01 * scale  # the difference to explain: more than 1 %
+    np.testing.assert_allclose(total, printed + leftover, atol=1e-3 * scale)

@@ -101,6 +101,14 @@ def one(don):
             "cold_s": cold, "warm_s": warm}
 
 
+def femnet_target(answer):
+    """FEMNET's answer a case is compared with (X Y Z, N; None when it has none): its current code's
+    (``ANSWERS.md``), unless that stopped unconverged (its cap, a timeout) and the stored ``.sta`` has one."""
+    converged = answer.get("converged", "").startswith("yes")
+    current, stored = answer.get("force"), answer.get("stored")
+    return current if (current and (converged or not stored)) else stored
+
+
 def run_case(don, timeout):
     """One case in a fresh process (cold), with a wall-clock limit (s)."""
     t0 = time.perf_counter()
@@ -151,9 +159,7 @@ def table(records, answers):
             rows.append(f"| {name} | no: {why.split(': ', 1)[-1][:110]} |" + " |" * 13)
             continue
         stats["read"] += 1
-        # FEMNET's current code's answer, unless it stopped unconverged (its cap, a timeout) and the .sta has one
-        converged = a.get("converged", "").startswith("yes")
-        target = a.get("force") if (a.get("force") and (converged or not a.get("stored"))) else a.get("stored")
+        target = femnet_target(a)
         force = r.get("total_force_N")
         diff = ""
         if target is not None and force is not None and r.get("converged"):
@@ -236,6 +242,18 @@ def run(report, quick: bool) -> None:
                         echo=lambda line: print(line, flush=True))
     text, summary = table(records, femnet_answers(CORPUS))
     report.text(summary + "\n\n" + text + "\n")
+    if not quick:
+        from validation import femnet_differences
+
+        report.text("*Where the total force is more than 1 % off FEMNET's* (`python validation/femnet_differences.py`, "
+                    "whose docstring says what each column measures): jaxnet on FEMNET's own mesh against the stored "
+                    ".sta; jaxnet's total at the .sta's positions against the .sta's (the same physics?); the .sta's "
+                    "total plus the force FEMNET left unbalanced on the free nodes against jaxnet's equilibrium on that "
+                    "mesh (FEMNET's stopping rule); FEMNET's current code against its .sta; each as a fraction of "
+                    "FEMNET's force.\n")
+        traced = femnet_differences.trace(records, CORPUS, report.results / "femnet_differences.json",
+                                          echo=lambda line: print(line, flush=True))
+        report.text(femnet_differences.table(records, traced, femnet_answers(CORPUS), 0.01) + "\n")
 
 
 def main():

@@ -699,9 +699,11 @@ def result(case: DonFile, scene, net, planes, catch, femnet_laws, plan: JoinPlan
     solver = _solver(case)
     info = {**_info(case, planes, catch, plan), "femnet_laws": bool(femnet_laws), "warnings": case.warnings + list(warnings)}
     if node_type is not None:
-        # the coordinates FEMNET holds by a node type's "Displacement" (not by its symmetry): its "forces along X Y
-        # and Z axes" sum the reactions there (femnet_figures)
-        info["fixity"] = [[int(i), j] for i, t in enumerate(node_type) for j in range(3) if case.types[t].fixed[j].value]
+        # the coordinates FEMNET holds by a node type's "Displacement" and not on a symmetry plane: its "forces
+        # along X Y and Z axes" sum the reactions there (femnet_figures; FEMNET's effortstructur.c skips a
+        # coordinate whose type has its "Symmetry" set even where "Displacement" also holds it)
+        info["fixity"] = [[int(i), j] for i, t in enumerate(node_type) for j in range(3)
+                          if case.types[t].fixed[j].value and not case.types[t].symmetry[j].value]
         # FEMNET's node boxes (floats, bodies with drag): the nodes that have one and the height of its top above
         # them (m), for the reports (which boxes rest at the surface z = 0)
         info["boxes"] = {int(i): max(case.types[t].length[2].value, 0.0) for i, t in enumerate(node_type)

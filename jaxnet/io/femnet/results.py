@@ -16,7 +16,7 @@ def femnet_figures(scene, eq, symmetry_axes=(), fixity=None):
     norms of the total drag on the netting, on the cables, and of the catch; total_force_N: the force the
     net exerts on its fixings (sum of the out-of-balance force at the held coordinates = minus jaxnet's
     reaction) as FEMNET prints it: at the coordinates ``fixity`` names ([node, axis] pairs: those FEMNET's node
-    types hold by "Displacement", the reader's ``info["fixity"]``), or else at every held coordinate less the
+    types hold by "Displacement" and not by a symmetry plane, the reader's ``info["fixity"]``), or else at every held coordinate less the
     ``symmetry_axes`` (FEMNET gives no reaction at a node held by a symmetry plane);
     catch: thickness, largest diameter, volume of the modelled part (FEMNET's convention).
     """
