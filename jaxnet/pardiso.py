@@ -11,6 +11,7 @@ relative) instead of exchanged, so the factor keeps the ordering's fill whatever
 fast on the cage's tangents, where SuperLU's threshold pivoting leaves the symmetric ordering and fills
 several times more. A perturbed factor is of a nearby matrix: :class:`jaxnet.linalg.PardisoSolver` hands
 such a matrix to SuperLU with partial pivoting, and checks and refines every solution, as it does SuperLU's.
+It runs in oneMKL's reproducible mode (:data:`CNR`), so that one scene gives one answer to the last bit.
 
 Why it. Measured side by side on the static solver's own tangents (``validation/bench_factorisation.py``):
 against SuperLU with a minimum-degree ordering, PARDISO factorises as fast on FEMNET's cod-end (10³ nodes)
@@ -46,6 +47,14 @@ CHOICE = "JAXNET_SPARSE_SOLVER"
 #: PARDISO's matrix type: real and nonsymmetric
 REAL_NONSYMMETRIC = 11
 
+#: oneMKL's conditional numerical reproducibility (CNR) mode, for bitwise reproducible factors from run to run
+#: on one machine: PARDISO's threads otherwise sum in an order that varies, and a Newton iteration sensitive to
+#: rounding (the 10⁴-node cage) then gave one scene two iteration counts. "AUTO": the code branch MKL chooses
+#: for this processor, kept for the whole run. Set through MKL's own environment variable, which MKL reads at
+#: its first call; a value the user gave is left as it is. Its cost: ``validation/REPORT.md``, "PARDISO's
+#: reproducible mode".
+CNR = ("MKL_CBWR", "AUTO")
+
 _LIBRARY = []  # [library or None], once per process
 
 
@@ -59,6 +68,7 @@ def library():
         candidates = [path for root in roots
                       for path in sorted(glob.glob(os.path.join(root, "lib", "libmkl_rt.so*")), reverse=True)]
         candidates += [name for name in (ctypes.util.find_library("mkl_rt"),) if name]
+        os.environ.setdefault(*CNR)  # before MKL's first call (CNR)
         for path in candidates:
             try:
                 found = ctypes.CDLL(path)
