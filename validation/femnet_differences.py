@@ -15,9 +15,10 @@ stored with its mesh and equilibrium (``.mdg`` and ``.sta``), three measurements
 * **FEMNET's equilibrium**: jaxnet's forces at the ``.sta``'s positions on that mesh: the total on the fixings
   (FEMNET's sum: the coordinates its node types hold by "Displacement", not on a symmetry plane), against the
   ``.sta``'s printed total (the two programs' physics at one shape), and the sum of the out-of-balance forces
-  left on the free coordinates. FEMNET stops when its *mean* nodal residual is below its threshold, and the
-  forces it leaves unbalanced, summed, go missing from its total: where the ``.sta``'s total plus that leftover
-  is jaxnet's total on the same mesh, the difference is FEMNET's stopping rule.
+  left on the free coordinates (and where: the five free nodes most out of balance). FEMNET stops when its
+  *mean* nodal residual is below its threshold, and the forces it leaves unbalanced, summed, go missing from its
+  total: where the ``.sta``'s total plus that leftover is jaxnet's total on the same mesh, the difference is
+  FEMNET's stopping rule.
 * **FEMNET's two answers**: its current code's total (``ANSWERS.md``, the target where it converged) against its
   stored ``.sta``; where they differ by more than ``--above`` FEMNET does not reproduce itself.
 
@@ -27,7 +28,8 @@ total plus its leftover is jaxnet's on that mesh); *the .sta is no equilibrium* 
 jaxnet's answer on FEMNET's mesh nearer the ``.sta``'s total than the force the ``.sta`` leaves unbalanced, and
 FEMNET either stopped at its cap or stopped by its mean rule, jaxnet's mean nodal residual there being within
 :data:`MEAN_RULE` times FEMNET's threshold: its soft modes carry the shape far for the force it left); *FEMNET's
-versions* (its current code, the target, differs from its ``.sta``); "not traced" where none does. Records are JSON lines written as each case ends
+versions* (its current code, the target, differs from its ``.sta``); "not traced" where none does
+(``docs/femnet.md`` traces those by hand from the records). Records are JSON lines written as each case ends
 (``--resume`` skips those in ``--out``). A benchmark, not a test: the suite holds the checks on single cases
 (``tests/test_femnet_corpus.py``, ``tests/test_tarp.py``).
 """
@@ -85,7 +87,8 @@ def one(don):
             "at_sta_mean_residual_N": float(unbalanced[free.any(axis=1)].mean()),
             "threshold_N": float(case.solver.tol),
             # where it is: the five free nodes most out of balance, [node, x, y, z (m), force x, y, z (N)]
-            "at_sta_worst_nodes": [[int(i), *positions[i].tolist(), *np.where(free, force, 0.0)[i].tolist()] for i in worst]}
+            "at_sta_worst_nodes": [[int(i), *positions[i].tolist(), *np.where(free[i], force[i], 0.0).tolist()]
+                                   for i in worst]}
 
 
 #: FEMNET stops when its mean nodal residual is below its threshold; jaxnet's mean nodal residual at FEMNET's .sta

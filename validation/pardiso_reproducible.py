@@ -49,7 +49,8 @@ def main():
         print(json.dumps(one(args.step, args.current)), flush=True)
         return
     print(f"fish cage, meshing step {args.step} m, current {args.current} m/s; each row a fresh process")
-    print("| MKL_CBWR | nodes | iterations (1st, 2nd solve) | warm s | factorisation s | two solves bitwise equal | largest difference m |")
+    print("| MKL_CBWR | nodes | iterations (1st, 2nd solve) | warm s | factorisation s | two solves bitwise equal "
+          "| largest difference m |")
     print("|---|---|---|---|---|---|---|")
     for _ in range(args.repeat):
         for mode in ("AUTO", ""):
