@@ -48,6 +48,9 @@ SCRIPTS = {
     "design_gradient_cost.py": ("Design gradients: the adjoint against one forward solve", ["--quick"], []),
     "newton_oracle.py": ("The static solver against a textbook trust-region Newton on still-water curtains",
                          ["--nodes", "100"], []),
+    "newton_chaos.py": ("How far the static solver's iteration count moves under changes that leave the answer as "
+                        "it is: FEMNET's cases solved with either tangent path and either MKL code branch",
+                        ["--cases", "1pelagic_trawl/toto1", "12purse_seine/u1"], []),
     "newton_locality.py": ("Where the static solver's iterations go: the cage from its drawn shape, from near its "
                            "answer, from a coarser mesh's answer", ["--kicks", "1e-3", "1e-2"], []),
 }
