@@ -1,9 +1,12 @@
-"""What a failed static solve says about the net (jaxnet.solve.diagnosis): hinged struts in compression.
+"""What a failed static solve says about the net (jaxnet.solve.diagnosis): hinged struts in compression, bars that
+carry little.
 
 A chain of two cable bars between two held ends, drawn shorter than the bars: both are in compression by an
 exact strain. With a compression stiffness, the free joint between them makes a strut that buckles; a rope
 without one (ea_compression=0) goes slack and is no strut; a stretched chain, a joint held on every axis, or a
-joint that bends with a stiffness (a bar, Rope(bending_stiffness=EI)) is none either.
+joint that bends with a stiffness (a bar, Rope(bending_stiffness=EI)) is none either. Two links of 1 cm drawn a
+tenth of a micrometre longer than at rest carry little (strain 1e-5); slack, or drawn 2 µm longer (2e-4), they are
+not such bars.
 """
 
 import numpy as np
@@ -93,3 +96,45 @@ def test_a_solve_stopped_while_converging_is_told_to_take_more_iterations():
     assert jn.solve_static(case).converged
     flat = dataclasses.replace(eq, history=np.where(np.isfinite(history), history[4], np.nan))
     assert diagnosis.still_falling(flat) is None and diagnosis.hints(case.scene, flat) == []
+
+
+
+def links(off=1e-7, ea=1.6e6):
+    """Two links of 0.01 m and EA ``ea`` between held ends, each drawn ``off`` (m) longer than at rest (strain
+    off / 0.01), the joint pulled sideways by 0.1 N: FEMNET's short links that carry little (1pelagic_trawl/toto1's,
+    validation/newton_chaos.py)."""
+    pos = np.array([[0.0, 0.0, 0.0], [0.01 + off, 0.0, 0.0], [0.02 + 2 * off, 0.0, 0.0]])
+    force = np.zeros((3, 3))
+    force[1, 1] = 0.1
+    nodes = Nodes(position=pos, fixed=np.array([[True] * 3, [False] * 3, [True] * 3]), mass=np.zeros(3),
+                  volume=np.zeros(3), force=force)
+    bars = Bars(ends=np.array([[0, 1], [1, 2]]), rest_length=np.full(2, 0.01), ea_traction=np.full(2, ea),
+                ea_compression=np.ones(2), diameter=np.full(2, 1e-3), density=np.full(2, 1e-9),
+                cable=np.zeros(2, dtype=int))
+    return Scene(nodes=nodes, bars=bars, environment=Environment(gravity=0.0), cable_names=("link",))
+
+
+def test_bars_that_carry_little_are_found_with_their_strain():
+    scene = links()
+    found = diagnosis.barely_taut_bars(scene, scene.nodes.position, 1)
+    assert [f[:4] for f in found] == [(0, "link", 0.01, 1.6e6), (1, "link", 0.01, 1.6e6)]
+    assert [f[4] for f in found] == pytest.approx([1e-5, 1e-5], rel=1e-6)
+    assert [f[0] for f in diagnosis.barely_taut_bars(scene, scene.nodes.position, 0)] == [0]  # a held end: its bar
+
+
+@pytest.mark.parametrize("off", [-1e-7, 2e-6], ids=["slack", "stretched by 2e-4"])
+def test_no_bar_that_carries_little(off):
+    scene = links(off=off)
+    assert diagnosis.barely_taut_bars(scene, scene.nodes.position, 1) == []
+
+
+def test_a_failed_solve_names_the_bar_that_carries_little_and_what_to_try():
+    # one damped step turns the links by 3e-5 rad: they stay stretched by 1e-5
+    scene = links()
+    with pytest.raises(jn.SolveError) as failure:
+        jn.solve_static(scene, max_iter=1)
+    message = str(failure.value)
+    assert int(failure.value.equilibrium.worst_node) == 1
+    assert ("node 1 hangs on bar 0 of cable 'link' (and 1 other bar(s) there) (rest length 0.01 m, EA 1.6e+06 N) "
+            "stretched by only 1e-05") in message
+    assert "more than about 0.0045 rad" in message and "a lower EA" in message

@@ -20,10 +20,11 @@ this size: judge it on the robustness set (``validation/robustness.py``) and the
 (``validation/femnet_corpus.py``).
 
 ``--trace CASE K`` looks at one solve's iterate K (the library's defaults): the node of the largest residual,
-the strains of the bars and twines at it, and each of its coordinates' column of the tangent against a central
-difference of the residual with steps of 1e-6 and 1e-8 m. A tangent that matches the small step and not the
-larger one is exact, and the residual turns within a micrometre there: a kink (a stiff bar at its slack
-point) that Newton steps cross.
+the strains of the bars and twines at it and, for each bar, how far the next full Newton step turns it and how
+much it lengthens it against what the step's linear model expected: a bar that carries little (strain ε) and
+is turned by an angle θ is stretched by about L0 θ²/2 more than expected, a tension EA θ²/2 that outweighs its
+own EA ε once θ exceeds √(2ε) (the stretch barrier of large rotations: the next step first undoes that
+stretch, and the net turns such bars a little at each iteration).
 
 The default cases are small ones of FEMNET's corpus that take hundreds of iterations (trawls, a seine, the
 gravity catch, the fish cage); ``../shared/femnet-corpus/`` must be there.
@@ -98,7 +99,6 @@ def trace(don, k):
     """Print what :func:`main`'s ``--trace`` describes, for iterate ``k`` of the solve of ``don``."""
     import jax
     import numpy as np
-    import scipy.sparse as sp
 
     from jaxnet import assemble, figures, model as model_lib
     from jaxnet.io import femnet
@@ -111,53 +111,53 @@ def trace(don, k):
     free = np.asarray(pattern.free)
     start = np.asarray(scene.nodes.position, dtype=float).ravel()[free]
     pieces = statics.compile_pieces(start, scene, pattern, model, solver.stiffness)
-    iterates, tangent = [], pieces["tangent"]
+    iterates, trials = [], {}  # the tangent is taken once per iteration, at the iterate; then the trials
 
-    def recording(x, *rest):  # the tangent is taken once per iteration, at the iterate
+    def at_iterate(x, *rest):
         iterates.append(np.asarray(x).copy())
-        return tangent(x, *rest)
+        return pieces["tangent"](x, *rest)
 
-    eq = statics.host_loop(start, scene, pattern, model, solver, {**pieces, "tangent": recording})
+    def at_trial(x, *rest):
+        if iterates:
+            trials.setdefault(len(iterates) - 1, np.asarray(x).copy())  # the first: the full Newton step
+        return pieces["evaluate"](x, *rest)
+
+    recording = {**pieces, "tangent": at_iterate, "evaluate": at_trial}
+    eq = statics.host_loop(start, scene, pattern, model, solver, recording)
     print(f"{don}: {eq.reason} after {int(eq.iterations)} iterations; iterate {k}:")
-    x = iterates[k]
-    load = kernel.loads(scene, model)
     force = jax.jit(lambda x: kernel.force(x, scene, pattern, model).ravel()[pattern.free])
+
+    def positions(x):
+        X = np.asarray(scene.nodes.position, dtype=float).ravel().copy()
+        X[free] = x
+        return X.reshape(-1, 3)
+
     f = np.zeros(3 * scene.n_nodes)
-    f[free] = np.asarray(force(x))
+    f[free] = np.asarray(force(iterates[k]))
     node = int(np.argmax(np.linalg.norm(f.reshape(-1, 3), axis=1)))
-    X = np.asarray(scene.nodes.position, dtype=float).ravel().copy()
-    X[free] = x
-    X = X.reshape(-1, 3)
+    X, full = positions(iterates[k]), positions(trials[k])
     print(f"  largest residual {np.linalg.norm(f[3 * node:3 * node + 3]):.4g} N at node {node}")
     bars = scene.bars
     if bars is not None:
         ends = np.asarray(bars.ends)
         for b in np.nonzero((ends == node).any(axis=1))[0]:
-            length = np.linalg.norm(X[ends[b, 1]] - X[ends[b, 0]])
-            rest = float(np.asarray(bars.rest_length)[b])
-            print(f"  bar {b} {ends[b].tolist()}: rest length {rest:g} m, EA {float(np.asarray(bars.ea_traction)[b]):g} N, "
-                  f"strain {(length - rest) / rest:.3e}")
+            rest, ea = float(np.asarray(bars.rest_length)[b]), float(np.asarray(bars.ea_traction)[b])
+            w = X[ends[b, 1]] - X[ends[b, 0]]
+            length = np.linalg.norm(w)
+            dw = full[ends[b, 1]] - full[ends[b, 0]] - w
+            linear = float(w @ dw) / length  # the length change the Newton step's linear model expects
+            actual = np.linalg.norm(w + dw) - length
+            turn = np.linalg.norm(dw - linear * w / length) / length
+            print(f"  bar {b} {ends[b].tolist()}: rest length {rest:g} m, EA {ea:g} N, "
+                  f"strain {(length - rest) / rest:.3e}; "
+                  f"the full Newton step turns it by {turn:.2e} rad and lengthens it by {actual:.3e} m where its "
+                  f"linear model says {linear:.3e}: {ea * (actual - linear) / rest:.3g} N of tension it did not expect")
     net = scene.netting
     if net is not None:
         tensions = figures.twine_tensions(scene, X)
         for e in np.nonzero((np.asarray(net.vertices) == node).any(axis=1))[0]:
             strains = tensions[e] / float(np.asarray(net.ea_traction)[e])
             print(f"  triangle {e}: twine strains U {strains[0]:.3e}, V {strains[1]:.3e} (0 when slack)")
-    _, _, _, _, state = kernel.evaluate(x, np.zeros_like(load), load, 1.0, scene, pattern, model)
-    data = np.asarray(kernel.tangent(x, state, 1.0, scene, pattern, model, solver.stiffness))
-    K = sp.csr_matrix((data, np.asarray(pattern.indices), np.asarray(pattern.indptr)), shape=(x.size, x.size))
-    for axis in range(3):
-        where = np.nonzero(free == 3 * node + axis)[0]
-        if not where.size:
-            continue
-        column = K[:, where[0]].toarray().ravel()
-        for h in (1e-6, 1e-8):
-            e = np.zeros(x.size)
-            e[where[0]] = h
-            difference = -(np.asarray(force(x + e)) - np.asarray(force(x - e))) / (2 * h)
-            error = np.linalg.norm(difference - column) / np.linalg.norm(difference)
-            print(f"  axis {'xyz'[axis]}, step {h:g} m: tangent column against central difference, relative "
-                  f"difference {error:.1e}; diagonal {column[where[0]]:.4g} against {difference[where[0]]:.4g} N/m")
 
 
 def main(argv=None):

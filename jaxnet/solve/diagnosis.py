@@ -18,6 +18,15 @@ built-in hanging panel) whose sinker bar was a hinged strut stopped on it this w
 bar with its bending stiffness converges in nearly all (the set's records: a strut is one cause of failure,
 the one this module recognises).
 
+Bars that carry little. A bar stretched by only ε, turned by an angle θ in one Newton step, is stretched by
+about L0 θ²/2 more than the step's linear model expects: a tension EA θ²/2 it was not meant to take, which
+outweighs its own EA ε once θ exceeds √(2ε). Where the net must still turn such bars, each iteration first undoes
+the last one's stretch and turns them a little further: the residual stays at a few newtons for hundreds of
+iterations (the stretch barrier of large rotations; ``validation/newton_chaos.py --trace`` shows it on FEMNET's
+1pelagic_trawl/toto1, whose links of 1 cm and EA 1.6e6 N are stretched by 4e-5). :func:`barely_taut_bars` finds
+such bars at the worst node. Where a bar's stretch does not matter (a short link), a lower EA stretches it more
+and lets it turn.
+
 Still converging. A solve stopped by its iteration cap while its residual was still falling fast (large nets can
 need more iterations than the default cap: the 10⁵-node cage of ``validation/REPORT.md``) needs more iterations, not
 another net: :func:`still_falling` says so, with the fall over the last iterations.
@@ -38,6 +47,12 @@ STILL_FALLING = 2.0
 #: a bar is in compression when its strain is below minus this (dimensionless): not roundoff about its rest
 #: length
 COMPRESSED_STRAIN = 1e-9
+
+
+def cable_name(scene, cable):
+    """The name of cable number ``cable`` of ``scene`` ("cable k" where the scene names none)."""
+    names = scene.cable_names or ()
+    return names[cable] if cable < len(names) else f"cable {int(cable)}"
 
 
 def compressed_struts(scene, x):
@@ -70,9 +85,31 @@ def compressed_struts(scene, x):
         hinges = [n for n in np.unique(ends[mine]) if degree[n] == 2 and not held[n]
                   and np.count_nonzero(mine & ((ends[:, 0] == n) | (ends[:, 1] == n))) == 2]
         if hinges:
-            name = scene.cable_names[c] if c < len(scene.cable_names) else f"cable {int(c)}"
-            found.append((name, int(mine.sum()), float(-strain[mine].min()), int(hinges[0])))
+            found.append((cable_name(scene, c), int(mine.sum()), float(-strain[mine].min()), int(hinges[0])))
     return sorted(found, key=lambda f: -f[1])
+
+
+#: a bar carries little when its strain lies between 0 and this (dimensionless): one Newton step can then turn it by
+#: at most about √(2 x 1e-4) = 0.014 rad before the stretch it makes outweighs its tension
+BARELY_TAUT_STRAIN = 1e-4
+
+
+def barely_taut_bars(scene, x, node):
+    """The bars at ``node`` stretched by less than :data:`BARELY_TAUT_STRAIN` (and not slack) at positions x
+    (N, 3) (m). Returns ``[(bar, cable name, rest length m, EA N, strain)]``, the least stretched first; [] when
+    there are none."""
+    bars = scene.bars
+    if bars is None:
+        return []
+    ends = np.asarray(bars.ends)
+    X = np.asarray(x, dtype=float)
+    rest = np.asarray(bars.rest_length, dtype=float)
+    strain = np.linalg.norm(X[ends[:, 1]] - X[ends[:, 0]], axis=1) / rest - 1.0
+    mine = np.nonzero((ends == node).any(axis=1) & (strain > 0.0) & (strain < BARELY_TAUT_STRAIN))[0]
+    cable = np.asarray(bars.cable)
+    found = [(int(b), cable_name(scene, cable[b]), float(rest[b]), float(np.asarray(bars.ea_traction, dtype=float)[b]),
+              float(strain[b])) for b in mine]
+    return sorted(found, key=lambda f: f[4])
 
 
 def still_falling(eq):
@@ -109,4 +146,14 @@ def hints(scene, eq):
             f"buckles and the net may have no stable equilibrium; a rope goes slack in compression "
             f"(ea_compression=0), a rigid bar resists with its bending stiffness (Rope(bending_stiffness=EI), "
             f"N·m²) (jaxnet.solve.diagnosis explains)")
+    taut = barely_taut_bars(scene, eq.x, int(eq.worst_node))
+    if taut:
+        bar, name, rest, ea, strain = taut[0]
+        others = "" if len(taut) == 1 else f" (and {len(taut) - 1} other bar(s) there)"
+        out.append(
+            f"node {int(eq.worst_node)} hangs on bar {bar} of cable {name!r}{others} (rest length {rest:g} m, EA "
+            f"{ea:g} N) stretched by only {strain:.2g}: a Newton step that turns it by more than about "
+            f"{np.sqrt(2.0 * strain):.2g} rad stretches it more than its tension, so where the net must still turn "
+            f"it the iteration crawls; give it more iterations, or, where its stretch does not matter (a short "
+            f"link), a lower EA (jaxnet.solve.diagnosis explains)")
     return out

@@ -32,11 +32,11 @@ minimum — the energy is flat over every arrangement of the slack netting and t
 twines a few 1e-7 in strain from their slack kink — and converge linearly, in a few hundred iterations
 (the stability suite, ``validation/stability.py``, holds such nets). Well-held nets converge in a few to a
 few tens of iterations, whatever their size (``validation/bench_statics.py``). A second limit, on FEMNET's
-gear: a short stiff bar that carries almost nothing at the equilibrium (a 1 cm link of EA 1.6e6 N a few 1e-5
-in strain from slack) changes its stiffness by 1.6e8 N/m within a micrometre of motion, less than the last
-Newton steps; the iterates then cross its kink back and forth, residual a few newtons, for hundreds of
-iterations, and which path a solve takes hangs on the last bits of its arithmetic
-(``validation/newton_chaos.py`` measures both).
+gear: a bar that carries little (a 1 cm link of EA 1.6e6 N stretched by ε = 4e-5) can be turned by only about
+√(2ε) (9e-3 rad) in one step before the stretch the step makes (L0 θ²/2 more than its linear model expects)
+outweighs its tension; where the net must still turn such bars, each iteration undoes the last one's stretch and
+turns them a little further, for hundreds of iterations at a residual of a few newtons, and the path taken around
+that barrier hangs on the last bits of the arithmetic (``validation/newton_chaos.py`` measures both).
 
 Units: m, N, J; damping dimensionless.
 """
