@@ -98,7 +98,6 @@ def test_a_solve_stopped_while_converging_is_told_to_take_more_iterations():
     assert diagnosis.still_falling(flat) is None and diagnosis.hints(case.scene, flat) == []
 
 
-
 def links(off=1e-7, ea=1.6e6):
     """Two links of 0.01 m and EA ``ea`` between held ends, each drawn ``off`` (m) longer than at rest (strain
     off / 0.01), the joint pulled sideways by 0.1 N: FEMNET's short links that carry little (1pelagic_trawl/toto1's,

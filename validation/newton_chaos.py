@@ -44,7 +44,7 @@ ROOT = pathlib.Path(__file__).resolve().parent.parent
 CORPUS = ROOT.parent / "shared" / "femnet-corpus"
 CASES = ("1pelagic_trawl/toto1", "1pelagic_trawl/t1", "1pelagic_trawl/t2", "3bottom_trawl/q1",
          "11bottom_seine/s1", "13gravity_catch/g1", "10fish_cage/f1", "12purse_seine/u1")
-#: run name -> (the Newton options' stiffness path, the MKL_CBWR the process starts with: None keeps jaxnet's)
+#: run name -> (the Newton options' stiffness path, the MKL_CBWR the process starts with: None for jaxnet's own)
 RUNS = {"closed form": ("closed_form", None), "autodiff": ("autodiff", None), "MKL default": ("closed_form", "")}
 
 
@@ -69,6 +69,7 @@ def run(don, name, timeout):
     none."""
     stiffness, cbwr = RUNS[name]
     env = dict(os.environ)
+    env.pop("MKL_CBWR", None)  # unset: jaxnet.pardiso chooses its own (the reproducible mode)
     if cbwr is not None:
         env["MKL_CBWR"] = cbwr
     try:
