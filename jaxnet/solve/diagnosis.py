@@ -15,8 +15,7 @@ free bottom of a curtain: the netting above gathers (its meshes close under the 
 ends together. A real rope goes slack in compression (``ea_compression=0``); a rigid bar resists with its
 bending stiffness. In ``validation/robustness.py``, the curtains with slack-prone twines (the README's, the
 built-in hanging panel) whose sinker bar was a hinged strut stopped on it this way in most currents; a lead
-bar with its bending stiffness converges in nearly all (the set's records: a strut is one cause of failure,
-the one this module recognises).
+bar with its bending stiffness converges in nearly all (the set's records: a strut is one cause of failure).
 
 Bars that carry little. A bar stretched by only ε, turned by an angle θ in one Newton step, is stretched by
 about L0 θ²/2 more than the step's linear model expects: a tension EA θ²/2 it was not meant to take, which
@@ -90,7 +89,7 @@ def compressed_struts(scene, x):
 
 
 #: a bar carries little when its strain lies between 0 and this (dimensionless): one Newton step can then turn it by
-#: at most about √(2 x 1e-4) = 0.014 rad before the stretch it makes outweighs its tension
+#: at most about √(2 × 1e-4) = 0.014 rad before the stretch it makes outweighs its tension
 BARELY_TAUT_STRAIN = 1e-4
 
 
