@@ -98,8 +98,8 @@ def test_a_solve_stopped_while_converging_is_told_to_take_more_iterations():
     assert diagnosis.still_falling(flat) is None and diagnosis.hints(case.scene, flat) == []
 
 
-def links(off=1e-7, ea=1.6e6):
-    """Two links of 0.01 m and EA ``ea`` between held ends, each drawn ``off`` (m) longer than at rest (strain
+def links(off=1e-7):
+    """Two links of 0.01 m and EA 1.6e6 N between held ends, each drawn ``off`` (m) longer than at rest (strain
     off / 0.01), the joint pulled sideways by 0.1 N: FEMNET's short links that carry little (1pelagic_trawl/toto1's,
     validation/newton_chaos.py)."""
     pos = np.array([[0.0, 0.0, 0.0], [0.01 + off, 0.0, 0.0], [0.02 + 2 * off, 0.0, 0.0]])
@@ -107,7 +107,7 @@ def links(off=1e-7, ea=1.6e6):
     force[1, 1] = 0.1
     nodes = Nodes(position=pos, fixed=np.array([[True] * 3, [False] * 3, [True] * 3]), mass=np.zeros(3),
                   volume=np.zeros(3), force=force)
-    bars = Bars(ends=np.array([[0, 1], [1, 2]]), rest_length=np.full(2, 0.01), ea_traction=np.full(2, ea),
+    bars = Bars(ends=np.array([[0, 1], [1, 2]]), rest_length=np.full(2, 0.01), ea_traction=np.full(2, 1.6e6),
                 ea_compression=np.ones(2), diameter=np.full(2, 1e-3), density=np.full(2, 1e-9),
                 cable=np.zeros(2, dtype=int))
     return Scene(nodes=nodes, bars=bars, environment=Environment(gravity=0.0), cable_names=("link",))

@@ -54,6 +54,13 @@ def cable_name(scene, cable):
     return names[cable] if cable < len(names) else f"cable {int(cable)}"
 
 
+def bar_strains(bars, x):
+    """(B,) the strain of every bar (dimensionless, < 0 in compression) at positions x (N, 3) (m)."""
+    ends = np.asarray(bars.ends)
+    X = np.asarray(x, dtype=float)
+    return np.linalg.norm(X[ends[:, 1]] - X[ends[:, 0]], axis=1) / np.asarray(bars.rest_length, dtype=float) - 1.0
+
+
 def compressed_struts(scene, x):
     """The cables whose bars are pushed into compression with a compression stiffness, at positions x (N, 3)
     (m), and whose compressed bars meet at a free hinge (a node of exactly two bars, not fixed on every axis,
@@ -64,9 +71,7 @@ def compressed_struts(scene, x):
     if bars is None:
         return []
     ends = np.asarray(bars.ends)
-    X = np.asarray(x, dtype=float)
-    length = np.linalg.norm(X[ends[:, 1]] - X[ends[:, 0]], axis=1)
-    strain = length / np.asarray(bars.rest_length, dtype=float) - 1.0
+    strain = bar_strains(bars, x)
     pushed = (strain < -COMPRESSED_STRAIN) & (np.asarray(bars.ea_compression, dtype=float) > 0.0)
     if not pushed.any():
         return []
@@ -101,9 +106,8 @@ def barely_taut_bars(scene, x, node):
     if bars is None:
         return []
     ends = np.asarray(bars.ends)
-    X = np.asarray(x, dtype=float)
     rest = np.asarray(bars.rest_length, dtype=float)
-    strain = np.linalg.norm(X[ends[:, 1]] - X[ends[:, 0]], axis=1) / rest - 1.0
+    strain = bar_strains(bars, x)
     mine = np.nonzero((ends == node).any(axis=1) & (strain > 0.0) & (strain < BARELY_TAUT_STRAIN))[0]
     cable = np.asarray(bars.cable)
     found = [(int(b), cable_name(scene, cable[b]), float(rest[b]), float(np.asarray(bars.ea_traction, dtype=float)[b]),
