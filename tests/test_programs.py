@@ -102,19 +102,42 @@ def test_a_program_jax_took_from_its_own_cache_is_not_kept_on_disk(tmp_path):
 
 
 def test_jit_compiles_with_the_package_options(monkeypatch):
-    """:func:`programs.jit` hands :data:`programs.COMPILER_OPTIONS` to XLA (an option XLA does not know is
-    refused, so a bad one shows that they reach it), a caller's own options on top."""
+    """:func:`programs.jit` hands :data:`programs.COMPILER_OPTIONS` to XLA when it compiles for the CPU (an
+    option XLA does not know is refused, so a bad one shows that they reach it), a caller's own options on
+    top; for another backend it hands none (a GPU refuses the CPU's options)."""
+    import jax
     import jax.numpy as jnp
 
     x = np.linspace(0.0, 1.0, 5)
     np.testing.assert_allclose(programs.jit(jnp.sin)(x), np.sin(x), rtol=1e-15)
+    assert programs.compiler_options("cpu") == programs.COMPILER_OPTIONS
+    assert programs.compiler_options("gpu") == {} and programs.compiler_options("tpu") == {}
     monkeypatch.setattr(programs, "COMPILER_OPTIONS", {"xla_no_such_option": True})
-    with pytest.raises(Exception, match="xla_no_such_option"):
-        programs.jit(lambda v: jnp.cos(v))(x)
+    if jax.default_backend() == "cpu":
+        with pytest.raises(Exception, match="xla_no_such_option"):
+            programs.jit(lambda v: jnp.cos(v))(x)
+    else:  # the CPU's options never reach another backend's compiler
+        np.testing.assert_allclose(programs.jit(lambda v: jnp.cos(v))(x), np.cos(x), rtol=1e-15)
     # the caller's options are merged over the package's: a valid override does not bring the bad one back
     monkeypatch.setattr(programs, "COMPILER_OPTIONS", {"xla_cpu_use_fusion_emitters": False})
-    np.testing.assert_allclose(programs.jit(lambda v: jnp.tan(v), compiler_options={"xla_cpu_use_fusion_emitters": True})(x),
+    override = {"xla_cpu_use_fusion_emitters": True} if jax.default_backend() == "cpu" else {}
+    np.testing.assert_allclose(programs.jit(lambda v: jnp.tan(v), compiler_options=override)(x),
                                np.tan(x), rtol=1e-15)
+
+
+def test_package_programs_are_made_for_the_backend_of_their_first_call(monkeypatch):
+    """A program declared with :func:`programs.jit` takes its options when first called, not when declared
+    (the package declares its programs at import, before a user may choose JAX's platform); its jax.jit
+    attributes (``trace``, ``lower``) are there."""
+    import jax.numpy as jnp
+
+    monkeypatch.setattr(programs, "COMPILER_OPTIONS", {"xla_no_such_option": True})
+    declared = programs.jit(lambda v: 2.0 * v)  # declared under bad options,
+    monkeypatch.setattr(programs, "COMPILER_OPTIONS", {"xla_cpu_use_fusion_emitters": False})
+    x = np.arange(3.0)
+    np.testing.assert_allclose(declared(x), 2.0 * x)  # compiled under the good ones
+    assert declared.trace(x).lower().compile()(x).tolist() == [0.0, 2.0, 4.0]
+    assert programs.jit(jnp.sin).__name__ == "sin"
 
 
 def test_the_package_compiles_through_programs_jit():

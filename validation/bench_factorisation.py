@@ -138,27 +138,38 @@ def make_case(kind, arg):
     return framed_panel(meshes=100, step=arg)
 
 
-def make_tangent(name, path):
-    """Solve the scene of ``name`` for its iterations and save its tangent K + mu S (CSR on the pattern),
-    the residual there and the free coordinates to ``path`` (npz)."""
-    import jax
-
+def iterate(name):
+    """The scene of ``name`` solved for its Newton iterations: (case, free coordinates of the iterate, the
+    iterations done, converged, solve time in s)."""
     import jaxnet as jn
     from jaxnet import assemble
     from jaxnet import model as model_lib
-    from jaxnet.solve import statics
 
-    _, kind, arg, iterations, mu = MATRICES[name]
+    _, kind, arg, iterations, _ = MATRICES[name]
     case = make_case(kind, arg)
-    scene = case.scene
-    model = model_lib.active_terms(scene)
-    pattern = assemble.build_pattern(scene, model)
+    pattern = assemble.build_pattern(case.scene, model_lib.active_terms(case.scene))
     t = time.perf_counter()
     options = {} if iterations is None else {"max_iter": iterations}
     eq = jn.solve_static(case, throw=False, **options)
     solve_s = time.perf_counter() - t
+    x = np.asarray(eq.x).ravel()[np.asarray(pattern.free)]
+    return case, x, int(eq.iterations), bool(eq.converged), solve_s
+
+
+def tangent_at(case, x, mu):
+    """The tangent K + mu S of ``case``'s scene at the free coordinates ``x`` on the tangent's CSR pattern, and
+    the residual there: dict of data, indptr, indices, rhs, free, n_nodes (what the solver factorises at
+    that iterate)."""
+    import jax
+
+    from jaxnet import assemble
+    from jaxnet import model as model_lib
+    from jaxnet.solve import statics
+
+    scene = case.scene
+    model = model_lib.active_terms(scene)
+    pattern = assemble.build_pattern(scene, model)
     free = np.asarray(pattern.free)
-    x = np.asarray(eq.x).ravel()[free]
     pieces = statics.compile_pieces(x, scene, pattern, model, "closed_form")
     sd, pd = jax.device_put((scene, pattern))
     state = statics._unknown_states(scene, pattern, model)
@@ -166,12 +177,21 @@ def make_tangent(name, path):
                                                sd, pd, state)
     data = np.asarray(pieces["scatter"](pieces["tangent"](x, state, 1.0, sd, pd), pd))
     springs = np.asarray(pieces["springs"](sd, pd))
-    rhs = np.asarray(force).ravel()[free]
-    np.savez(path, data=data + mu * springs, indptr=np.asarray(pattern.indptr), indices=np.asarray(pattern.indices),
-             rhs=rhs, free=free, n_nodes=scene.n_nodes, iterations=int(eq.iterations), converged=bool(eq.converged),
-             mu=mu, solve_s=solve_s)
-    print(f"  {name}: {scene.n_nodes} nodes, {free.size} unknowns, {int(eq.iterations)} iterations "
-          f"(converged {bool(eq.converged)}), solved in {solve_s:.0f} s", flush=True)
+    return dict(data=data + mu * springs, indptr=np.asarray(pattern.indptr), indices=np.asarray(pattern.indices),
+                rhs=np.asarray(force).ravel()[free], free=free, n_nodes=scene.n_nodes)
+
+
+def make_tangent(name, path):
+    """Solve the scene of ``name`` for its iterations and save its tangent K + mu S (CSR on the pattern),
+    the residual there, the free coordinates and the iterate ``x`` itself to ``path`` (npz). The iterate
+    alone rebuilds the same tangent elsewhere (:func:`tangent_at`: what a machine too far to send the
+    matrices to does)."""
+    mu = MATRICES[name][4]
+    case, x, iterations, converged, solve_s = iterate(name)
+    tangent = tangent_at(case, x, mu)
+    np.savez(path, **tangent, x=x, iterations=iterations, converged=converged, mu=mu, solve_s=solve_s)
+    print(f"  {name}: {case.scene.n_nodes} nodes, {x.size} unknowns, {iterations} iterations "
+          f"(converged {converged}), solved in {solve_s:.0f} s", flush=True)
 
 
 def load(path):

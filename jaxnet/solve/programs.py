@@ -45,23 +45,59 @@ from jax.experimental import serialize_executable
 #: subdirectory of JAX's compilation cache directory where the programs are kept
 SUBDIRECTORY = "jaxnet-programs"
 
-#: XLA options every jaxnet program is compiled with (:func:`jit`). XLA's CPU backend emits each fusion
-#: through its MLIR "fusion emitters" by default; its older elemental emitter compiles jaxnet's programs
-#: (many small per-element fusions over (E, 3, 3) stacks) markedly faster, and they run as fast: most of a
-#: first solve is compilation. And no YNNPACK fusions (an empty list of fusion types): by default XLA hands
-#: the dots of the (E, 3, 3) stacks and the elementwise work around them to YNNPACK, which is slower on such
-#: small matrices, for the same compile time. ``validation/compile_options.py`` compiles and runs the
-#: solver's programs with XLA's defaults and with these, side by side. CPU options: other backends ignore them.
+#: XLA options every jaxnet program is compiled with on the CPU (:func:`compiler_options`). XLA's CPU
+#: backend emits each fusion through its MLIR "fusion emitters" by default; its older elemental emitter
+#: compiles jaxnet's programs (many small per-element fusions over (E, 3, 3) stacks) markedly faster, and
+#: they run as fast: most of a first solve is compilation. And no YNNPACK fusions (an empty list of fusion
+#: types): by default XLA hands the dots of the (E, 3, 3) stacks and the elementwise work around them to
+#: YNNPACK, which is slower on such small matrices, for the same compile time.
+#: ``validation/compile_options.py`` compiles and runs the solver's programs with XLA's defaults and with
+#: these, side by side. Options of the CPU backend only: a GPU backend refuses them ("No such compile option").
 COMPILER_OPTIONS = {"xla_cpu_use_fusion_emitters": False, "xla_cpu_experimental_ynn_fusion_type": ""}
 
 
+def compiler_options(backend=None):
+    """The XLA options jaxnet's programs are compiled with for ``backend`` (a JAX platform name; default
+    JAX's default backend): :data:`COMPILER_OPTIONS` on ``"cpu"``, none on the others."""
+    return dict(COMPILER_OPTIONS) if (backend or jax.default_backend()) == "cpu" else {}
+
+
+class _Jit:
+    """``jax.jit`` of a function, made at its first use with the options of the backend JAX compiles for
+    then (:func:`compiler_options`, a caller's own ``compiler_options`` on top). Made late because the
+    package's programs are declared at import, before a user may choose the platform
+    (``jax.config.update("jax_platforms", ...)``), and asking JAX for its backend would fix it. Calls and
+    attributes (``trace``, ``lower``, ...) are those of the ``jax.jit`` function."""
+
+    def __init__(self, fun, kwargs):
+        functools.update_wrapper(self, fun)
+        self._fun, self._kwargs, self._jitted = fun, kwargs, None
+        self._lock = threading.Lock()
+
+    def _made(self):
+        if self._jitted is None:
+            with self._lock:
+                if self._jitted is None:
+                    kwargs = dict(self._kwargs)
+                    options = {**compiler_options(), **(kwargs.pop("compiler_options", None) or {})}
+                    self._jitted = jax.jit(self._fun, compiler_options=options, **kwargs)
+        return self._jitted
+
+    def __call__(self, *args, **kwargs):
+        return self._made()(*args, **kwargs)
+
+    def __getattr__(self, name):
+        if name.startswith("_"):  # this object's own state, before __init__ has set it (copy, pickle)
+            raise AttributeError(name)
+        return getattr(self._made(), name)
+
+
 def jit(fun=None, **kwargs):
-    """``jax.jit`` with :data:`COMPILER_OPTIONS` (a caller's own ``compiler_options`` take precedence);
-    usable as a decorator, with or without keywords."""
-    options = {**COMPILER_OPTIONS, **(kwargs.pop("compiler_options", None) or {})}
+    """``jax.jit`` with the package's XLA options for the backend it compiles for (:func:`compiler_options`;
+    a caller's own ``compiler_options`` take precedence); usable as a decorator, with or without keywords."""
     if fun is None:
-        return functools.partial(jit, compiler_options=options, **kwargs)
-    return jax.jit(fun, compiler_options=options, **kwargs)
+        return functools.partial(jit, **kwargs)
+    return _Jit(fun, kwargs)
 
 
 _MEMORY: dict = {}
