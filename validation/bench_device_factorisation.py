@@ -91,7 +91,9 @@ def jax_spsolve(data, indices, indptr, b):
     import jax.numpy as jnp
     from jax.experimental.sparse.linalg import spsolve
 
-    args = [jnp.asarray(v) for v in (data, indices, indptr, b)]
+    # cuSOLVER's sparse QR takes 32-bit indices (with 64-bit ones jax 0.11.2 on CUDA refuses the call:
+    # "Failed to decode all FFI handler operands")
+    args = [jnp.asarray(v) for v in (data, indices.astype(np.int32), indptr.astype(np.int32), b)]
     return f"jax spsolve ({jax.default_backend()})", lambda: np.asarray(
         spsolve(*args, tol=0.0, reorder=1).block_until_ready())
 
