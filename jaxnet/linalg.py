@@ -4,8 +4,9 @@ The tangent of a net is sparse, often nearly singular (slack twines, a flat memb
 stiffness) and badly conditioned (EA/l0 against small geometric stiffness): Krylov methods with cheap
 preconditioners do not converge on it (measured: ../shared/notes/solvers.md), so it is factorised on the
 host: by oneMKL's PARDISO where MKL is installed (:class:`PardisoSolver`, :mod:`jaxnet.pardiso` says why),
-else by SuperLU (scipy, :class:`HostSolver`), which is also PARDISO's fallback; :func:`direct_solver`
-picks. Jitted code calls them through ``jax.pure_callback``, on a Python thread of this module's
+else by SuperLU (scipy, :class:`HostSolver`), which is also PARDISO's fallback; where JAX computes on a GPU, by
+cuDSS on the device (:class:`CudssSolver`, :mod:`jaxnet.cudss`); :func:`direct_solver` picks
+(:func:`solver_choice`). Jitted code calls them through ``jax.pure_callback``, on a Python thread of this module's
 (:func:`on_solver_thread`: SuperLU's memory is freed only there). What follows is SuperLU's. The structure
 (indptr, indices) is passed as arguments, so one compiled program serves every scene of the same shape. The
 minimum-degree ordering on A^T + A suits the structurally symmetric pattern of finite elements (about
@@ -449,7 +450,65 @@ class PardisoSolver(HostSolver):
         return self._pardiso.solve(b, transpose)
 
 
+class CudssSolver(HostSolver):
+    """:class:`HostSolver` with its factorisations made by cuDSS on the GPU (:mod:`jaxnet.cudss`) instead of
+    SuperLU: the same interface, the same check of every solution's backward error (on the host), the same
+    iterative refinement, and the same fallback, to SuperLU with partial pivoting (counted in ``fallbacks``),
+    when a solution stays inaccurate or cuDSS fails. ``order`` is None: cuDSS keeps its ordering to itself."""
+
+    def __init__(self, indptr, indices, tolerance=TOLERANCE, refinements=REFINEMENTS):
+        from jaxnet import cudss
+
+        super().__init__(indptr, indices, tolerance=tolerance, refinements=refinements)
+        self._cudss = cudss.Factor(self.indptr, self.indices)
+
+    @property
+    def factor_entries(self):
+        if self._lu is None:
+            return 0
+        return super().factor_entries if self._pivoted else self._cudss.entries
+
+    def _factor_diagonal(self, data):
+        # a RuntimeError (cuDSS failed) sends HostSolver.factorize to the fallback
+        self._cudss.factor(data)
+        self._lu, self._perm = self._cudss, None
+
+    def _lu_solve(self, b, transpose=False):
+        if self._pivoted:
+            return super()._lu_solve(b, transpose)
+        return self._cudss.solve(b, transpose)
+
+
+def solver_choice():
+    """The sparse direct solver :func:`direct_solver` makes: ``"cudss"``, ``"pardiso"`` or ``"superlu"``.
+    ``JAXNET_SPARSE_SOLVER`` (:data:`jaxnet.pardiso.CHOICE`) names one; unset (or empty), cuDSS where JAX
+    computes on a GPU and it is installed (:func:`jaxnet.cudss.available`), else PARDISO where MKL is
+    installed, else SuperLU. A name that is not one of these three, or ``cudss`` or ``pardiso`` where it
+    cannot run, is a ValueError that says why."""
+    from jaxnet import cudss
+
+    asked = os.environ.get(pardiso.CHOICE, "").strip().lower()
+    if asked == "":
+        if cudss.available():
+            return "cudss"
+        return "pardiso" if pardiso.available() else "superlu"
+    if asked == "cudss":
+        try:
+            cudss.require()
+        except RuntimeError as error:
+            raise ValueError(f"{pardiso.CHOICE}=cudss: {error}") from None
+        return asked
+    if asked == "pardiso" and not pardiso.available():
+        raise ValueError(f"{pardiso.CHOICE}=pardiso: MKL's mkl_rt library is not installed "
+                         "(pip install mkl, x86-64 only); unset the variable for the default solver")
+    if asked not in ("pardiso", "superlu"):
+        raise ValueError(f"{pardiso.CHOICE}={asked!r}: expected cudss, pardiso or superlu (or unset: cuDSS on a "
+                         "GPU where it is installed, else PARDISO where MKL is, else SuperLU)")
+    return asked
+
+
 def direct_solver(indptr, indices):
-    """The sparse direct solver of the tangents of one structure: a :class:`PardisoSolver` where MKL is installed
-    (:func:`jaxnet.pardiso.available`), else a :class:`HostSolver` (SuperLU). Both have the same interface."""
-    return PardisoSolver(indptr, indices) if pardiso.available() else HostSolver(indptr, indices)
+    """The sparse direct solver of the tangents of one structure, as :func:`solver_choice` says: a
+    :class:`CudssSolver`, a :class:`PardisoSolver` or a :class:`HostSolver` (SuperLU). All have the same
+    interface."""
+    return {"cudss": CudssSolver, "pardiso": PardisoSolver, "superlu": HostSolver}[solver_choice()](indptr, indices)

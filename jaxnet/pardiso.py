@@ -25,7 +25,8 @@ Availability. MKL comes as the ``mkl`` wheel on x86-64 (``pyproject.toml``); :fu
 ``mkl_rt`` library where pip puts it (the environment's or the user's ``lib``), then where the system's
 loader finds it. Where it is absent (other processors) jaxnet factorises with SuperLU alone.
 ``JAXNET_SPARSE_SOLVER=superlu`` in the environment makes jaxnet use SuperLU even where MKL is installed (to
-compare the two).
+compare the two); ``cudss`` asks for NVIDIA's cuDSS on a GPU (:mod:`jaxnet.cudss`;
+:func:`jaxnet.linalg.solver_choice` says which applies).
 """
 
 from __future__ import annotations
@@ -40,8 +41,9 @@ import sysconfig
 
 import numpy as np
 
-#: the environment variable that chooses the sparse direct solver: "superlu" for SuperLU even where MKL is
-#: installed, anything else (or unset) for PARDISO where it is
+#: the environment variable that chooses the sparse direct solver (:func:`jaxnet.linalg.solver_choice`):
+#: "superlu" for SuperLU even where MKL is installed, "pardiso" for PARDISO, "cudss" for cuDSS on a GPU; unset
+#: for cuDSS where JAX computes on a GPU and it is installed, else PARDISO where MKL is, else SuperLU
 CHOICE = "JAXNET_SPARSE_SOLVER"
 
 #: PARDISO's matrix type: real and nonsymmetric

@@ -5,6 +5,7 @@ with the pattern of a net's tangent (3x3 blocks on a small triangulated sheet)."
 import jax
 import jax.numpy as jnp
 import numpy as np
+import pytest
 import scipy.sparse as sp
 
 from jaxnet import linalg
@@ -333,3 +334,54 @@ def test_factors_made_in_callbacks_are_freed_whatever_thread_state_calls_back():
     for x, ok in results:
         assert bool(ok)
         np.testing.assert_allclose(lap @ x, b, atol=1e-10)
+
+
+def test_the_sparse_solver_is_chosen_by_the_environment_and_refused_by_name(monkeypatch):
+    """``JAXNET_SPARSE_SOLVER`` names the factorisation (superlu, pardiso, cudss); unset, cuDSS on a GPU where it
+    is installed, else PARDISO where MKL is, else SuperLU. A name it does not know, or a solver that cannot run
+    here, is refused with the variable, the value and what to do -- by ``solve_static`` before it compiles."""
+    import jaxnet as jn
+    from jaxnet import cudss, pardiso
+    from jaxnet.scenes.panel import hanging_panel
+
+    indptr, indices = np.array([0, 1]), np.array([0])
+    monkeypatch.setenv("JAXNET_SPARSE_SOLVER", "superlu")
+    assert linalg.solver_choice() == "superlu" and type(linalg.direct_solver(indptr, indices)) is linalg.HostSolver
+    monkeypatch.delenv("JAXNET_SPARSE_SOLVER")
+    default = "cudss" if cudss.available() else ("pardiso" if pardiso.library() is not None else "superlu")
+    assert linalg.solver_choice() == default
+    monkeypatch.setenv("JAXNET_SPARSE_SOLVER", "MUMPS")
+    with pytest.raises(ValueError, match="JAXNET_SPARSE_SOLVER='mumps': expected cudss, pardiso or superlu"):
+        linalg.solver_choice()
+    scene = hanging_panel(meshes=4, step=0.1).scene
+    with pytest.raises(ValueError, match="JAXNET_SPARSE_SOLVER"):
+        jn.solve_static(scene)
+    monkeypatch.setenv("JAXNET_SPARSE_SOLVER", "cudss")
+    try:
+        cudss.require()
+    except RuntimeError:  # no GPU with cuDSS here (CI): asked for, it is refused with the reason and the install
+        with pytest.raises(ValueError, match=r"JAXNET_SPARSE_SOLVER=cudss: cuDSS cannot be used here.*pip install"):
+            linalg.solver_choice()
+    else:
+        assert type(linalg.direct_solver(indptr, indices)) is linalg.CudssSolver
+
+
+def test_the_transposed_structure_gathers_a_transpose_from_the_entries():
+    """cuDSS solves with A only: the adjoints' A^T is factorised from A's entries gathered into A^T's CSR
+    structure (:func:`jaxnet.cudss.transposed_structure`), explicit zeros and empty rows included."""
+    from jaxnet import cudss
+
+    rng = np.random.default_rng(3)
+    a = sp.random(40, 40, density=0.15, random_state=4, format="csr") + sp.eye(40, format="csr")
+    a = a.tolil()
+    a[5, :] = 0.0  # an empty row (no entries) becomes an empty column
+    a = a.tocsr()
+    a.eliminate_zeros()
+    a.data[::5] = 0.0  # explicit zeros stay entries of the pattern
+    a.sort_indices()
+    slot, indptr_t, indices_t = cudss.transposed_structure(a.indptr, a.indices)
+    assert slot.shape == a.data.shape and np.array_equal(np.sort(slot), np.arange(a.nnz))
+    for _ in range(2):  # any entries of A, on the same structure
+        data = rng.normal(size=a.nnz)
+        at = sp.csr_matrix((data[slot], indices_t, indptr_t), shape=a.shape)
+        np.testing.assert_array_equal(at.toarray(), sp.csr_matrix((data, a.indices, a.indptr), shape=a.shape).T.toarray())

@@ -321,6 +321,7 @@ def solve(scene, solver: Newton | None = None, x0=None, throw: bool = True, **op
         scene, solver = scene.scene, solver or scene.solver
     solver = dataclasses.replace(solver or STATIC, **options)
     checks.validate(scene)
+    linalg.solver_choice()  # a sparse solver asked for that cannot run here: said before anything compiles
     model = model_lib.active_terms(scene)
     pattern = assemble.build_pattern(scene, model)
     if x0 is not None:
