@@ -3,13 +3,13 @@ computes on a CUDA device.
 
 Why. On a GPU the tangent's assembly runs on the device while PARDISO or SuperLU factorise on the host's few
 cores, and at 10^4-10^5 nodes the factorisation is what an iteration costs. cuDSS factorises the same tangents
-on the device. Measured on an H200 against SuperLU on the same machine's CPU, on the cage's and a trawl's
-Newton tangents (``validation/bench_device_factorisation.py``, ``validation/REPORT.md``): 14x faster at 3e3
-unknowns, 510x at 2.7e5 (one factorisation and solve 0.03 s), backward errors at rounding; its time grows as
-n^0.77 against SuperLU's n^1.55.
+on the device, one to two orders of magnitude faster than SuperLU on the same machine from 10^4 unknowns, with
+backward errors at rounding, its time growing more slowly with the unknowns (measured on the cage's and a
+trawl's Newton tangents, and in whole solves: ``validation/bench_device_factorisation.py``, the section
+"cuDSS on a GPU" of ``validation/REPORT.md``).
 
 How. Through ``nvmath-python`` (NVIDIA's Python interface to its math libraries;
-``pip install nvmath-python[cu13]``, or ``[cu12]``, which brings the ``nvidia-cudss`` library) on CuPy arrays:
+``pip install -e ".[gpu]"``: nvmath-python with the ``nvidia-cudss`` library, and CuPy) on CuPy arrays:
 one :class:`nvmath.sparse.advanced.DirectSolver` per structure, its analysis (reordering, symbolic
 factorisation) made at the first factorisation and kept, the values of each later tangent written into the
 same device arrays and factorised again. cuDSS solves with A only: A^T x = b (the adjoints of the implicit
@@ -89,10 +89,10 @@ class Factor:
     @property
     def entries(self):
         """Entries of the last factor (L's and U's), as cuDSS reports them; 0 before the first."""
-        if self._forward is None:
+        if self._forward is None or self._forward.info is None:
             return 0
         try:
-            return int(self._forward.solver.factorization_info.lu_nnz)
+            return int(self._forward.info.lu_nnz)
         except Exception:  # noqa: BLE001 -- a report only
             return 0
 
@@ -143,6 +143,7 @@ class _OnDevice:
         self._values = a.data  # the matrix's own array (CuPy may have copied it)
         self.solver = direct_solver(a, self._rhs)
         self._planned = False
+        self.info = None  # what the last factorisation reported (nvmath's DirectSolverFactorizationInfo)
 
     def factor(self, data):
         try:
@@ -150,7 +151,7 @@ class _OnDevice:
             if not self._planned:
                 self.solver.plan()
                 self._planned = True
-            self.solver.factorize()
+            self.info = self.solver.factorize()
         except Exception as error:  # noqa: BLE001 -- cuDSS's and CuPy's errors: the caller falls back
             raise RuntimeError(f"cuDSS factorisation failed: {type(error).__name__}: {error}") from error
 
