@@ -102,9 +102,11 @@ def test_a_program_jax_took_from_its_own_cache_is_not_kept_on_disk(tmp_path):
 
 
 def test_jit_compiles_with_the_package_options(monkeypatch):
-    """:func:`programs.jit` hands :data:`programs.COMPILER_OPTIONS` to XLA when it compiles for the CPU (an
-    option XLA does not know is refused, so a bad one shows that they reach it), a caller's own options on
-    top; for another backend it hands none (a GPU refuses the CPU's options)."""
+    """:func:`programs.jit` hands :data:`programs.COMPILER_OPTIONS` to XLA when it compiles for the CPU, a
+    caller's own options on top, and none to another backend (a GPU refuses the CPU's options). An option
+    XLA refuses (its name unknown to this jax: jax 0.11.2 no longer knows ``xla_cpu_use_fusion_emitters``) is
+    left out with a warning that names it -- which also shows that the options reach XLA -- and the others
+    are kept."""
     import jax
     import jax.numpy as jnp
 
@@ -112,12 +114,12 @@ def test_jit_compiles_with_the_package_options(monkeypatch):
     np.testing.assert_allclose(programs.jit(jnp.sin)(x), np.sin(x), rtol=1e-15)
     assert programs.compiler_options("cpu") == programs.COMPILER_OPTIONS
     assert programs.compiler_options("gpu") == {} and programs.compiler_options("tpu") == {}
-    monkeypatch.setattr(programs, "COMPILER_OPTIONS", {"xla_no_such_option": True})
+    monkeypatch.setattr(programs, "COMPILER_OPTIONS", {"xla_no_such_option": True,
+                                                       "xla_cpu_use_fusion_emitters": False})
     if jax.default_backend() == "cpu":
-        with pytest.raises(Exception, match="xla_no_such_option"):
-            programs.jit(lambda v: jnp.cos(v))(x)
-    else:  # the CPU's options never reach another backend's compiler
-        np.testing.assert_allclose(programs.jit(lambda v: jnp.cos(v))(x), np.cos(x), rtol=1e-15)
+        with pytest.warns(RuntimeWarning, match=r"refuses the option\(s\) \['xla_no_such_option'\]"):
+            np.testing.assert_allclose(programs.jit(lambda v: jnp.cos(v))(x), np.cos(x), rtol=1e-15)
+    assert programs.compiler_options("cpu") == {"xla_cpu_use_fusion_emitters": False}
     # the caller's options are merged over the package's: a valid override does not bring the bad one back
     monkeypatch.setattr(programs, "COMPILER_OPTIONS", {"xla_cpu_use_fusion_emitters": False})
     override = {"xla_cpu_use_fusion_emitters": True} if jax.default_backend() == "cpu" else {}
@@ -129,13 +131,15 @@ def test_package_programs_are_made_for_the_backend_of_their_first_call(monkeypat
     """A program declared with :func:`programs.jit` takes its options when first called, not when declared
     (the package declares its programs at import, before a user may choose JAX's platform); its jax.jit
     attributes (``trace``, ``lower``) are there."""
+    import jax
     import jax.numpy as jnp
 
-    monkeypatch.setattr(programs, "COMPILER_OPTIONS", {"xla_no_such_option": True})
-    declared = programs.jit(lambda v: 2.0 * v)  # declared under bad options,
-    monkeypatch.setattr(programs, "COMPILER_OPTIONS", {"xla_cpu_use_fusion_emitters": False})
+    declared = programs.jit(lambda v: 2.0 * v)  # declared under the package's options,
+    monkeypatch.setattr(programs, "COMPILER_OPTIONS", {"xla_option_set_after_declaring": True})
     x = np.arange(3.0)
-    np.testing.assert_allclose(declared(x), 2.0 * x)  # compiled under the good ones
+    if jax.default_backend() == "cpu":  # made at its first call: under the options of then
+        with pytest.warns(RuntimeWarning, match="xla_option_set_after_declaring"):
+            np.testing.assert_allclose(declared(x), 2.0 * x)
     assert declared.trace(x).lower().compile()(x).tolist() == [0.0, 2.0, 4.0]
     assert programs.jit(jnp.sin).__name__ == "sin"
 

@@ -35,6 +35,7 @@ import pathlib
 import pickle
 import tempfile
 import threading
+import warnings
 
 import jax
 import numpy as np
@@ -56,10 +57,43 @@ SUBDIRECTORY = "jaxnet-programs"
 COMPILER_OPTIONS = {"xla_cpu_use_fusion_emitters": False, "xla_cpu_experimental_ynn_fusion_type": ""}
 
 
+_ACCEPTED: dict = {}  # (backend, options asked for) -> the options that backend's compiler accepts
+
+
 def compiler_options(backend=None):
     """The XLA options jaxnet's programs are compiled with for ``backend`` (a JAX platform name; default
-    JAX's default backend): :data:`COMPILER_OPTIONS` on ``"cpu"``, none on the others."""
-    return dict(COMPILER_OPTIONS) if (backend or jax.default_backend()) == "cpu" else {}
+    JAX's default backend): those of :data:`COMPILER_OPTIONS` that this JAX's compiler accepts on ``"cpu"``,
+    none on the others. XLA refuses an option it does not know ("No such compile option": jax 0.11.2 no
+    longer knows ``xla_cpu_use_fusion_emitters``), so each is tried once per process on a one-line program
+    (the two together first, a few hundredths of a second) and one refused is left out with a warning: a JAX
+    other than the pinned one still runs jaxnet, its compilation perhaps slower."""
+    backend = backend or jax.default_backend()
+    if backend != "cpu":
+        return {}
+    key = (backend, tuple(sorted(COMPILER_OPTIONS.items())))
+    if key not in _ACCEPTED:
+        accepted = dict(COMPILER_OPTIONS)
+        if not _compiles(accepted, backend):
+            accepted = {k: v for k, v in COMPILER_OPTIONS.items() if _compiles({k: v}, backend)}
+            refused = sorted(set(COMPILER_OPTIONS) - set(accepted))
+            warnings.warn(f"jaxnet: XLA's compiler in jax {jax.__version__} refuses the option(s) {refused}: "
+                          f"jaxnet's programs are compiled without them (jaxnet is tested with the jax its "
+                          f"pyproject.toml pins)", RuntimeWarning, stacklevel=3)
+        _ACCEPTED[key] = accepted
+    return dict(_ACCEPTED[key])
+
+
+def _compiles(options, backend):
+    """Whether XLA on ``backend`` compiles a one-line program with ``options``."""
+    try:
+        # compiled where its argument lies: a device of that backend
+        argument = jax.device_put(np.float64(0.0), jax.devices(backend)[0])
+        jax.jit(lambda v: v + 1.0, compiler_options=options).lower(argument).compile()
+    except Exception as error:  # noqa: BLE001 -- XLA's refusal is a JaxRuntimeError (INVALID_ARGUMENT)
+        if "compile option" in str(error):
+            return False
+        raise
+    return True
 
 
 class _Jit:
