@@ -118,3 +118,15 @@ def test_compare_names_a_case_that_now_fails():
                  expected=False)
     text = robustness.compare([before], [after])
     assert "NOW FAILS" in text and "| a |" in text
+
+
+def test_only_picks_whole_words_side_by_side():
+    """``--only`` matches whole words of the case names: a size or a speed does not pick its multiples."""
+    names = [c.name for c in robustness.cases("quick") if c.family in ("readme", "hanging")]
+    picked = [n for n in names if robustness.matches(n, "readme n100")]
+    assert picked and all(n.startswith("readme n100 ") for n in picked)
+    assert not any(robustness.matches(n, "readme n100") for n in names if "n1000" in n)
+    assert {n for n in names if robustness.matches(n, "1m/s")} == {n for n in names if " 1m/s " in n} != set()
+    assert not robustness.matches("readme n100 0.1m/s 30deg sinker", "1m/s")
+    assert all(robustness.matches(n, "") for n in names)
+    assert not robustness.matches("readme n100 still sinker", "sinker still")  # in the name's order only

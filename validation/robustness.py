@@ -1,6 +1,6 @@
 """Robustness set of the static solver: does it converge, in how many iterations, at what cost, on every net?
 
-    python validation/robustness.py [--size test|quick|full] [--only SUBSTRING] [--out PATH] [--resume] [--list]
+    python validation/robustness.py [--size test|quick|full] [--only WORDS] [--out PATH] [--resume] [--list]
     python validation/robustness.py --compare OLD.json [NEW.json]
 
 The set every change to the static solver (``jaxnet/solve``) is judged on. Each case is solved once with
@@ -680,10 +680,19 @@ def run(report, quick: bool) -> None:
                     "change):\n\n" + comparison.split("Summary over the cases in both, before and after:\n\n")[-1])
 
 
+def matches(name, words):
+    """Whether a case's ``name`` holds ``words`` (``--only``) as whole words, in that order and side by side:
+    "readme n100" picks the README panel's cases of about 10² nodes, not those of 10³ ("n1000"); "1m/s" the
+    cases at 1 m/s, not at 0.1 m/s. Empty ``words`` match every name."""
+    wanted, held = words.split(), name.split()
+    return any(held[k:k + len(wanted)] == wanted for k in range(len(held) - len(wanted) + 1))
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--size", choices=SIZES, default="quick")
-    parser.add_argument("--only", default="", help="run the cases whose name contains this")
+    parser.add_argument("--only", default="", help="run the cases whose name holds these whole words, side by "
+                                                   "side (\"readme n100\": not the n1000 cases)")
     parser.add_argument("--out", default=str(DEFAULT_OUT), help="the records, JSON lines (default %(default)s)")
     parser.add_argument("--resume", action="store_true", help="skip the cases already in --out")
     parser.add_argument("--list", action="store_true", help="print the cases' names and stop")
@@ -700,7 +709,7 @@ def main(argv=None):
 
     import jaxnet  # noqa: F401  (float64 on)
 
-    chosen = [c for c in cases(args.size) if args.only in c.name]
+    chosen = [c for c in cases(args.size) if matches(c.name, args.only)]
     if args.list:
         print("\n".join(f"{c.family:10s} {c.name}" for c in chosen))
         return 0
