@@ -416,67 +416,67 @@ class HostSolver:
         return np.max(np.abs(r), axis=0, initial=0.0) / np.where(scale > 0, scale, 1.0), r
 
 
-class PardisoSolver(HostSolver):
-    """:class:`HostSolver` with its factorisations made by PARDISO (:mod:`jaxnet.pardiso`) instead of SuperLU:
-    the same interface, the same check of every solution's backward error, the same iterative refinement,
-    and the same fallback, to SuperLU with partial pivoting (counted in ``fallbacks``), when a solution stays
-    inaccurate, PARDISO fails, or it perturbs a pivot (the matrix is singular or nearly so). Its structure
-    is analysed (ordered) at its first factorisation. ``order`` is None: PARDISO keeps its ordering to
-    itself."""
+class _LibrarySolver(HostSolver):
+    """:class:`HostSolver` whose regular factorisations a library makes instead of SuperLU (its factor object:
+    ``factor(data)``, ``solve(b, transpose)``, ``entries``; :meth:`make_factor`): the same interface, the same
+    check of every solution's backward error (on the host), the same iterative refinement, and the same
+    fallback, to SuperLU with partial pivoting (counted in ``fallbacks``), when a solution stays inaccurate or
+    the library fails (a RuntimeError, from it or from :meth:`check_factor`). The structure is analysed
+    (ordered) at the first factorisation; ``order`` is None: the library keeps its ordering to itself."""
 
     def __init__(self, indptr, indices, tolerance=TOLERANCE, refinements=REFINEMENTS):
         super().__init__(indptr, indices, tolerance=tolerance, refinements=refinements)
-        self._pardiso = pardiso.Factor(self.indptr, self.indices)
+        self._library = self.make_factor(self.indptr, self.indices)
+
+    def make_factor(self, indptr, indices):
+        """The library's factor object for this structure."""
+        raise NotImplementedError
+
+    def check_factor(self, factor):
+        """Raise RuntimeError where the library's last factor must not be used (the fallback decides)."""
 
     @property
     def factor_entries(self):
         if self._lu is None:
             return 0
-        return super().factor_entries if self._pivoted else self._pardiso.entries
+        return super().factor_entries if self._pivoted else self._library.entries
 
     def _factor_diagonal(self, data):
-        # a RuntimeError (PARDISO failed, or perturbed a pivot) sends HostSolver.factorize to the fallback
-        self._pardiso.factor(data)
-        if self._pardiso.perturbed_pivots:
+        # a RuntimeError (the library failed, or its factor is refused) sends HostSolver.factorize to the fallback
+        self._library.factor(data)
+        self.check_factor(self._library)
+        self._lu, self._perm = self._library, None
+
+    def _lu_solve(self, b, transpose=False):
+        if self._pivoted:
+            return super()._lu_solve(b, transpose)
+        return self._library.solve(b, transpose)
+
+
+class PardisoSolver(_LibrarySolver):
+    """The tangents factorised by oneMKL's PARDISO (:mod:`jaxnet.pardiso`) on the host, behind
+    :class:`HostSolver`'s checks and fallback (:class:`_LibrarySolver`); a factor with a perturbed pivot (the
+    matrix singular or nearly so) is handed to the fallback too."""
+
+    def make_factor(self, indptr, indices):
+        return pardiso.Factor(indptr, indices)
+
+    def check_factor(self, factor):
+        if factor.perturbed_pivots:
             # A perturbed pivot factorises a nearby matrix: of a singular one, a solution far too large whose
             # backward error is nevertheless small. Partial pivoting decides instead (SuperLU's exact zero
             # pivots refuse a singular matrix). The Newton tangents, damped, perturb none.
             raise RuntimeError("PARDISO perturbed a pivot")
-        self._lu, self._perm = self._pardiso, None
-
-    def _lu_solve(self, b, transpose=False):
-        if self._pivoted:
-            return super()._lu_solve(b, transpose)
-        return self._pardiso.solve(b, transpose)
 
 
-class CudssSolver(HostSolver):
-    """:class:`HostSolver` with its factorisations made by cuDSS on the GPU (:mod:`jaxnet.cudss`) instead of
-    SuperLU: the same interface, the same check of every solution's backward error (on the host), the same
-    iterative refinement, and the same fallback, to SuperLU with partial pivoting (counted in ``fallbacks``),
-    when a solution stays inaccurate or cuDSS fails. ``order`` is None: cuDSS keeps its ordering to itself."""
+class CudssSolver(_LibrarySolver):
+    """The tangents factorised by NVIDIA's cuDSS on the GPU (:mod:`jaxnet.cudss`), behind :class:`HostSolver`'s
+    checks and fallback (:class:`_LibrarySolver`)."""
 
-    def __init__(self, indptr, indices, tolerance=TOLERANCE, refinements=REFINEMENTS):
+    def make_factor(self, indptr, indices):
         from jaxnet import cudss
 
-        super().__init__(indptr, indices, tolerance=tolerance, refinements=refinements)
-        self._cudss = cudss.Factor(self.indptr, self.indices)
-
-    @property
-    def factor_entries(self):
-        if self._lu is None:
-            return 0
-        return super().factor_entries if self._pivoted else self._cudss.entries
-
-    def _factor_diagonal(self, data):
-        # a RuntimeError (cuDSS failed) sends HostSolver.factorize to the fallback
-        self._cudss.factor(data)
-        self._lu, self._perm = self._cudss, None
-
-    def _lu_solve(self, b, transpose=False):
-        if self._pivoted:
-            return super()._lu_solve(b, transpose)
-        return self._cudss.solve(b, transpose)
+        return cudss.Factor(indptr, indices)
 
 
 def solver_choice():
