@@ -64,9 +64,9 @@ def compiler_options(backend=None):
     """The XLA options jaxnet's programs are compiled with for ``backend`` (a JAX platform name; default
     JAX's default backend): those of :data:`COMPILER_OPTIONS` that this JAX's compiler accepts on ``"cpu"``,
     none on the others. XLA refuses an option it does not know ("No such compile option": jax 0.11.2 no
-    longer knows ``xla_cpu_use_fusion_emitters``), so each is tried once per process on a one-line program
-    (the two together first, a few hundredths of a second) and one refused is left out with a warning: a JAX
-    other than the pinned one still runs jaxnet, its compilation perhaps slower."""
+    longer knows ``xla_cpu_use_fusion_emitters``), so they are tried once per process on a one-line program
+    (all together, then one by one if refused) and one refused is left out with a warning: a JAX other than
+    the pinned one still runs jaxnet, its compilation perhaps slower."""
     backend = backend or jax.default_backend()
     if backend != "cpu":
         return {}
