@@ -22,9 +22,10 @@ Availability. :func:`available` is True where JAX's default backend is a GPU and
 imports. ``JAXNET_SPARSE_SOLVER`` (:data:`jaxnet.pardiso.CHOICE`) chooses otherwise: ``cudss`` asks for it
 (an error says why where it cannot run), ``pardiso`` or ``superlu`` keep the factorisations on the host.
 
-Memory. JAX takes 75 % of the GPU's memory at its start by default; cuDSS's factors need their own (about
-1 GB at 10^5 nodes). Where a solve runs out of device memory, start Python with
-``XLA_PYTHON_CLIENT_PREALLOCATE=false`` (or a smaller ``XLA_PYTHON_CLIENT_MEM_FRACTION``).
+Memory. JAX takes 75 % of the GPU's memory at its start by default; cuDSS's factors and CuPy's arrays need
+their own, outside JAX's pool. Where a solve runs out of device memory (a fallback to SuperLU, counted in
+``Timing.fallbacks``), start Python with ``XLA_PYTHON_CLIENT_PREALLOCATE=false`` (or a smaller
+``XLA_PYTHON_CLIENT_MEM_FRACTION``).
 """
 
 from __future__ import annotations
