@@ -14,17 +14,16 @@ them exactly: ``--export-iterates DIR`` writes the iterates of the kept tangents
 ``--tangents`` before measuring (``--build-only``: only that). The trawl's tangents read FEMNET's case from
 ``--corpus`` (default: ``../shared/femnet-corpus``). On each tangent, side by side:
 
-* ``host``: the factorisation the static solver makes (:func:`jaxnet.linalg.direct_solver`: PARDISO where MKL
-  is installed, else SuperLU), its first factorisation and solve (analysis included) and the median of
-  ``--repeats`` more;
+* ``host``: the factorisation the static solver makes on the host (:class:`jaxnet.linalg.PardisoSolver` where
+  MKL is installed, else :class:`jaxnet.linalg.HostSolver`, SuperLU), its first factorisation and solve
+  (analysis included) and the median of ``--repeats`` more;
 * ``jax spsolve``: :func:`jax.experimental.sparse.linalg.spsolve` on JAX's default device (cuSOLVER's sparse
   QR with reordering on a CUDA device; on the CPU, scipy's ``spsolve`` through a host callback);
 * ``cupy spsolve``: :func:`cupyx.scipy.sparse.linalg.spsolve` where CuPy imports (cuSOLVER on the GPU);
 * ``cuDSS``: NVIDIA's sparse direct solver (:class:`nvmath.sparse.advanced.DirectSolver` of
-  ``nvmath-python`` on CuPy arrays, the ``nvidia-cudss`` library), general LU with its defaults (nested
-  dissection, pivots perturbed rather than exchanged): analysis (``plan``) once, then factorisation and solve
-  (the analysis time is in the note). The solver the Newton would use: like PARDISO it keeps the analysis
-  of a pattern for every factorisation of the solve.
+  ``nvmath-python`` on CuPy arrays, the ``nvidia-cudss`` library), general LU with its defaults: analysis
+  (``plan``) once, then factorisation and solve (the analysis time is in the note), as jaxnet's Newton uses it
+  on a GPU (:class:`jaxnet.linalg.CudssSolver`, which also checks and refines each solution on the host).
 
 For each: the time of the first call (analysis, factorisation and solve) and the median of the next
 ``--repeats`` (analysis reused where the solver separates it; fewer repeats where they would take over
@@ -79,9 +78,9 @@ def timed(call, repeats, target=float("inf")):
 
 
 def host(data, indices, indptr, b):
-    from jaxnet import linalg
+    from jaxnet import linalg, pardiso
 
-    solver = linalg.direct_solver(indptr, indices)
+    solver = (linalg.PardisoSolver if pardiso.available() else linalg.HostSolver)(indptr, indices)
     name = type(solver).__name__
     return f"host ({name})", lambda: solver.solve(data, b)[0]
 
