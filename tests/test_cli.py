@@ -104,7 +104,10 @@ def test_compiled_programs_are_kept_on_disk_and_reused(tmp_path):
     second, kept_after, entries_after = run("b")
     assert kept_after == kept and entries_after == entries  # loaded: nothing compiled, nothing written
     assert second["iterations"] == first["iterations"]
-    np.testing.assert_allclose(second["reaction_N"], first["reaction_N"], rtol=1e-12)
+    # to rounding of the largest component (a component that is zero to rounding may differ in its own digits
+    # where sums run in another order: a GPU's reductions)
+    np.testing.assert_allclose(second["reaction_N"], first["reaction_N"], rtol=1e-12,
+                               atol=1e-12 * np.abs(first["reaction_N"]).max())
     damaged = next(name for name in kept if name.startswith("tangent-"))
     (programs / damaged).write_bytes(b"not a program")
     third, kept_third, _ = run("c")
