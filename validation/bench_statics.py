@@ -124,6 +124,10 @@ def main():
         return
     import numpy as np
 
+    import jax
+
+    from jaxnet import linalg
+
     rows = []
     columns = ("case", "nodes", "dof", "nnz", "compile s", "it", "fact", "assembly s", "factor s", "s/it",
                "it/(asm+fac)", "total/(it*fac)", "residual N", "peak MB")
@@ -134,7 +138,8 @@ def main():
            "femnet": "FEMNET's cases, drawn start"}[args.scene]
           + ("" if args.scene in ("cage", "trawl", "femnet") else
              f", twine EA_c = {args.ea_compression if args.ea_compression is not None else 'scene default'} N")
-          + f"; at most {args.max_iter} Newton iterations\n")
+          + f"; at most {args.max_iter} Newton iterations; JAX on {jax.default_backend()}, tangents factorised by "
+            f"{linalg.solver_choice()} (JAXNET_SPARSE_SOLVER)\n")
     print("| " + " | ".join(columns) + " |\n|" + "---|" * len(columns))
     sizes = args.cases if args.scene == "femnet" else [str(n) for n in args.sizes]
     for size in sizes:
