@@ -106,7 +106,9 @@ def _run(args):
         _use_compilation_cache(args.cache)
     if args.dynamic:
         return _run_dynamic(args)
-    from jaxnet import figures
+    import jax
+
+    from jaxnet import figures, linalg
     from jaxnet.io import femnet, plot, vtk
     from jaxnet.solve.statics import SolveError, solve
 
@@ -137,7 +139,8 @@ def _run(args):
     print(f"  {'converged' if result['converged'] else 'NOT converged: ' + result['reason']} in {result['iterations']} "
           f"iterations, residual {result['residual_N']:.3g} N")
     if eq.timing is not None:
-        print(f"  wall {eq.timing.wall_s:.2f} s (compile {eq.timing.compile_s:.2f} s)")
+        print(f"  wall {eq.timing.wall_s:.2f} s (compile {eq.timing.compile_s:.2f} s; JAX on {jax.default_backend()}, "
+              f"tangents factorised by {linalg.solver_choice()})")
     print(f"  reaction at fixed nodes [{r[0]:.4g}, {r[1]:.4g}, {r[2]:.4g}] N, max twine tension "
           f"{result['max_twine_tension_N']:.4g} N, max bar tension {result['max_bar_tension_N']:.4g} N")
     for figure in result.get("femnet", {}).get("printed", []):   # FEMNET's text outputs, as it prints them
