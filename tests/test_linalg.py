@@ -339,10 +339,12 @@ def test_factors_made_in_callbacks_are_freed_whatever_thread_state_calls_back():
 def test_the_sparse_solver_is_chosen_by_the_environment_and_refused_by_name(monkeypatch):
     """``JAXNET_SPARSE_SOLVER`` names the factorisation (superlu, pardiso, cudss); unset, cuDSS on a GPU where it
     is installed, else PARDISO where MKL is, else SuperLU. A name it does not know, or a solver that cannot run
-    here, is refused with the variable, the value and what to do -- by ``solve_static`` before it compiles."""
+    here, is refused with the variable, the value and what to do -- before anything compiles, by the static,
+    dynamic and differentiable solves."""
     import jaxnet as jn
     from jaxnet import cudss, pardiso
     from jaxnet.scenes.panel import hanging_panel
+    from jaxnet.solve import dynamics, implicit
 
     indptr, indices = np.array([0, 1]), np.array([0])
     monkeypatch.setenv("JAXNET_SPARSE_SOLVER", "superlu")
@@ -354,8 +356,10 @@ def test_the_sparse_solver_is_chosen_by_the_environment_and_refused_by_name(monk
     with pytest.raises(ValueError, match="JAXNET_SPARSE_SOLVER='mumps': expected cudss, pardiso or superlu"):
         linalg.solver_choice()
     scene = hanging_panel(meshes=4, step=0.1).scene
-    with pytest.raises(ValueError, match="JAXNET_SPARSE_SOLVER"):
-        jn.solve_static(scene)
+    for entry in (lambda: jn.solve_static(scene), lambda: dynamics.simulate(scene, end_time=0.1),
+                  lambda: implicit.structure_of(scene)):  # statics, dynamics, the differentiable equilibrium
+        with pytest.raises(ValueError, match="JAXNET_SPARSE_SOLVER"):
+            entry()
     monkeypatch.setenv("JAXNET_SPARSE_SOLVER", "cudss")
     try:
         cudss.require()

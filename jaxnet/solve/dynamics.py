@@ -62,7 +62,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxnet import assemble, catch as catch_lib, checks, model as model_lib, scene as scene_lib
+from jaxnet import assemble, catch as catch_lib, checks, linalg, model as model_lib, scene as scene_lib
 from jaxnet.case import Case
 from jaxnet.forcing import Loading  # simulate's argument, offered here as dynamics.Loading too
 from jaxnet.solve import newton, programs, results
@@ -400,6 +400,7 @@ def simulate(scene, end_time=None, solver: Implicit | None = None, loading: Load
     solver = solver or Implicit()
     loading = loading or Loading()
     checks.validate(scene)
+    linalg.solver_choice()  # a sparse solver asked for that cannot run here: said before anything compiles
     check_loading(scene, loading)
     if not (np.isfinite(end_time) and end_time > 0):
         raise ValueError(f"simulate: end_time must be finite and > 0, got {end_time!r}")

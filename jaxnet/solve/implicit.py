@@ -96,6 +96,7 @@ def _without_fronts(*parts):
 def structure_of(scene, dynamic=False) -> Structure:
     """The :class:`Structure` of ``scene`` (validated here): its active terms and tangent pattern."""
     checks.validate(scene)
+    linalg.solver_choice()  # a sparse solver asked for that cannot run here: said before anything compiles
     model = model_lib.active_terms(scene, dynamic=dynamic)
     return Structure(pattern=assemble.build_pattern(scene, model), model=model, exact_tangent=_without_fronts(scene))
 
