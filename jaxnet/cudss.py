@@ -85,7 +85,7 @@ class Factor:
         self._forward = self._transposed = None
         self._data = None  # the last matrix's entries (host), for the factor of A^T when it is asked for
         self._transposed_current = False
-        self._t_slot, self._t_indptr, self._t_indices = transposed_structure(self.indptr, self.indices)
+        self._t_slot = None  # where A^T's entries come from in A's (transposed_structure), made when first needed
 
     @property
     def entries(self):
@@ -107,8 +107,9 @@ class Factor:
     def solve(self, b, transpose=False):
         if not transpose:
             return self._forward.solve(b)
-        if self._transposed is None:
-            self._transposed = _OnDevice(self._cupy, self._direct_solver, self._t_indptr, self._t_indices, self.n)
+        if self._transposed is None:  # the first transposed solve: the Newton never asks for one, the adjoints do
+            self._t_slot, indptr_t, indices_t = transposed_structure(self.indptr, self.indices)
+            self._transposed = _OnDevice(self._cupy, self._direct_solver, indptr_t, indices_t, self.n)
         if not self._transposed_current:
             self._transposed.factor(self._data[self._t_slot])
             self._transposed_current = True
