@@ -177,15 +177,17 @@ def _run_dynamic(args):
     print(f"jaxnet: {label}")
     print(f"  {scene.n_nodes} nodes, {scene.n_elements} elements, {scene.n_dof} unknowns; dynamics to "
           f"{end_time:g} s, step {implicit.time_step:g} s")
+    scene, loading, ramp = dynamics.with_start_ramp(scene, settings.loading)
+    if ramp > 0:
+        print(f"  the waves and the prescribed motions grow in over the first {ramp:g} s")
     x0 = None
     if not args.resume:
-        eq = solve(dynamics.scene_at(scene, settings.loading, 0.0), case.solver, verbose=False, throw=False,
-                   **overrides)
+        eq = solve(dynamics.scene_at(scene, loading, 0.0), case.solver, verbose=False, throw=False, **overrides)
         print(f"  start: static equilibrium {'converged' if eq.converged else 'NOT converged (' + eq.reason + ')'}"
               f" in {int(eq.iterations)} iterations")
         x0 = np.asarray(eq.x)
     try:
-        run = dynamics.simulate(scene, end_time, implicit, settings.loading, record_every=record_every, out=out,
+        run = dynamics.simulate(scene, end_time, implicit, loading, record_every=record_every, out=out,
                                 resume=args.resume, x0=x0, progress=not args.quiet)
     except dynamics.DynamicsError as err:
         print(f"jaxnet: {err}", file=sys.stderr)

@@ -89,6 +89,25 @@ def _half_cosine(s):
     return 0.5 * (1.0 - jnp.cos(jnp.pi * c)), 0.5 * jnp.pi * jnp.sin(jnp.pi * c) * _inside_unit(s)
 
 
+def envelope(t, duration):
+    """The smooth start of something that grows in over ``duration`` (s) from t = 0: (e(t), de/dt (1/s)),
+
+        e = 0 (t <= 0),   s³ (10 - 15 s + 6 s²) with s = t/duration (during),   1 (t >= duration),
+
+    C²: e, de/dt and d²e/dt² are continuous and the last two are 0 at both ends, so a motion or a wave
+    multiplied by it starts with zero velocity *and acceleration*: the inertia of what it moves rises from 0
+    instead of jumping, as it would under a half-cosine (whose second derivative jumps to (π/duration)²/2 at
+    t = 0). ``duration`` 0 means no envelope (e = 1, de/dt = 0 at every t). What :class:`Harmonic`'s ``ramp``
+    and the waves' (:mod:`jaxnet.waves`) use."""
+    t = jnp.asarray(t, dtype=float)
+    ramped = jnp.asarray(duration) > 0.0
+    safe = jnp.where(ramped, duration, 1.0)
+    s = _clamp_unit(t / safe)
+    value = s**3 * (10.0 - 15.0 * s + 6.0 * s**2)
+    slope = 30.0 * s**2 * (1.0 - s) ** 2 / safe
+    return jnp.where(ramped, value, 1.0), jnp.where(ramped, slope, 0.0)
+
+
 # -- base classes ----------------------------------------------------------------------------------------
 
 
@@ -275,10 +294,11 @@ class Harmonic(AbstractMotion):
     """Harmonic displacement amplitude sin(2π t/period + phase) e(t) (m), amplitude (3,) in m, period in s
     (> 0), phase in rad: the heave or surge of a collar.
 
-    e(t) is an optional smooth envelope rising over ``ramp`` seconds from t = 0: 0 before, (1 - cos(πt/R))/2
-    during, 1 after; ``ramp = 0`` (default) means no envelope (e = 1 at all t). Without it, phase 0 gives a
-    zero displacement at t = 0 but a velocity 2π/period × amplitude: a net starting at rest is jerked into
-    motion; a nonzero phase even displaces the nodes at t = 0. A ramp of a period or two starts the motion
+    e(t) is an optional smooth envelope rising over ``ramp`` seconds from t = 0 (:func:`envelope`, C²): 0
+    before, s³ (10 - 15 s + 6 s²) with s = t/R during, 1 after; ``ramp = 0`` (default) means no envelope (e = 1
+    at all t). Without it, phase 0 gives a zero displacement at t = 0 but a velocity 2π/period × amplitude: a
+    net starting at rest is jerked into motion; a nonzero phase even displaces the nodes at t = 0. A ramp of a
+    period or two starts the motion
     with zero displacement and zero velocity.
     """
 
@@ -297,24 +317,17 @@ class Harmonic(AbstractMotion):
         self.phase = _as_float(phase)
         self.ramp = _as_float(ramp)
 
-    def _envelope(self, t):
-        """e(t) and de/dt (1/s)."""
-        ramped = self.ramp > 0.0
-        ramp = jnp.where(ramped, self.ramp, 1.0)
-        value, slope = _half_cosine(t / ramp)
-        return jnp.where(ramped, value, 1.0), jnp.where(ramped, slope / ramp, 0.0)
-
     def __call__(self, t):
         t = jnp.asarray(t, dtype=float)
-        envelope, _ = self._envelope(t)
-        return self.amplitude * (jnp.sin(2.0 * jnp.pi * t / self.period + self.phase) * envelope)
+        envelope_value, _ = envelope(t, self.ramp)
+        return self.amplitude * (jnp.sin(2.0 * jnp.pi * t / self.period + self.phase) * envelope_value)
 
     def velocity(self, t):
         t = jnp.asarray(t, dtype=float)
         omega = 2.0 * jnp.pi / self.period
-        envelope, envelope_rate = self._envelope(t)
+        envelope_value, envelope_rate = envelope(t, self.ramp)
         angle = omega * t + self.phase
-        return self.amplitude * (omega * jnp.cos(angle) * envelope + jnp.sin(angle) * envelope_rate)
+        return self.amplitude * (omega * jnp.cos(angle) * envelope_value + jnp.sin(angle) * envelope_rate)
 
 
 # -- composition -----------------------------------------------------------------------------------------
@@ -407,13 +420,24 @@ class Loading(eqx.Module):
       environment's current (its direction and depth profile kept); None: the environment's constant speed.
     motions: prescribed motions (:class:`PrescribedMotion`): each moves its nodes, which must be fixed in the
       scene, to their start positions plus its displacement at t.
+    ramp: the time (s) over which a run grows in what its static start leaves out, so that it starts without
+      a shock: the waves (their ``ramp``: elevation and velocity times :func:`envelope`) and the
+      :class:`Towing` and :class:`Harmonic` motions that have no ramp of their own (theirs set to it: a towing
+      speed rises to its value, a heave's amplitude grows, its phase kept). None (default): one period of the
+      waves (:attr:`jaxnet.waves.Airy.characteristic_period`, an irregular sea's peak period), 0 without
+      waves; 0: nothing ramped. The current is not ramped: the run starts from the static equilibrium in it.
+      :func:`jaxnet.solve.dynamics.with_start_ramp` applies it, in :func:`jaxnet.solve.dynamics.simulate` and
+      :func:`jaxnet.solve.reference.reference`; the run's records state it. The differentiable runs of
+      :mod:`jaxnet.solve.adjoint_dynamics` take the scene and loading as given (their leaves may be traced):
+      give them ``with_start_ramp(scene, loading)[:2]`` for the same start.
     """
 
     current_speed: Callable | None = None
     motions: tuple = ()
+    ramp: float | None = None
 
 
 __all__ = [
     "AbstractHistory", "AbstractMotion", "Constant", "Ramp", "Step", "Oscillation", "Towing", "Harmonic", "Sum",
-    "PrescribedMotion", "Loading",
+    "PrescribedMotion", "Loading", "envelope",
 ]

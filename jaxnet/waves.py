@@ -67,7 +67,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxnet import geometry
+from jaxnet import forcing, geometry, spectra
 
 #: Newton steps on y tanh y = x after Fenton & McKee's start: its relative error is below 2 %, Newton
 #: squares it each step, so 4 steps give < 1e-16; one more is a margin.
@@ -129,6 +129,23 @@ def _horizontal_unit(direction, up):
     return horizontal * jnp.where(length > 0.0, 1.0 / jnp.where(length > 0.0, length, 1.0), 0.0)
 
 
+def depth_ratios(k, z, depth):
+    """(cosh(ks)/sinh(kh), sinh(ks)/sinh(kh)) of linear waves of wavenumber k (rad/m) at heights z (m) above
+    the mean surface (s = z + h), z clamped to [-h, 0] (constant extrapolation above the surface and below
+    the bed, slope exactly 0 there), written without overflow (the module docstring); ``depth`` h (m) may be
+    inf (deep water: both e^{kz}). k and z broadcast together."""
+    deep = jnp.isinf(depth)
+    h = jnp.where(deep, 1.0, depth)  # double where: the finite branch never sees inf
+    z = jnp.where(z > 0.0, 0.0, z)
+    z = jnp.where(deep, z, jnp.where(z < -h, -h, z))
+    surface_decay = jnp.exp(k * z)
+    # 1 - e^{-2ks} and 1 - e^{-2kh} with expm1: exact as k s, k h → 0 (shallow water, near the bed)
+    s = z + h
+    bed_factor = jnp.where(deep, 1.0, -jnp.expm1(-2.0 * k * s))
+    denominator = jnp.where(deep, 1.0, -jnp.expm1(-2.0 * k * h))
+    return surface_decay * (2.0 - bed_factor) / denominator, surface_decay * bed_factor / denominator
+
+
 class Airy(eqx.Module):
     """Regular linear (Airy) waves (a pytree: its numbers can be traced and differentiated).
 
@@ -142,7 +159,10 @@ class Airy(eqx.Module):
       surface_level: height of the mean free surface along ``up`` (m).
       gravity: g (m/s²).
       up: (3,) the vertical (normalised), z along it.
-    Raises ValueError naming the parameter for a negative height, a non-positive period, depth or
+      ramp: time (s) over which the waves grow in from still water at t = 0 (:func:`jaxnet.forcing.envelope`:
+        elevation and velocity times e(t), the acceleration gaining de/dt times the velocity); 0 (default):
+        the textbook field at every t. A dynamic run sets it (:attr:`jaxnet.forcing.Loading.ramp`).
+    Raises ValueError naming the parameter for a negative height or ramp, a non-positive period, depth or
     gravity, NaN, a wrong shape or a vertical (or zero) direction, when the values are concrete.
     """
 
@@ -154,11 +174,12 @@ class Airy(eqx.Module):
     surface_level: jax.Array
     gravity: jax.Array
     up: jax.Array
+    ramp: jax.Array
 
     def __init__(self, height, period, direction=(1.0, 0.0, 0.0), depth=float("inf"), phase=0.0,
-                 surface_level=0.0, gravity=9.81, up=(0.0, 0.0, 1.0)):
+                 surface_level=0.0, gravity=9.81, up=(0.0, 0.0, 1.0), ramp=0.0):
         scalars = dict(height=height, period=period, depth=depth, phase=phase, surface_level=surface_level,
-                       gravity=gravity)
+                       gravity=gravity, ramp=ramp)
         vectors = dict(direction=direction, up=up)
         for name, value in {**scalars, **vectors}.items():
             if not _is_concrete(value):
@@ -173,7 +194,8 @@ class Airy(eqx.Module):
             if finite_required and not np.isfinite(array).all():
                 raise ValueError(f"Airy: {name} must be finite, got {value!r}")
         checks = (("height", lambda v: v >= 0.0, ">= 0"), ("period", lambda v: v > 0.0, "> 0"),
-                  ("depth", lambda v: v > 0.0, "> 0 (inf for deep water)"), ("gravity", lambda v: v > 0.0, "> 0"))
+                  ("depth", lambda v: v > 0.0, "> 0 (inf for deep water)"), ("gravity", lambda v: v > 0.0, "> 0"),
+                  ("ramp", lambda v: v >= 0.0, ">= 0 (s)"))
         for name, ok, what in checks:
             value = scalars[name]
             if _is_concrete(value) and not ok(float(value)):
@@ -201,6 +223,7 @@ class Airy(eqx.Module):
         self.surface_level = jnp.asarray(surface_level, dtype=float)
         self.gravity = jnp.asarray(gravity, dtype=float)
         self.up = up
+        self.ramp = jnp.asarray(ramp, dtype=float)
 
     # -- derived quantities ------------------------------------------------------------------------------
 
@@ -224,6 +247,11 @@ class Airy(eqx.Module):
         """Phase speed c = ω/k (m/s)."""
         return self.angular_frequency / self.wavenumber
 
+    @property
+    def characteristic_period(self):
+        """T (s): what a dynamic run grows these waves in over by default (:attr:`jaxnet.forcing.Loading.ramp`)."""
+        return self.period
+
     # -- kinematics at points ----------------------------------------------------------------------------
 
     def _phase(self, x, t):
@@ -232,34 +260,20 @@ class Airy(eqx.Module):
 
     def _depth_ratios(self, x):
         """(cosh(ks)/sinh(kh), sinh(ks)/sinh(kh)) at points x (..., 3), z clamped to [-h, 0]."""
-        k = self.wavenumber
-        deep = jnp.isinf(self.depth)
-        h = jnp.where(deep, 1.0, self.depth)  # double where: the finite branch never sees inf
-        z = x @ self.up - self.surface_level
-        # constant extrapolation above the surface and below the bed, slope exactly 0 there
-        z = jnp.where(z > 0.0, 0.0, z)
-        z = jnp.where(deep, z, jnp.where(z < -h, -h, z))
-        surface_decay = jnp.exp(k * z)
-        # 1 - e^{-2ks} and 1 - e^{-2kh} with expm1: exact as k s, k h → 0 (shallow water, near the bed)
-        s = z + h
-        bed_factor = jnp.where(deep, 1.0, -jnp.expm1(-2.0 * k * s))
-        denominator = jnp.where(deep, 1.0, -jnp.expm1(-2.0 * k * h))
-        cosh_ratio = surface_decay * (2.0 - bed_factor) / denominator
-        sinh_ratio = surface_decay * bed_factor / denominator
-        return cosh_ratio, sinh_ratio
+        return depth_ratios(self.wavenumber, x @ self.up - self.surface_level, self.depth)
 
     def elevation(self, x, t):
         """Elevation η (m) of the free surface above its mean level, at the horizontal position of points
         x (..., 3) (m) and time t (s): η = H/2 cos θ. Shape (...)."""
         x = jnp.asarray(x, dtype=float)
-        return 0.5 * self.height * jnp.cos(self._phase(x, t))
+        return 0.5 * self.height * forcing.envelope(t, self.ramp)[0] * jnp.cos(self._phase(x, t))
 
     def velocity(self, x, t):
         """Orbital velocity (..., 3) (m/s) of the water at points x (..., 3) (m), time t (s)."""
         x = jnp.asarray(x, dtype=float)
         theta = self._phase(x, t)
         cosh_ratio, sinh_ratio = self._depth_ratios(x)
-        amplitude = 0.5 * self.height * self.angular_frequency
+        amplitude = 0.5 * self.height * self.angular_frequency * forcing.envelope(t, self.ramp)[0]
         horizontal = amplitude * cosh_ratio * jnp.cos(theta)
         vertical = amplitude * sinh_ratio * jnp.sin(theta)
         return horizontal[..., None] * self.direction + vertical[..., None] * self.up
@@ -281,7 +295,7 @@ class Airy(eqx.Module):
         cosh_ratio, sinh_ratio = self._depth_ratios(x)
         z = x @ self.up - self.surface_level
         inside = ((z <= 0.0) & (z >= -self.depth)).astype(x.dtype)  # depth inf: no bed
-        scale = 0.5 * self.height * self.angular_frequency * self.wavenumber
+        scale = 0.5 * self.height * self.angular_frequency * self.wavenumber * forcing.envelope(t, self.ramp)[0]
         cos, sin = jnp.cos(theta), jnp.sin(theta)
         e, up = self.direction, self.up
         # d(horizontal)/dx and d(vertical)/dx, (..., 3) each
@@ -291,14 +305,173 @@ class Airy(eqx.Module):
 
     def acceleration(self, x, t):
         """Local acceleration ∂u/∂t (..., 3) (m/s²) of the water at points x (..., 3) (m), time t (s): the
-        linear-theory γ_h (the convective (u·∇)u, second order in H, is left out)."""
+        linear-theory γ_h (the convective (u·∇)u, second order in H, is left out). During the ramp it is
+        e ∂u/∂t + (de/dt) u: the time derivative of the ramped velocity."""
         x = jnp.asarray(x, dtype=float)
         theta = self._phase(x, t)
         cosh_ratio, sinh_ratio = self._depth_ratios(x)
-        amplitude = 0.5 * self.height * self.angular_frequency**2
-        horizontal = amplitude * cosh_ratio * jnp.sin(theta)
-        vertical = -amplitude * sinh_ratio * jnp.cos(theta)
+        grow, grow_rate = forcing.envelope(t, self.ramp)
+        amplitude = 0.5 * self.height * self.angular_frequency
+        # d/dt of e a ω [C cos θ e + S sin θ up], θ = ... - ω t
+        horizontal = amplitude * cosh_ratio * (grow * self.angular_frequency * jnp.sin(theta) + grow_rate * jnp.cos(theta))
+        vertical = amplitude * sinh_ratio * (-grow * self.angular_frequency * jnp.cos(theta) + grow_rate * jnp.sin(theta))
         return horizontal[..., None] * self.direction + vertical[..., None] * self.up
 
 
-__all__ = ["Airy", "wavenumber"]
+class Irregular(eqx.Module):
+    """An irregular sea: the sum of linear waves, each a component of :class:`Airy`'s theory with its own
+    amplitude a_i, angular frequency ω_i, heading e_i and phase φ_i (a pytree: its numbers can be traced and
+    differentiated). Build one from a spectrum with :func:`sea_state`; the components come from
+    :func:`jaxnet.spectra.components`.
+
+        η = e(t) Σ a_i cos θ_i,    θ_i = k_i e_i·x - ω_i t + φ_i,    ω_i² = g k_i tanh(k_i h)
+        u = e(t) Σ a_i ω_i [C_i(z*) cos θ_i e_i + S_i(z*) sin θ_i up]
+
+    (C_i, S_i: :func:`depth_ratios` of k_i; e(t) the ramp's envelope). z* is where the linear profile is read
+    at a point of height z above the mean surface:
+
+    * ``stretching="wheeler"`` (default; Wheeler 1970): z* = h (z - η)/(h + η) (deep water: z - η), which
+      maps the instantaneous surface η to 0 and the bed to itself. Linear theory's exponential profile taken
+      up to z = η under a crest overestimates the velocity there, and stopping it at the mean level misses
+      the crest; for the broad spectra of irregular seas Wheeler's rule is the usual choice (DNV-RP-C205
+      3.2.3). Points above the instantaneous surface get the kinematics at it.
+    * ``stretching="none"``: z* = z, constant above the mean surface: :class:`Airy`'s rule, so that one
+      component is exactly :class:`Airy`.
+
+    The local acceleration ∂u/∂t at a fixed point and the gradient ∂u/∂x are the exact derivatives of this
+    u (forward-mode autodiff: with stretching, u depends on t and x through η too).
+
+    Cost: every evaluation sums all N components at every point: N × points work and memory.
+
+    Args (arrays of one length N): amplitude a_i (m), angular_frequency ω_i (rad/s), heading (N, 3) the
+    components' directions (their vertical part removed, normalised), phase φ_i (rad); depth h (m, inf for
+    deep water); surface_level (m); gravity (m/s²); up (3,); stretching; ramp (s, as :class:`Airy`'s);
+    peak_period: the sea's Tp (s), a run's default ramp.
+    """
+
+    amplitude: jax.Array
+    angular_frequency: jax.Array
+    direction: jax.Array
+    phase: jax.Array
+    depth: jax.Array
+    surface_level: jax.Array
+    gravity: jax.Array
+    up: jax.Array
+    ramp: jax.Array
+    peak_period: jax.Array
+    stretching: str = eqx.field(static=True, default="wheeler")
+
+    def __init__(self, amplitude, angular_frequency, heading, phase, depth=float("inf"), surface_level=0.0,
+                 gravity=9.81, up=(0.0, 0.0, 1.0), stretching="wheeler", ramp=0.0, peak_period=None):
+        if stretching not in ("wheeler", "none"):
+            raise ValueError(f"Irregular: stretching must be 'wheeler' or 'none', got {stretching!r}")
+        arrays = dict(amplitude=amplitude, angular_frequency=angular_frequency, phase=phase)
+        if _is_concrete((arrays, heading, depth, ramp)):
+            n = np.shape(amplitude)
+            for name, value in {**arrays, "heading": heading}.items():
+                array = np.asarray(value, dtype=float)
+                expected = n + (3,) if name == "heading" else n
+                if array.ndim != len(expected) or array.shape != expected or len(n) != 1:
+                    raise ValueError(f"Irregular: {name} must have shape {expected} (N components), got {array.shape}")
+                if not np.isfinite(array).all():
+                    raise ValueError(f"Irregular: {name} must be finite, got {array.tolist()}")
+            if (np.asarray(amplitude) < 0).any() or not (np.asarray(angular_frequency) > 0).all():
+                raise ValueError("Irregular: amplitudes must be >= 0 m and angular frequencies > 0 rad/s")
+            if not float(depth) > 0 or not float(ramp) >= 0:
+                raise ValueError(f"Irregular: depth must be > 0 (inf for deep water) and ramp >= 0 s, got {depth!r}, "
+                                 f"{ramp!r}")
+        up = jnp.asarray(up, dtype=float)
+        self.up = up / geometry.safe_norm(up)
+        self.direction = jax.vmap(lambda d: _horizontal_unit(d, self.up))(jnp.asarray(heading, dtype=float))
+        self.amplitude = jnp.asarray(amplitude, dtype=float)
+        self.angular_frequency = jnp.asarray(angular_frequency, dtype=float)
+        self.phase = jnp.asarray(phase, dtype=float)
+        self.depth = jnp.asarray(depth, dtype=float)
+        self.surface_level = jnp.asarray(surface_level, dtype=float)
+        self.gravity = jnp.asarray(gravity, dtype=float)
+        self.ramp = jnp.asarray(ramp, dtype=float)
+        if peak_period is None:  # the period of the largest component
+            peak_period = 2.0 * jnp.pi / self.angular_frequency[jnp.argmax(self.amplitude)]
+        self.peak_period = jnp.asarray(peak_period, dtype=float)
+        self.stretching = stretching
+
+    @property
+    def wavenumber(self):
+        """k_i (N,) (rad/m), from the dispersion relation (:func:`wavenumber`)."""
+        return wavenumber(2.0 * jnp.pi / self.angular_frequency, self.depth, self.gravity)
+
+    @property
+    def characteristic_period(self):
+        """Tp (s): what a dynamic run grows this sea in over by default (:attr:`jaxnet.forcing.Loading.ramp`)."""
+        return self.peak_period
+
+    def _phase(self, x, t):
+        """θ_i (..., N) at points x (..., 3) and time t."""
+        return self.wavenumber * (x @ self.direction.T) - self.angular_frequency * t + self.phase
+
+    def elevation(self, x, t):
+        """Elevation η (m) of the free surface above its mean level at the horizontal position of points x
+        (..., 3) (m), time t (s). Shape (...)."""
+        x = jnp.asarray(x, dtype=float)
+        return forcing.envelope(t, self.ramp)[0] * (jnp.cos(self._phase(x, t)) @ self.amplitude)
+
+    def velocity(self, x, t):
+        """Orbital velocity (..., 3) (m/s) of the water at points x (..., 3) (m), time t (s)."""
+        x = jnp.asarray(x, dtype=float)
+        theta = self._phase(x, t)
+        z = x @ self.up - self.surface_level
+        if self.stretching == "wheeler":
+            eta = forcing.envelope(t, self.ramp)[0] * (jnp.cos(theta) @ self.amplitude)
+            deep = jnp.isinf(self.depth)
+            h = jnp.where(deep, 1.0, self.depth)
+            # above the instantaneous surface z* > 0: depth_ratios holds the surface's kinematics there
+            z = jnp.where(deep, z - eta, h * (z - eta) / jnp.maximum(h + eta, 1e-9 * h))
+        cosh_ratio, sinh_ratio = depth_ratios(self.wavenumber, z[..., None], self.depth)
+        scale = forcing.envelope(t, self.ramp)[0] * self.amplitude * self.angular_frequency
+        horizontal = (scale * cosh_ratio * jnp.cos(theta)) @ self.direction
+        vertical = jnp.sum(scale * sinh_ratio * jnp.sin(theta), axis=-1)
+        return horizontal + vertical[..., None] * self.up
+
+    def acceleration(self, x, t):
+        """Local acceleration ∂u/∂t (..., 3) (m/s²) of the water at points x (..., 3) (m), time t (s): the
+        exact time derivative of :meth:`velocity` at a fixed point (linear theory's γ_h per component, plus
+        the stretching's and the ramp's parts)."""
+        x = jnp.asarray(x, dtype=float)
+        t = jnp.asarray(t, dtype=float)
+        return jax.jvp(lambda s: self.velocity(x, s), (t,), (jnp.ones_like(t),))[1]
+
+    def velocity_gradient(self, x, t):
+        """Gradient ∂u/∂x (..., 3, 3) (1/s), entry [..., m, n] = ∂u_m/∂x_n, at points x (..., 3) (m), time t (s):
+        the exact derivative of :meth:`velocity` (what the drag stiffness of a moving net needs)."""
+        x = jnp.asarray(x, dtype=float)
+        flat = x.reshape(-1, 3)
+        gradient = jax.vmap(jax.jacfwd(lambda p: self.velocity(p, t)))(flat)
+        return gradient.reshape(x.shape[:-1] + (3, 3))
+
+
+def sea_state(hs, tp, direction=(1.0, 0.0, 0.0), spectrum="jonswap", gamma=None, spreading=None, components=200,
+              band=spectra.BAND, seed=0, depth=float("inf"), surface_level=0.0, gravity=9.81, up=(0.0, 0.0, 1.0),
+              stretching="wheeler"):
+    """An irregular sea of significant height ``hs`` (m) and peak period ``tp`` (s) travelling along the
+    horizontal ``direction``: an :class:`Irregular` of ``components`` linear waves realised from a JONSWAP
+    (``gamma``: its peak enhancement, None for DNV's from Hs and Tp) or Pierson-Moskowitz spectrum with the
+    generator's ``seed`` (:func:`jaxnet.spectra.components`: the same seed, the same sea). ``spreading``: None
+    for a long-crested sea, else the exponent n of DNV's cos^n spreading about ``direction`` (2-4 for a wind
+    sea): a short-crested one. ``band``: the frequencies covered, in multiples of the peak's. ``depth`` (m, inf
+    for deep water), ``surface_level`` (m), ``gravity``, ``up``, ``stretching``: as :class:`Irregular`'s. The
+    record repeats after 2π/Δω = components × Tp / (band[1] - band[0]) seconds (1111 s for the defaults and
+    Tp = 25 s)."""
+    amplitude, omega, phase, angle = spectra.components(hs, tp, spectrum, gamma, components, band, seed, spreading)
+    up_unit = np.asarray(up, dtype=float) / np.linalg.norm(up)
+    mean = np.asarray(direction, dtype=float)
+    mean = mean - np.dot(mean, up_unit) * up_unit
+    if not np.linalg.norm(mean) > 0:
+        raise ValueError(f"sea state: direction must have a horizontal component, got {list(direction)}")
+    mean = mean / np.linalg.norm(mean)
+    side = np.cross(up_unit, mean)
+    heading = np.cos(angle)[:, None] * mean + np.sin(angle)[:, None] * side
+    return Irregular(amplitude, omega, heading, phase, depth=depth, surface_level=surface_level, gravity=gravity, up=up,
+                     stretching=stretching, peak_period=tp)
+
+
+__all__ = ["Airy", "Irregular", "sea_state", "wavenumber", "depth_ratios"]

@@ -4,7 +4,10 @@
 The format mirrors the Python API (see README, "Scene files"). Top-level keys::
 
     environment  {gravity, water_density, up, current_speed, current_direction, profile_depth,
-                  profile_factor, surface_level, bottom_stiffness, bottom_friction, bottom_band}
+                  profile_factor, surface_level, bottom_stiffness, bottom_friction, bottom_band,
+                  waves?: {height, period, direction?, depth?, phase?}             regular (Airy) waves
+                        | {hs, tp, spectrum?, gamma?, spreading?, components?, band?, seed?,
+                           direction?, depth?, stretching?}                       an irregular sea}
     twines       {NAME: {l0, ea, diameter, ea_compression?, density?, cd_normal?, tangential_ratio?,
                          drag_model?, opening_stiffness?, rest_angle?, knot_size?, knot_stiffness?,
                          bending_stiffness?, tarp_cd?}}                      netting materials
@@ -160,6 +163,50 @@ def _triple(value, where):
     return arr
 
 
+_REGULAR = {"height", "period", "direction", "depth", "phase"}
+_IRREGULAR = {"hs", "tp", "spectrum", "gamma", "spreading", "components", "band", "seed", "direction", "depth",
+              "stretching"}
+
+
+def _waves(spec, env_spec, where):
+    """The environment's waves of the file: regular ({height, period, direction?, depth?, phase?}:
+    :class:`jaxnet.waves.Airy`) or an irregular sea ({hs, tp, spectrum?, gamma?, spreading?, components?, band?,
+    seed?, direction?, depth?, stretching?}: :func:`jaxnet.waves.sea_state`), on the environment's surface
+    level (0 where it has none), gravity and vertical; a bad value is a SceneError naming it."""
+    from jaxnet import waves
+
+    if spec is None:
+        return None
+    if not isinstance(spec, dict) or not ({"height", "hs"} & set(spec)):
+        raise SceneError(f"{where}: expected regular waves {{height, period, ...}} or a sea state {{hs, tp, ...}}, "
+                         f"got {spec!r}")
+    irregular = "hs" in spec
+    _keys(spec, _IRREGULAR if irregular else _REGULAR, where, ("hs", "tp") if irregular else ("height", "period"))
+    values = {}
+    for key, value in spec.items():
+        if key == "direction":
+            values[key] = _triple(value, f"{where}.direction")
+        elif key in ("spectrum", "stretching"):
+            if not isinstance(value, str):
+                raise SceneError(f"{where}.{key}: expected a name, got {value!r}")
+            values[key] = value
+        elif key in ("components", "seed"):
+            values[key] = _integer(value, f"{where}.{key}")
+        elif key == "band":
+            values[key] = tuple(_list(value, f"{where}.band"))
+        else:
+            values[key] = _number(value, f"{where}.{key}")
+    level = env_spec.get("surface_level", float("nan"))
+    common = dict(surface_level=0.0 if np.isnan(level) else level, gravity=env_spec.get("gravity", 9.81),
+                  up=env_spec.get("up", (0.0, 0.0, 1.0)))
+    try:
+        if irregular:
+            return waves.sea_state(**values, **common)
+        return waves.Airy(**values, **common)
+    except ValueError as err:
+        raise SceneError(f"{where}: {err}") from None
+
+
 def from_dict(doc: dict, label: str = "scene document") -> Case:
     """The :class:`~jaxnet.case.Case` of a parsed scene document: its :class:`~jaxnet.net.Net` (built here) and
     solver options."""
@@ -173,6 +220,8 @@ def from_dict(doc: dict, label: str = "scene document") -> Case:
             env_spec[key] = _list(value, f"environment.{key}")
         elif key != "waves":
             env_spec[key] = _number(value, f"environment.{key}")
+    if "waves" in env_spec:
+        env_spec["waves"] = _waves(env_spec["waves"], env_spec, "environment.waves")
     env = Environment(**env_spec)
     net = Net(environment=env)
     twines = {k: _material(v, {}, Twine, f"twines.{k}") for k, v in doc.get("twines", {}).items()}

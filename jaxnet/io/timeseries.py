@@ -11,7 +11,8 @@ Units are SI, as everywhere in jaxnet: s, m, m/s; a figure's unit is in its name
 Layout of ``out_dir``::
 
     series.json          the index: arrays (name, raw file, shape of one record, dtype), the number of
-                         complete records, the scene's counts. Replaced atomically.
+                         complete records, the scene's counts, what the run says of itself ("run": the
+                         time its waves and motions grew in over, ``start_ramp_s``). Replaced atomically.
     raw/<name>.bin       one append-only raw file per array: record after record, C order, little-endian
                          float64 (int64 for ``step`` and for integer figures). Figure ``f`` is in
                          ``raw/figure.f.bin``.
@@ -312,7 +313,7 @@ def resume_point(out_dir):
 class SeriesWriter:
     """Writes the records of a dynamic run to ``out_dir`` as they come (layout and order: module docstring).
 
-    ``SeriesWriter(out_dir, scene, vtk=True, resume=False, fsync=False)``; a context manager (``close()``
+    ``SeriesWriter(out_dir, scene, vtk=True, resume=False, fsync=False, run=None)``; a context manager (``close()``
     at the end, also when the run raised: what was recorded is kept).
 
     out_dir: the directory (created if missing). scene: the :class:`jaxnet.scene.Scene` being run (for
@@ -320,11 +321,13 @@ class SeriesWriter:
     resume: continue the series in ``out_dir`` after its last complete record (see :func:`resume_point`;
     ``resumed`` then holds (Record, solver checkpoint) to restart the solver from, or None when there was
     nothing to resume, and the writer starts a new series); without it, a series already in ``out_dir`` is
-    replaced (its files are removed, and only those). fsync: force each write to the disk.
+    replaced (its files are removed, and only those). fsync: force each write to the disk. run: what the
+    index says of the run itself (a JSON-able dict, e.g. ``{"start_ramp_s": 6.0}``), under ``"run"``.
     """
 
-    def __init__(self, out_dir, scene, vtk=True, resume=False, fsync=False):
+    def __init__(self, out_dir, scene, vtk=True, resume=False, fsync=False, run=None):
         self.out_dir = pathlib.Path(out_dir)
+        self.run = dict(run or {})
         self.scene = scene
         self.vtk = bool(vtk)
         self.fsync = bool(fsync)
@@ -498,7 +501,7 @@ class SeriesWriter:
             "figures": list(self._figures or ()),
             "scene": {"n_nodes": scene.n_nodes, "n_elements": scene.n_elements, "n_dof": scene.n_dof,
                       "panel_names": list(scene.panel_names), "cable_names": list(scene.cable_names)},
-            "checkpoint": CHECKPOINT, "vtk": self.vtk,
+            "checkpoint": CHECKPOINT, "vtk": self.vtk, "run": self.run,
         }
         text = json.dumps(index, indent=1).encode()
         _replace(self.out_dir / INDEX, lambda f: f.write(text), self.fsync)

@@ -94,13 +94,14 @@ def _describe(radius, depth, sides, l0, step, current, sinker_kg, twine) -> Net:
 
 
 def cage_in_waves(wave_height: float = 2.0, wave_period: float = 6.0, water_depth: float = 50.0,
-                  current: float = 0.2, ramp: float = 2.0, end_time: float = 12.0, time_step: float = 0.01,
+                  current: float = 0.2, ramp: float | None = None, end_time: float = 12.0, time_step: float = 0.01,
                   record_every: float = 0.1, **cage) -> Case:
     """The cage of :func:`fish_cage` (its keyword arguments ``cage``) in regular waves along x, for dynamics.
 
     wave_height H (m, crest to trough), wave_period T (s), water_depth (m): linear (Airy) waves
-    (:class:`jaxnet.waves.Airy`); current (m/s) along x; ramp: time (s) over which the collar's heave grows
-    smoothly from rest to its full amplitude H/2 (a run starting at rest). A :class:`~jaxnet.case.Case` whose
+    (:class:`jaxnet.waves.Airy`); current (m/s) along x; ramp: time (s) over which the waves and the collar's
+    heave grow together from still water to their full height (:attr:`jaxnet.forcing.Loading.ramp`; None:
+    one wave period), so that the run starts from the static equilibrium without a shock. A :class:`~jaxnet.case.Case` whose
     time settings run it to ``end_time`` (s) with steps of ``time_step`` (s), a record every ``record_every``
     (s), the collar's heave its :class:`~jaxnet.forcing.Loading`.
     """
@@ -119,8 +120,8 @@ def cage_in_waves(wave_height: float = 2.0, wave_period: float = 6.0, water_dept
     scene = net.build()
     collar = np.flatnonzero(np.asarray(scene.nodes.fixed).all(axis=1))
     # the heave of the surface at the centre: η = H/2 cos(-ωt) = H/2 sin(ωt + π/2)
-    heave = forcing.Harmonic(amplitude=(0.0, 0.0, 0.5 * wave_height), period=wave_period, phase=np.pi / 2, ramp=ramp)
-    loading = forcing.Loading(motions=(forcing.PrescribedMotion(collar, heave),))
+    heave = forcing.Harmonic(amplitude=(0.0, 0.0, 0.5 * wave_height), period=wave_period, phase=np.pi / 2)
+    loading = forcing.Loading(motions=(forcing.PrescribedMotion(collar, heave),), ramp=ramp)
     time = TimeSettings(end_time=end_time, record_every=record_every, solver=Implicit(time_step=time_step),
                         loading=loading)
     return Case(scene=scene, time=time, net=net,

@@ -62,7 +62,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxnet import assemble, catch as catch_lib, checks, linalg, model as model_lib, scene as scene_lib
+from jaxnet import assemble, catch as catch_lib, checks, forcing, linalg, model as model_lib, scene as scene_lib
 from jaxnet.case import Case
 from jaxnet.forcing import Loading  # simulate's argument, offered here as dynamics.Loading too
 from jaxnet.solve import newton, programs, results
@@ -72,7 +72,7 @@ from jaxnet.solve.results import Timing
 from jaxnet.terms import drag, inertia, term as term_lib
 
 __all__ = ["Implicit", "Loading", "TimeStep", "State", "Trajectory", "DynamicsError", "lumped_masses", "scene_at",
-           "water_acceleration", "out_of_balance", "prescribed_velocity", "check_loading", "advance", "simulate",
+           "water_acceleration", "out_of_balance", "prescribed_velocity", "check_loading", "with_start_ramp", "advance", "simulate",
            "out_of_balance_jit", "advance_jit", "record_figures", "RUNNING", "DONE", "STEP_FAILED", "REASONS"]
 
 #: stop reasons of a dynamic run (``State.status``, ``Trajectory.status``)
@@ -153,6 +153,41 @@ class State(eqx.Module):
 
 
 # -- the surroundings at a time ------------------------------------------------------------------------
+
+
+def _ramped_motion(motion, ramp):
+    """``motion`` with ``ramp`` (s) as its own ramp where it is a Towing or Harmonic without one (recursively
+    through sums); any other motion as it is."""
+    if isinstance(motion, forcing.Sum):
+        return forcing.Sum(*(_ramped_motion(part, ramp) for part in motion.parts))
+    if isinstance(motion, (forcing.Towing, forcing.Harmonic)) and not float(motion.ramp) > 0.0:
+        return eqx.tree_at(lambda m: m.ramp, motion, jnp.asarray(ramp, dtype=float))
+    return motion
+
+
+def with_start_ramp(scene, loading: Loading):
+    """(scene, loading, ramp in s): the scene's waves and the loading's motions given the run's start ramp
+    (:attr:`jaxnet.forcing.Loading.ramp`, its default resolved: one period of the waves, 0 without). What
+    :func:`simulate` runs; applying it twice changes nothing more. Raises SceneError for waves that have no
+    ``ramp`` to set when a ramp is asked for."""
+    waves = scene.environment.waves
+    ramp = loading.ramp
+    if ramp is None:
+        ramp = float(waves.characteristic_period) if waves is not None and hasattr(waves, "characteristic_period") \
+            else 0.0
+    ramp = float(ramp)
+    if not (np.isfinite(ramp) and ramp >= 0.0):
+        raise ValueError(f"Loading: ramp must be finite and >= 0 (s), got {loading.ramp!r}")
+    if ramp > 0.0:
+        if waves is not None:
+            if not hasattr(waves, "ramp"):
+                raise scene_lib.SceneError(f"the waves ({type(waves).__name__}) have no ramp to grow them in over "
+                                           f"{ramp:g} s: give them one, or run with Loading(ramp=0)")
+            scene = eqx.tree_at(lambda s: s.environment.waves.ramp, scene, jnp.asarray(ramp, dtype=float))
+        motions = tuple(eqx.tree_at(lambda p: p.motion, m, _ramped_motion(m.motion, ramp)) for m in loading.motions)
+        loading = eqx.tree_at(lambda ld: ld.motions, loading, motions)
+    loading = eqx.tree_at(lambda ld: ld.ramp, loading, ramp, is_leaf=lambda v: v is None)
+    return scene, loading, ramp
 
 
 def scene_at(scene, loading: Loading, t):
@@ -321,7 +356,8 @@ class Trajectory:
     """A run: ``times`` (R,) (s), ``positions`` (R, N, 3) (m), ``velocities`` (R, N, 3) (m/s) of its records,
     ``figures`` name -> (R, ...), the last :class:`State` (its ``status`` DONE, or STEP_FAILED for a run that
     stopped, ``throw=False``: the records then end at the last one before the failure), and its
-    :class:`~jaxnet.solve.results.Timing` (``compile_s``: the first record interval, which compiles)."""
+    :class:`~jaxnet.solve.results.Timing` (``compile_s``: the first record interval, which compiles), and the
+    time (s) over which its waves and motions grew in (:attr:`jaxnet.forcing.Loading.ramp`)."""
 
     times: np.ndarray
     positions: np.ndarray
@@ -329,6 +365,7 @@ class Trajectory:
     figures: dict
     state: State
     timing: Timing
+    start_ramp_s: float = 0.0
 
     @property
     def status(self):
@@ -400,6 +437,7 @@ def simulate(scene, end_time=None, solver: Implicit | None = None, loading: Load
     solver = solver or Implicit()
     loading = loading or Loading()
     checks.validate(scene)
+    scene, loading, ramp = with_start_ramp(scene, loading)
     linalg.solver_choice()  # a sparse solver asked for that cannot run here: said before anything compiles
     check_loading(scene, loading)
     if not (np.isfinite(end_time) and end_time > 0):
@@ -423,7 +461,8 @@ def simulate(scene, end_time=None, solver: Implicit | None = None, loading: Load
     times, positions, velocities, figures = [], [], [], {}
     writer = None
     if out is not None:
-        writer = timeseries.SeriesWriter(pathlib.Path(out), scene, vtk=vtk, resume=resume)
+        writer = timeseries.SeriesWriter(pathlib.Path(out), scene, vtk=vtk, resume=resume,
+                                         run={"start_ramp_s": ramp})
         if resume and writer.resumed is not None:
             _, checkpoint = writer.resumed
             state = State(**{f.name: jnp.asarray(checkpoint[f.name]) for f in dataclasses.fields(State)})
@@ -475,7 +514,7 @@ def simulate(scene, end_time=None, solver: Implicit | None = None, loading: Load
             writer.close()
     return Trajectory(times=np.asarray(times), positions=np.asarray(positions), velocities=np.asarray(velocities),
                       figures={k: np.asarray(v) for k, v in figures.items()}, state=state,
-                      timing=Timing(compile_s=compile_s, wall_s=_time.perf_counter() - t0))
+                      timing=Timing(compile_s=compile_s, wall_s=_time.perf_counter() - t0), start_ramp_s=ramp)
 
 
 def _checkpoint(state: State):

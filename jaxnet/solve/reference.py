@@ -331,7 +331,8 @@ def reference(scene, end_time, loading=None, saveat=None, rtol=1e-6, atol=1e-9, 
     Args:
       scene: a :class:`jaxnet.scene.Scene` (validated here).
       end_time: the final time (s).
-      loading: :class:`jaxnet.solve.dynamics.Loading` (current history, prescribed motions); None for none.
+      loading: :class:`jaxnet.solve.dynamics.Loading` (current history, prescribed motions, the start ramp of
+        the waves and motions, applied as :func:`jaxnet.solve.dynamics.simulate` does); None for none.
       saveat: the save times (s), increasing, within [0, end_time]; default 101 times evenly from 0 to
         end_time. The steps land on them (see the module docstring).
       rtol, atol: the step-size controller's relative and absolute tolerances (absolute in m for positions
@@ -359,6 +360,7 @@ def reference(scene, end_time, loading=None, saveat=None, rtol=1e-6, atol=1e-9, 
     """
     loading = loading or dynamics.Loading()
     checks.validate(scene)
+    scene, loading, _ = dynamics.with_start_ramp(scene, loading)  # the run's start, as simulate's
     dynamics.check_loading(scene, loading)
     if not (np.isfinite(end_time) and end_time > 0):
         raise ValueError(f"reference: end_time must be finite and > 0, got {end_time!r}")
