@@ -153,6 +153,20 @@ def _run(args):
     return 0
 
 
+def _stopped(out, argv):
+    """What a dynamic run stopped by Ctrl-C says: where its records end, and the command that continues it
+    (exit status 130, the shell's for an interrupt)."""
+    import shlex
+
+    from jaxnet.io import timeseries
+
+    point = timeseries.resume_point(out)
+    where = f"its records in {out} end at t = {point[0].time:g} s" if point else f"no record in {out} yet"
+    again = [a for a in argv if a != "--resume"] + ["--resume"]
+    print(f"jaxnet: stopped (Ctrl-C); {where}. Continue with: jaxnet {shlex.join(again)}", file=sys.stderr)
+    return 130
+
+
 def _run_dynamic(args):
     import numpy as np
 
@@ -161,10 +175,6 @@ def _run_dynamic(args):
     from jaxnet.solve.statics import solve
 
     case, label = _case(args, dynamic=True)
-    added = case.info.get("added_mass", {})
-    if any(any(v > 0 for v in m) for m in added.values()):
-        raise SceneError(f"{args.scene}: node types with an added mass ({added}) are not yet mapped onto jaxnet's "
-                         "nodes for dynamics")
     overrides = _overrides(args)
     settings, implicit = time_stepping(case, args)
     end_time = args.end if args.end is not None else settings.end_time
@@ -192,6 +202,8 @@ def _run_dynamic(args):
     except dynamics.DynamicsError as err:
         print(f"jaxnet: {err}", file=sys.stderr)
         return 1
+    except KeyboardInterrupt:
+        return _stopped(out, args.argv)
     print(f"  {run.steps} steps, {run.mean_iterations:.2f} Newton iterations per step, {int(run.state.retries)} "
           f"retried; wall {run.timing.wall_s:.2f} s (first interval with compilation {run.timing.compile_s:.2f} s)")
     print(f"  wrote {out / 'series.npz'}, {out / 'series.pvd'}")
@@ -243,6 +255,7 @@ def main(argv=None):
     from jaxnet.scene import SceneError
 
     args = argument_parser().parse_args(argv)
+    args.argv = list(sys.argv[1:] if argv is None else argv)  # what a stopped run's hint repeats
 
     try:
         return _run(args)

@@ -318,6 +318,73 @@ class Airy(eqx.Module):
         return horizontal[..., None] * self.direction + vertical[..., None] * self.up
 
 
+class Stokes2(Airy):
+    """Regular second-order Stokes waves in water of finite or infinite depth: FEMNET's ``input wave_model 2``
+    (a pytree; the same parameters as :class:`Airy`, whose first-order field it adds to).
+
+    With a = H/2, θ = k e·x - ω t + phase, s = z + h, and k from the linear dispersion relation (at second
+    order the frequency is unchanged; Dean & Dalrymple, *Water wave mechanics*, 1991, ch. 11):
+
+        η = a cos θ + (k a²/4) (3 - tanh² kh)/tanh³ kh · cos 2θ
+        u = a ω cosh(ks)/sinh(kh) cos θ e + a ω sinh(ks)/sinh(kh) sin θ up
+            + (3/4) a² ω k [cosh(2ks) cos 2θ e + sinh(2ks) sin 2θ up] / sinh⁴(kh)
+
+    the potential Φ = a ω/k cosh(ks)/sinh(kh) sin θ + (3/8) a² ω cosh(2ks)/sinh⁴(kh) sin 2θ, whose velocity this
+    is (divergence-free, irrotational, w = 0 at the bed: the tests check them). FEMNET's kinematics
+    (``vitesse_houle``/``acceleration_houle``) and elevation are these. In deep water the second-order velocity
+    vanishes (1/sinh⁴ → 0) and η's second harmonic is k a²/2 cos 2θ. The factor 2 cosh(kh)/sinh³(kh) =
+    8 E (1 + E)/(1 - E)³ with E = e^{-2kh} keeps it finite there. Valid where the second harmonic stays small
+    (Ursell number H L²/h³ below about 25; in shallow water 1/sinh⁴ grows without bound).
+
+    Above the mean surface the kinematics are held at their z = 0 values, as :class:`Airy`'s (FEMNET evaluates
+    the series above it as written). The local acceleration and the velocity gradient are the exact
+    derivatives of this velocity (forward-mode autodiff); the ramp acts as :class:`Airy`'s.
+    """
+
+    def _second_order(self, z):
+        """(cosh(2ks), sinh(2ks)) / sinh⁴(kh) at heights z, clamped as :func:`depth_ratios` clamps."""
+        k = self.wavenumber
+        cosh2, sinh2 = depth_ratios(2.0 * k, z, self.depth)  # cosh(2ks)/sinh(2kh), sinh(2ks)/sinh(2kh)
+        deep = jnp.isinf(self.depth)
+        e = jnp.where(deep, 0.0, jnp.exp(-2.0 * k * jnp.where(deep, 1.0, self.depth)))
+        factor = 8.0 * e * (1.0 + e) / (1.0 - e) ** 3  # sinh(2kh)/sinh⁴(kh) = 2 cosh(kh)/sinh³(kh)
+        return cosh2 * factor, sinh2 * factor
+
+    def elevation(self, x, t):
+        """Elevation η (m) of the free surface above its mean level at points x (..., 3), time t (s)."""
+        x = jnp.asarray(x, dtype=float)
+        theta = self._phase(x, t)
+        a, k = 0.5 * self.height, self.wavenumber
+        deep = jnp.isinf(self.depth)
+        tanh = jnp.where(deep, 1.0, jnp.tanh(k * jnp.where(deep, 1.0, self.depth)))
+        second = k * a**2 / 4.0 * (3.0 - tanh**2) / tanh**3
+        return forcing.envelope(t, self.ramp)[0] * (a * jnp.cos(theta) + second * jnp.cos(2.0 * theta))
+
+    def velocity(self, x, t):
+        """Orbital velocity (..., 3) (m/s) of the water at points x (..., 3) (m), time t (s)."""
+        x = jnp.asarray(x, dtype=float)
+        theta = self._phase(x, t)
+        z = x @ self.up - self.surface_level
+        cosh2, sinh2 = self._second_order(z)
+        a, k, omega = 0.5 * self.height, self.wavenumber, self.angular_frequency
+        second = 0.75 * a**2 * omega * k * forcing.envelope(t, self.ramp)[0]
+        horizontal = second * cosh2 * jnp.cos(2.0 * theta)
+        vertical = second * sinh2 * jnp.sin(2.0 * theta)
+        return Airy.velocity(self, x, t) + horizontal[..., None] * self.direction + vertical[..., None] * self.up
+
+    def acceleration(self, x, t):
+        """Local acceleration ∂u/∂t (..., 3) (m/s²) at points x (..., 3) (m), time t (s)."""
+        x = jnp.asarray(x, dtype=float)
+        t = jnp.asarray(t, dtype=float)
+        return jax.jvp(lambda s: self.velocity(x, s), (t,), (jnp.ones_like(t),))[1]
+
+    def velocity_gradient(self, x, t):
+        """Gradient ∂u/∂x (..., 3, 3) (1/s), entry [..., m, n] = ∂u_m/∂x_n, at points x (..., 3) (m), time t (s)."""
+        x = jnp.asarray(x, dtype=float)
+        gradient = jax.vmap(jax.jacfwd(lambda p: self.velocity(p, t)))(x.reshape(-1, 3))
+        return gradient.reshape(x.shape[:-1] + (3, 3))
+
+
 class Irregular(eqx.Module):
     """An irregular sea: the sum of linear waves, each a component of :class:`Airy`'s theory with its own
     amplitude a_i, angular frequency ω_i, heading e_i and phase φ_i (a pytree: its numbers can be traced and
@@ -474,4 +541,4 @@ def sea_state(hs, tp, direction=(1.0, 0.0, 0.0), spectrum="jonswap", gamma=None,
                      stretching=stretching, peak_period=tp)
 
 
-__all__ = ["Airy", "Irregular", "sea_state", "wavenumber", "depth_ratios"]
+__all__ = ["Airy", "Stokes2", "Irregular", "sea_state", "wavenumber", "depth_ratios"]

@@ -180,3 +180,36 @@ def test_a_dynamic_run_of_a_scene_file_takes_the_solver_flags(tmp_path):
     assert settings.end_time is None  # a scene file has no end time: --end must say
     assert (implicit.newton.tol, implicit.newton.max_iter) == (5e-5, 12)
     assert implicit.newton.damping == TIME_STEP.damping and implicit.time_step == 0.01
+
+
+def test_a_dynamic_run_stopped_by_ctrl_c_says_how_to_resume_and_resumes(tmp_path, monkeypatch, capsys):
+    """Ctrl-C during `jaxnet run --dynamic`: the records written so far are kept, a one-line hint gives the
+    command that continues the run (exit status 130), and that command finishes it as one run would."""
+    from jaxnet.io import timeseries
+    from jaxnet.solve import dynamics
+
+    path = tmp_path / "scene.json"
+    path.write_text(json.dumps(wall_scene()))
+    out = tmp_path / "dyn"
+    args = ["run", str(path), "--dynamic", "--dt", "0.01", "--record", "0.05", "--end", "0.2", "--out", str(out),
+            "--quiet", "--no-cache"]
+    advance, calls = dynamics.advance_jit, []
+
+    def interrupted(*a, **k):
+        calls.append(1)
+        if len(calls) == 3:  # during the third record interval
+            raise KeyboardInterrupt
+        return advance(*a, **k)
+
+    monkeypatch.setattr(dynamics, "advance_jit", interrupted)
+    assert cli.main(args) == 130
+    err = capsys.readouterr().err
+    assert "its records in" in err and "end at t = 0.1 s" in err
+    hint = err.split("Continue with: jaxnet ")[1].strip()
+    assert hint.endswith("--resume") and str(out) in hint
+    assert len(timeseries.read_series(out)["time"]) == 3  # t = 0, 0.05, 0.1
+    monkeypatch.setattr(dynamics, "advance_jit", advance)
+    import shlex
+
+    assert cli.main(shlex.split(hint)) == 0
+    np.testing.assert_allclose(timeseries.read_series(out)["time"], [0.0, 0.05, 0.1, 0.15, 0.2], atol=1e-12)

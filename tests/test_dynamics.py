@@ -117,8 +117,12 @@ def test_current_settles_to_the_static_equilibrium():
     assert float(eq.x[1, 0]) == pytest.approx(1.0 + drag / 500.0, rel=1e-9)
     assert tr.positions[-1, 1, 0] == pytest.approx(float(eq.x[1, 0]), abs=1e-7)
     assert abs(tr.velocities[-1, 1, 0]) < 1e-6
-    # the reaction at the held end carries the drag
+    # the reaction at the held end (node 0; node 1 is held across the bar) carries the drag, and so does the bar
+    np.testing.assert_array_equal(tr.reaction_nodes, [0, 1])
+    assert tr.figures["reaction_N"][-1][0, 0] == pytest.approx(-drag, rel=1e-6)
     assert tr.figures["reaction_total_N"][-1][0] == pytest.approx(-drag, rel=1e-6)
+    assert tr.figures["max_bar_tension_N"][-1] == pytest.approx(drag, rel=1e-6)
+    assert "max_twine_tension_N" not in tr.figures  # no netting
     np.testing.assert_allclose(tr.figures["drag_nodes_N"][-1], [drag, 0, 0], rtol=1e-6)
 
 

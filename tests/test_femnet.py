@@ -550,6 +550,17 @@ def test_added_mass_is_recorded_and_limits_without_sense_are_no_limits(tmp_path)
     for field in ("position", "fixed", "mass", "volume", "force"):
         np.testing.assert_array_equal(getattr(a.nodes, field), getattr(b.nodes, field))
     json.dumps(info)
+    # the nodes carry it for dynamics: type 2's nodes (the free ones) the whole of it, or the half on a symmetry
+    # plane, as their mass would be (FEMNET's masses are the whole structure's)
+    assert a.nodes.added_mass is None
+    added = np.asarray(b.nodes.added_mass)
+    free = ~np.asarray(b.nodes.fixed).all(axis=1)
+    share = added[:, 0] / 1.5
+    assert set(np.round(share[free], 12)) <= {0.5, 1.0} and (share[free] == 1.0).sum() > 0.5 * free.sum()
+    np.testing.assert_allclose(added, share[:, None] * [1.5, 2.0, 0.25], rtol=1e-15)
+    # and so does FEMNET's own mesh read with the same .don
+    on_mdg = femnet.read_mdg(DATA / "nr_netting.mdg", path).scene
+    assert np.asarray(on_mdg.nodes.added_mass)[:, 1].max() == 2.0
 
 
 def test_meshing_order_shorthand(tmp_path):
@@ -583,6 +594,14 @@ def test_dynamic_settings_and_waves_are_read(tmp_path):
     # deep-water dispersion at T = 10 s where FEMNET's depth is 0 or large: L = g T² / (2π)
     if not np.isfinite(float(waves.depth)):
         assert float(waves.wavelength) == pytest.approx(9.81 * 100 / (2 * np.pi), rel=1e-12)
+    assert type(waves).__name__ == "Airy"  # FEMNET's default theory
+    # 'input wave_model 2': Stokes second order, the same parameters; 3 is refused naming its line
+    path.write_text("\n".join(lines) + "\ninput wave_model 2\n")
+    stokes = femnet.read_don(path).scene.environment.waves
+    assert type(stokes).__name__ == "Stokes2" and float(stokes.height) == 1.5 and float(stokes.period) == 10.0
+    path.write_text("\n".join(lines) + "\ninput wave_model 3\n")
+    with pytest.raises(SceneError, match=rf"waves.don:{len(lines) + 1}: 'input wave_model 3' \(Stokes third order"):
+        femnet.read_don(path)
     edit("Wave period", "0.0")
     path.write_text("\n".join(lines) + "\n")
     with pytest.raises(SceneError, match=r"waves.don:\d+: wave period 0.0 s: waves of height 1.5 m need a period > 0"):

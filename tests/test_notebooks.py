@@ -201,15 +201,19 @@ def test_dynamics_in_waves(monkeypatch):
     H, T, depth, ramp, collar = ns["H"], ns["T"], ns["depth"], ns["ramp"], ns["collar"]
     g, omega = 9.81, 2 * np.pi / ns["T"]
     assert t[0] == 0.0 and t[-1] == pytest.approx(ns["end"]) and int(run.figures["retries"][-1]) == 0
-    # the collar follows the surface at the cage's centre, η = H/2 cos ωt, ramped up by (1 - cos πt/R)/2
-    envelope = np.where(t < ramp, 0.5 * (1.0 - np.cos(np.pi * np.minimum(t, ramp) / ramp)), 1.0)
+    # the collar follows the surface at the cage's centre, η = H/2 cos ωt, grown in over the run's start ramp by
+    # the C² envelope s³ (10 - 15 s + 6 s²), s = t/R (jaxnet.forcing.envelope)
+    assert ramp == pytest.approx(T)
+    s = np.minimum(t / ramp, 1.0)
+    envelope = s**3 * (10 - 15 * s + 6 * s**2)
     heave = run.positions[:, collar, 2] - start[collar, 2]
     expected = np.broadcast_to((0.5 * H * envelope * np.cos(omega * t))[:, None], heave.shape)
     np.testing.assert_allclose(heave, expected, atol=1e-9)
     # the wave's elevation at each node plotted: Airy's H/2 cos(k x - ωt), k from ω² = g k tanh(k h)
     k = brentq(lambda k_: g * k_ * np.tanh(k_ * depth) - omega**2, 1e-8, 100.0, xtol=1e-15)
     for name, i in ns["nodes"].items():
-        np.testing.assert_allclose(ns["elevation"][name], 0.5 * H * np.cos(k * start[i, 0] - omega * t), atol=1e-9)
+        np.testing.assert_allclose(ns["elevation"][name], 0.5 * H * envelope * np.cos(k * start[i, 0] - omega * t),
+                                   atol=1e-9)
     # mean loads over the last whole period against the static ones. Along the current: drag grows as
     # u|u| of the water's velocity relative to the net, and adding a zero-mean oscillation w to a current U
     # raises its mean (U² + w² while |w| < U, 2 U |w| beyond) without passing U² + mean w²: for a net held

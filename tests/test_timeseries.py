@@ -242,6 +242,11 @@ def test_progress_shows_time_step_rate_and_mean_newton_iterations():
         assert bar.steps_per_second > 0
     text = out.getvalue()
     assert "t = 1.5/2 s" in text and "4.67 Newton it./step" in text and "steps/s" in text
+    # a run resumed at 6 s of 12: the bar is the whole run's, starting at 6 s (half done)
+    resumed = io.StringIO()
+    with Progress(6.0, 12.0, file=resumed, mininterval=0, steps0=600) as bar:
+        bar.update(9.0, 900, 1200)
+    assert "t = 9/12 s" in resumed.getvalue() and " 75%" in resumed.getvalue()
     quiet = Progress(0.0, 1.0, disable=True, file=out)
     quiet.update(0.5, 2, 7)
     quiet.close()

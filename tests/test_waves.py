@@ -249,3 +249,59 @@ def test_bad_parameters_name_the_parameter():
         Airy(1.0, 2.0, (1.0, 0.0), 10.0)
     with pytest.raises(ValueError, match="phase"):
         Airy(1.0, 2.0, (1.0, 0.0, 0.0), 10.0, phase=float("nan"))
+
+
+# -- second-order Stokes waves (FEMNET's wave_model 2) -----------------------------------------------------
+
+
+def _stokes_textbook(H, T, h, x, z, t):
+    """Dean & Dalrymple's second-order Stokes series written out with numpy (moderate kh only): η, u, w at
+    (x, z) for waves along x, phase 0."""
+    k = float(waves.wavenumber(T, h))
+    a, w = H / 2, 2 * np.pi / T
+    th = k * x - w * t
+    s = z + h
+    eta = a * np.cos(th) + k * a**2 / 4 * np.cosh(k * h) * (2 + np.cosh(2 * k * h)) / np.sinh(k * h) ** 3 * np.cos(2 * th)
+    u = (a * w * np.cosh(k * s) / np.sinh(k * h) * np.cos(th)
+         + 0.75 * a**2 * w * k * np.cosh(2 * k * s) / np.sinh(k * h) ** 4 * np.cos(2 * th))
+    v = (a * w * np.sinh(k * s) / np.sinh(k * h) * np.sin(th)
+         + 0.75 * a**2 * w * k * np.sinh(2 * k * s) / np.sinh(k * h) ** 4 * np.sin(2 * th))
+    return eta, u, v
+
+
+def test_stokes2_is_the_textbook_series_and_a_potential_flow():
+    H, T, h = 2.0, 8.0, 15.0
+    wave = waves.Stokes2(H, T, depth=h)
+    x = np.array([[0.0, 0.0, -1.0], [7.0, 0.0, -6.0], [23.0, 0.0, -14.5], [41.0, 0.0, -15.0]])
+    t = np.full(4, 1.3)
+    out = field(wave, x, t)
+    for k in range(4):
+        eta, u, w = _stokes_textbook(H, T, h, x[k, 0], x[k, 2], 1.3)
+        assert float(out["eta"][k]) == pytest.approx(eta, rel=1e-12)
+        np.testing.assert_allclose(np.asarray(out["u"][k]), [u, 0.0, w], rtol=1e-12, atol=1e-14)
+    # a potential flow: divergence-free, irrotational (symmetric gradient), no flow through the bed
+    grad = np.asarray(out["du_dx"])
+    np.testing.assert_allclose(np.trace(grad, axis1=1, axis2=2), 0.0, atol=1e-13)
+    np.testing.assert_allclose(grad, np.swapaxes(grad, 1, 2), atol=1e-13)
+    assert abs(float(out["u"][3, 2])) < 1e-15
+    # the acceleration is the velocity's time derivative; the gradient the one of velocity_gradient
+    np.testing.assert_allclose(np.asarray(out["a"]), np.asarray(out["du_dt"]), rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(np.asarray(wave.velocity_gradient(x, 1.3)), grad, rtol=1e-12, atol=1e-15)
+    # the second harmonic raises the crest and flattens the trough (crest a + k a²/4 (3 - tanh²)/tanh³)
+    k = float(waves.wavenumber(T, h))
+    crest = 1.0 + k / 4 * (3 - np.tanh(k * h) ** 2) / np.tanh(k * h) ** 3
+    assert float(wave.elevation(np.zeros(3), 0.0)) == pytest.approx(crest, rel=1e-14)
+
+
+def test_stokes2_in_deep_water_is_airy_with_a_second_harmonic_surface():
+    H, T = 10.0, 14.0  # FEMNET's FAD (7fad/g3): 10 m, 14 s waves in 1500 m of water
+    deep, airy = waves.Stokes2(H, T), waves.Airy(H, T)
+    x = np.array([[3.0, 0.0, -5.0], [50.0, 4.0, -30.0]])
+    np.testing.assert_array_equal(np.asarray(deep.velocity(x, 2.0)), np.asarray(airy.velocity(x, 2.0)))
+    k = float(deep.wavenumber)
+    theta = k * x[:, 0] - 2 * np.pi / T * 2.0
+    np.testing.assert_allclose(np.asarray(deep.elevation(x, 2.0)), 5.0 * np.cos(theta) + k * 25.0 / 2 * np.cos(2 * theta),
+                               rtol=1e-13)
+    # 1500 m is deep for these waves: the finite depth gives the deep answer to rounding
+    finite = waves.Stokes2(H, T, depth=1500.0)
+    np.testing.assert_allclose(np.asarray(finite.velocity(x, 2.0)), np.asarray(deep.velocity(x, 2.0)), rtol=1e-12)

@@ -9,7 +9,7 @@ import time as _time
 class Progress:
     """Progress bar of a dynamic run from ``t0`` to ``t_end`` (s), over tqdm; a context manager.
 
-    The bar is the simulated time over the end time; the postfix the time steps per second of wall-clock
+    The bar is the simulated time over the end time, of the whole run (a run resumed at t0 starts at t0); the postfix the time steps per second of wall-clock
     time and the mean number of Newton iterations per step, both since this bar started.
     ``update(t, steps, newton_iterations)``: t the simulated time now (s); steps the number of steps taken
     so far (cumulative, as ``Record.step``); newton_iterations the Newton iterations of the steps taken
@@ -26,7 +26,8 @@ class Progress:
         self.newton_iterations = 0
         self.start = _time.perf_counter()
         bar_format = "{desc}: {percentage:3.0f}%|{bar}| t = {n:.4g}/{total:.4g} s [{elapsed}<{remaining}{postfix}]"
-        self.bar = tqdm(total=self.t_end - self.t0, desc=desc, disable=disable,
+        # the whole run's time, a resumed run's bar starting where it stopped
+        self.bar = tqdm(total=self.t_end, initial=self.t0, desc=desc, disable=disable,
                         bar_format=tqdm_kwargs.pop("bar_format", bar_format), **tqdm_kwargs)
 
     @property
@@ -48,7 +49,7 @@ class Progress:
         self.newton_iterations += int(newton_iterations)
         self.bar.set_postfix_str(f"{self.steps_per_second:.3g} steps/s, {self.newton_per_step:.2f} Newton it./step",
                                  refresh=False)
-        done = min(max(float(t) - self.t0, 0.0), self.bar.total)
+        done = min(max(float(t), self.t0), self.bar.total)
         self.bar.update(done - self.bar.n)
 
     def close(self):

@@ -69,7 +69,7 @@ from jaxnet.solve import newton, programs, results
 from jaxnet.solve.masses import lumped_masses
 from jaxnet.solve.options import Implicit, Newton
 from jaxnet.solve.results import Timing
-from jaxnet.terms import drag, inertia, term as term_lib
+from jaxnet.terms import cable, drag, inertia, tension, term as term_lib
 
 __all__ = ["Implicit", "Loading", "TimeStep", "State", "Trajectory", "DynamicsError", "lumped_masses", "scene_at",
            "water_acceleration", "out_of_balance", "prescribed_velocity", "check_loading", "with_start_ramp", "advance", "simulate",
@@ -316,8 +316,8 @@ advance_jit = programs.jit(advance, static_argnames=("model", "solver"))
 
 def _totals(state: State, scene, loading, model):
     """(3,) total drag (N) of each drag group (:func:`jaxnet.terms.term.drag_groups`) at the state (relative
-    velocities included), and
-    the volume held (m³) when the scene has an enclosure; one compiled program per run."""
+    velocities included), the volume held (m³) when the scene has an enclosure, and the largest twine and bar
+    tensions (N; of one twine, not of the mesh's bundle of them); one compiled program per run."""
     scene_t = scene_at(scene, loading, state.t)
     motion = assemble.Motion(state.x - state.last_step * state.v, state.last_step)
     out = {}
@@ -329,6 +329,14 @@ def _totals(state: State, scene, loading, model):
     if e is not None and scene.netting is not None:
         out["volume_m3"] = catch_lib.enclosed_volume(state.x, scene.netting.vertices, jnp.dot(e.center, e.axis), e.axis,
                                                      sign=scene.netting.outward)
+    net, bars = scene.netting, scene.bars
+    if net is not None:
+        tu, tv = jax.vmap(tension.netting_tensions)(state.x[net.vertices], net.uv, net.l0, net.ea_traction,
+                                                    net.ea_compression)
+        out["max_twine_tension_N"] = jnp.maximum(jnp.max(tu), jnp.max(tv))
+    if bars is not None:
+        out["max_bar_tension_N"] = jnp.max(jax.vmap(cable.bar_tension)(state.x[bars.ends], bars.rest_length,
+                                                                       bars.ea_traction, bars.ea_compression))
     return out
 
 
@@ -336,8 +344,9 @@ _totals_jit = programs.jit(_totals, static_argnames=("model",))
 
 
 def record_figures(state: State, scene, loading, model, fixed_nodes):
-    """The figures of one record (numpy): reactions at the fixed nodes (F, 3) and their total (3,) in N,
-    drag totals (3,) in N per group, the volume held (m³) for an enclosure, the run's counters."""
+    """The figures of one record (numpy): reactions at the fixed nodes (F, 3) (N; the nodes ``fixed_nodes``, in
+    that order) and their total (3,) in N, drag totals (3,) in N per group, the volume held (m³) for an
+    enclosure, the largest twine and bar tensions (N), the run's counters."""
     force = np.asarray(state.force)
     fixed = np.asarray(scene.nodes.fixed)
     reaction = np.where(fixed, -force, 0.0)
@@ -357,7 +366,8 @@ class Trajectory:
     ``figures`` name -> (R, ...), the last :class:`State` (its ``status`` DONE, or STEP_FAILED for a run that
     stopped, ``throw=False``: the records then end at the last one before the failure), and its
     :class:`~jaxnet.solve.results.Timing` (``compile_s``: the first record interval, which compiles), and the
-    time (s) over which its waves and motions grew in (:attr:`jaxnet.forcing.Loading.ramp`)."""
+    time (s) over which its waves and motions grew in (:attr:`jaxnet.forcing.Loading.ramp`); ``reaction_nodes``
+    (F,): the node indices of the rows of ``figures["reaction_N"]`` (the nodes held on some axis)."""
 
     times: np.ndarray
     positions: np.ndarray
@@ -366,6 +376,7 @@ class Trajectory:
     state: State
     timing: Timing
     start_ramp_s: float = 0.0
+    reaction_nodes: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0, dtype=np.int64))
 
     @property
     def status(self):
@@ -462,7 +473,7 @@ def simulate(scene, end_time=None, solver: Implicit | None = None, loading: Load
     writer = None
     if out is not None:
         writer = timeseries.SeriesWriter(pathlib.Path(out), scene, vtk=vtk, resume=resume,
-                                         run={"start_ramp_s": ramp})
+                                         run={"start_ramp_s": ramp, "reaction_nodes": fixed_nodes.tolist()})
         if resume and writer.resumed is not None:
             _, checkpoint = writer.resumed
             state = State(**{f.name: jnp.asarray(checkpoint[f.name]) for f in dataclasses.fields(State)})
@@ -514,7 +525,8 @@ def simulate(scene, end_time=None, solver: Implicit | None = None, loading: Load
             writer.close()
     return Trajectory(times=np.asarray(times), positions=np.asarray(positions), velocities=np.asarray(velocities),
                       figures={k: np.asarray(v) for k, v in figures.items()}, state=state,
-                      timing=Timing(compile_s=compile_s, wall_s=_time.perf_counter() - t0), start_ramp_s=ramp)
+                      timing=Timing(compile_s=compile_s, wall_s=_time.perf_counter() - t0), start_ramp_s=ramp,
+                      reaction_nodes=fixed_nodes)
 
 
 def _checkpoint(state: State):

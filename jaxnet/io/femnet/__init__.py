@@ -81,8 +81,9 @@ Conventions established from the files (see ``tests/test_femnet.py``):
   (:mod:`jaxnet.mesh.twines`), of its material scaled by PERIOD, as FEMNET's mesher and solver do, and read
   from FEMNET's ``.mdg`` too (its bars of type -PANEL). FEMNET's mesher doubles a rope meshed before such a
   panel (:mod:`.twines` says how); jaxnet's is single.
-* **Added mass** acts in dynamics only (``lectureDo4.c``: "n'intervient qu'en dynamique"): read, kept
-  in ``info["added_mass"]`` per node type, without effect here.
+* **Added mass** acts in dynamics only (``lectureDo4.c``: "n'intervient qu'en dynamique"): each node gets its
+  type's, shared over the symmetry planes as its mass is (``Nodes.added_mass``, per axis; listed per node type
+  in ``info["added_mass"]``); statics leaves it out.
 * **Node bodies.** A node type's **length** X,Y,Z (m) and **drag coefficient** X,Y,Z make its nodes boxes
   (``Net.body``: ``Nodes.drag_length``, ``Nodes.drag_coefficient``; :func:`jaxnet.terms.drag.box_drag`).
   FEMNET's statics (``traineecourant2.c``) drags a box along x by ½ ρ Cd_x L_y h U² cos θ and along y by
@@ -124,8 +125,10 @@ Conventions established from the files (see ``tests/test_femnet.py``):
   FEMNET's global numbers (the joined points in the order of their first corner or end, as its ``.mdg`` lists
   them first: ``info["global_nodes"]``). ``output NAME ...`` commands (prints and drawings) are read and listed in
   ``info["outputs"]``; they change nothing.
-* **Commands of the tail.** FEMNET's dynamics-only commands (winches ``hauling_cable4``/``6`` and towing
-  speeds ``speed_type_node2`` with the time tables on their next lines, ``wave_model``) are read and kept:
+* **Commands of the tail.** ``input wave_model N`` picks the waves' theory (1 Airy, 2 Stokes second order:
+  :class:`jaxnet.waves.Stokes2`; 3 is refused). FEMNET's dynamics-only commands (winches
+  ``hauling_cable4``/``6`` and towing speeds ``speed_type_node2`` with the time tables on their next lines)
+  are read and kept:
   ``info["dynamic_only"]`` names them, left out of a static run; ``node_position``, which FEMNET's current
   code has no handler for, is read and ignored (``info["ignored"]``); the table of a command commented out
   is skipped with it. A drag coefficient left out of its line (``Normal Cd:`` then the next label) is
@@ -170,8 +173,8 @@ not model when it is used (sea-bed limits without a stiffness, hexagonal netting
 meshed as bars (meshing type 3), sliding cables, anisotropic node mass, extra catch volumes,
 FEMNET's other drag laws, meshing along the twines (``Meshing_uv``), unknown ``input`` commands, ...). Dynamic cases (an end time > 0) and waves are read: the time settings
 go to ``info["dynamic"]`` (``jaxnet run CASE.don --dynamic``), the waves to ``Environment.waves`` (linear
-waves on FEMNET's surface z = 0, a depth of 0 taken as deep water); the node types' added masses are read
-into ``info["added_mass"]``, and a dynamic run of a case that has any stops with an error (not yet mapped).
+waves on FEMNET's surface z = 0, a depth of 0 taken as deep water), the node types' added masses to the nodes
+(``Nodes.added_mass``).
 :func:`read_don` also builds the net it returns, so that errors of meshing and of the scene (a net held
 nowhere, ...) come named with the file and a line too. "Meshing order" may be FEMNET's shorthand: a word beginning with ``a`` (cables, then panels,
 then hexagonal panels) or ``b`` (panels, hexagonal panels, cables).

@@ -490,6 +490,16 @@ def _link_flexion_elem2(values):
     return None
 
 
+def _wave_model(values):
+    """``input wave_model N`` (FEMNET's manual, "Waves"): 1 Airy, 2 Stokes second order (intermediate and deep
+    water); its 3, Stokes third order in deep water, is used by no worked case and not modelled."""
+    n = values[0]
+    if n == 3:
+        return "'input wave_model 3' (Stokes third order in deep water): " + _UNSUPPORTED + " (1 Airy and 2 Stokes " \
+               "second order are)"
+    return None if n in (1, 2) else f"'input wave_model': the model must be 1 (Airy) or 2 (Stokes second order), got {n!r}"
+
+
 def _drag_forces_type(values):
     """``input drag_forces_type N``: FEMNET's netting drag law, one of its 1 to 4 (``chargement_don.c``'s comments;
     its solver does nothing for another value, which a line asking for a law does not mean)."""
@@ -539,7 +549,8 @@ COMMANDS = (
     Command("input", "hauling_cable4", 4, use="dynamic", table=(3, -1)),
     Command("input", "hauling_cable6", 4, use="dynamic", table=(3, -1)),
     Command("input", "speed_type_node2", 2, use="dynamic", table=(4, 1)),
-    Command("input", "wave_model", 1, use="dynamic"),
+    # the waves' theory (jaxnet.io.femnet.mapping.environment_of): 1 Airy, 2 Stokes second order; felt in dynamics
+    Command("input", "wave_model", 1, _wave_model),
     # FEMNET's current code has no handler for it (its reader skips the line)
     Command("input", "node_position", 1, use="ignored"),
     *(Command("input", name, tuple(range(0, 12)), use="unsupported", reason=reason) for name, reason in (

@@ -11,6 +11,7 @@ import dataclasses
 import math
 import re
 
+import equinox as eqx
 import numpy as np
 
 from jaxnet import geometry
@@ -152,10 +153,13 @@ def environment_of(case: DonFile) -> Environment:
     friction = case.ocean["bottom_friction"].value if "moving_bottom" in case.inputs else 0.0
     waves = None
     if case.ocean["wave_height"].value > 0:
-        # regular linear waves on FEMNET's surface z = 0 (felt in dynamics only); a depth of 0 is deep water
+        # regular waves on FEMNET's surface z = 0 (felt in dynamics only), linear or, with 'input wave_model 2',
+        # Stokes second order (FEMNET's default is Airy); a depth of 0 is deep water
         heading = math.radians(case.ocean["wave_direction"].value)
         depth = case.ocean["depth"].value
-        waves = waves_lib.Airy(case.ocean["wave_height"].value, case.ocean["wave_period"].value,
+        model = int(case.inputs["wave_model"].value) if "wave_model" in case.inputs else 1
+        theory = waves_lib.Stokes2 if model == 2 else waves_lib.Airy
+        waves = theory(case.ocean["wave_height"].value, case.ocean["wave_period"].value,
                                direction=(math.cos(heading), math.sin(heading), 0.0),
                                depth=depth if depth > 0 else float("inf"), surface_level=0.0, gravity=GRAVITY)
     return Environment(gravity=GRAVITY, water_density=float(rho), up=np.array([0.0, 0.0, 1.0]),
@@ -654,6 +658,7 @@ def read_don(path, femnet_laws=True, refine=1.0):
             net.catch(volume, drag_coefficient=cd, symmetry=copies, center=tuple(center), axis=tuple(axis),
                       density=density)
         scene = femnet_panel_catch_sides(net.build())
+    scene = with_added_masses(case, scene, node_type, share)
     finer = "" if refine == 1.0 else f", meshed {refine:g} times finer than its file"
     out = result(case, scene, net, planes, catch, femnet_laws, plan, label=f"FEMNET case {case.path}{finer}",
                  warnings=warnings, node_type=node_type)
@@ -662,6 +667,17 @@ def read_don(path, femnet_laws=True, refine=1.0):
     if gauge is not None:
         out.info["gauge"] = {"node": gauge[0], "axes": gauge[1]}
     return out
+
+
+def with_added_masses(case: DonFile, scene, node_type, share):
+    """``scene`` with FEMNET's added masses (``Nodes.added_mass``, kg per axis): each node's type's "Added mass
+    X,Y,Z", shared over the symmetry planes as its mass is (``share``: FEMNET's manual gives the masses of the
+    whole structure). They act in dynamics only (``lectureDo4.c``: "n'intervient qu'en dynamique"); a case
+    with none is returned as it is."""
+    added = np.array([share[i] * np.asarray(case.types[t].added_mass, dtype=float) for i, t in enumerate(node_type)])
+    if not added.any():
+        return scene
+    return eqx.tree_at(lambda s: s.nodes.added_mass, scene, added, is_leaf=lambda v: v is None)
 
 
 def _global_nodes(plan: JoinPlan, position):
@@ -748,7 +764,7 @@ def _info(case: DonFile, planes, catch, plan: JoinPlan | None = None):
         "water_density": environment_of(case).water_density,
         "inputs": {k: v.value for k, v in case.inputs.items()},
         "outputs": list(case.outputs),
-        # FEMNET's commands that act in its dynamics only, left out of a static run (winches, towing, wave model)
+        # FEMNET's commands that act in its dynamics only, left out of a static run (winches, towing)
         "dynamic_only": [f"input {name} (line {line})" for name, values, line in case.commands
                          if INPUTS[name].use == "dynamic"],
         # commands FEMNET itself does nothing with

@@ -14,7 +14,8 @@ import numpy as np
 from jaxnet.io.femnet.grammar import twine_coordinates
 from jaxnet.io.femnet.mapping import (catch_of, check_types, environment_of, femnet_panel_catch_sides,
                                       gravity_catch_density, node_type_fields, panel_catches_of, result, rope_of,
-                                      spheres_folded, symmetry_planes, symmetry_share, twine_of)
+                                      spheres_folded, symmetry_planes, symmetry_share, twine_of,
+                                      with_added_masses)
 from jaxnet.io.femnet.parse import parse_don
 from jaxnet.io.femnet.twines import mdg_twine_bars, numerical_twines
 from jaxnet.materials import bar_rows, netting_rows
@@ -129,14 +130,14 @@ def read_mdg(path, don=None, femnet_laws=True):
         for r, c in zip(bar_lines, cable):
             if not 0 <= c < len(case.cables):
                 raise SceneError(f"{where}:{r[-1]}: bar {int(r[0])} belongs to cable {c + 1}, not in {don}")
-        share = np.array([r[4] - r[3] for r in bar_lines])
-        bad = np.flatnonzero(~(share > 0))
+        portion = np.array([r[4] - r[3] for r in bar_lines])
+        bad = np.flatnonzero(~(portion > 0))
         if bad.size:
             r = bar_lines[int(bad[0])]
-            raise SceneError(f"{where}:{r[-1]}: bar {int(r[0])}: its share of the cable (pro2 - pro1 = {share[bad[0]]!r}) "
+            raise SceneError(f"{where}:{r[-1]}: bar {int(r[0])}: its share of the cable (pro2 - pro1 = {portion[bad[0]]!r}) "
                              "must be > 0")
         ropes = [rope_of(c) for c in case.cables]
-        rest = share * np.array([case.cables[c].material["l0"].value for c in cable])
+        rest = portion * np.array([case.cables[c].material["l0"].value for c in cable])
         bars = Bars(ends=ends, rest_length=rest, cable=cable, **bar_rows(ropes, cable))
     if twine_bars is not None:
         bars = twine_bars if bars is None else Bars(**{f: np.concatenate([getattr(bars, f), getattr(twine_bars, f)])
@@ -156,7 +157,7 @@ def read_mdg(path, don=None, femnet_laws=True):
                   panel_catches=panel_catches_of(case, planes, len(case.panels)),
                   panel_names=tuple(f"panel {k + 1}" for k in range(len(case.panels))),
                   cable_names=tuple(f"cable {k + 1}" for k in range(len(case.cables))) + twine_names)
-    scene = femnet_panel_catch_sides(scene)
+    scene = with_added_masses(case, femnet_panel_catch_sides(scene), node_type, share)
     validate(scene)
     out = result(case, scene, None, planes, catch_spec, femnet_laws, label=f"FEMNET case {don} on FEMNET's mesh {path}",
                   node_type=node_type)
