@@ -175,6 +175,10 @@ def _run_dynamic(args):
     from jaxnet.solve.statics import solve
 
     case, label = _case(args, dynamic=True)
+    left_out = case.info.get("dynamic_only", [])
+    if left_out:
+        raise SceneError(f"{args.scene}: FEMNET's {', '.join(left_out)} cannot be run in time by jaxnet yet (winches): "
+                         "a run without them would not be this case's")
     overrides = _overrides(args)
     settings, implicit = time_stepping(case, args)
     end_time = args.end if args.end is not None else settings.end_time

@@ -10,7 +10,8 @@ form (the tests check both agree):
   time derivative (unit/s; the dynamics takes d(speed)/dt for the water's acceleration γ_h of 4.265):
   :class:`Constant`, :class:`Ramp`, :class:`Step`, :class:`Oscillation`;
 * motions, ``m(t)`` the displacement (3,) (m) of nodes from their start positions, ``m.velocity(t)`` its
-  time derivative (3,) (m/s): :class:`Towing`, :class:`Harmonic`;
+  time derivative (3,) (m/s): :class:`Towing`, :class:`SpeedTable` (FEMNET's towing speed tables),
+  :class:`Harmonic`;
 * :class:`Sum` (also ``a + b``) adds histories, or motions;
 * :class:`PrescribedMotion` pairs node indices with a motion: the dynamics holds those nodes at
   start + m(t).
@@ -290,6 +291,56 @@ class Towing(AbstractMotion):
         return fraction * self.towing_velocity
 
 
+class SpeedTable(AbstractMotion):
+    """A velocity (3,) (m/s) given by a time table: linear between the table's times t_1 < ... < t_K (s), 0 before
+    t_1 and after t_K (the nodes stand still there): FEMNET's ``input speed_type_node2`` towing speeds. The
+    displacement (m) is its integral from t_1, exact (piecewise quadratic in t):
+
+        d(t) = Σ_{j < i} (v_j + v_{j+1})/2 Δ_j + v_i τ + (v_{i+1} - v_i) τ²/(2 Δ_i),   τ = t - t_i in segment i,
+
+    held at its last value after t_K. The velocity jumps where the table starts or ends at a non-zero speed, as
+    FEMNET's does (a smooth start: a first row at speed 0, or the run's start ramp).
+
+    Args: times: (K,) increasing times (s), K >= 2; velocities: (K, 3) the velocity at each (m/s).
+    """
+
+    times: jax.Array
+    velocities: jax.Array
+
+    def __init__(self, times, velocities):
+        if _is_concrete((times, velocities)):
+            t, v = np.asarray(times, dtype=float), np.asarray(velocities, dtype=float)
+            if t.ndim != 1 or t.size < 2:
+                raise ValueError(f"SpeedTable: times must be a 1-D array of at least 2 times (s), got shape {t.shape}")
+            _check("SpeedTable", "times", t, shape=t.shape)
+            if not (np.diff(t) > 0).all():
+                raise ValueError(f"SpeedTable: times must increase, got {t.tolist()}")
+            _check("SpeedTable", "velocities", v, shape=(t.size, 3))
+        self.times = _as_float(times)
+        self.velocities = _as_float(velocities)
+
+    def _segment(self, t):
+        """(i, τ, Δ_i): the segment of t (clamped to the table), the time into it (s) and its length (s)."""
+        t = jnp.asarray(t, dtype=float)
+        k = self.times.shape[0]
+        clamped = jnp.where(t < self.times[0], self.times[0], jnp.where(t > self.times[-1], self.times[-1], t))
+        i = jnp.clip(jnp.searchsorted(self.times, clamped, side="right") - 1, 0, k - 2)
+        return i, clamped - self.times[i], self.times[i + 1] - self.times[i]
+
+    def __call__(self, t):
+        i, tau, span = self._segment(t)
+        v = self.velocities
+        done = jnp.concatenate([jnp.zeros((1, 3)), jnp.cumsum(0.5 * (v[1:] + v[:-1]) * jnp.diff(self.times)[:, None],
+                                                              axis=0)])
+        return done[i] + v[i] * tau + (v[i + 1] - v[i]) * tau**2 / (2.0 * span)
+
+    def velocity(self, t):
+        t = jnp.asarray(t, dtype=float)
+        i, tau, span = self._segment(t)
+        inside = (t >= self.times[0]) & (t <= self.times[-1])
+        return jnp.where(inside, self.velocities[i] + (self.velocities[i + 1] - self.velocities[i]) * tau / span, 0.0)
+
+
 class Harmonic(AbstractMotion):
     """Harmonic displacement amplitude sin(2π t/period + phase) e(t) (m), amplitude (3,) in m, period in s
     (> 0), phase in rad: the heave or surge of a collar.
@@ -438,6 +489,7 @@ class Loading(eqx.Module):
 
 
 __all__ = [
-    "AbstractHistory", "AbstractMotion", "Constant", "Ramp", "Step", "Oscillation", "Towing", "Harmonic", "Sum",
+    "AbstractHistory", "AbstractMotion", "Constant", "Ramp", "Step", "Oscillation", "Towing", "SpeedTable", "Harmonic",
+    "Sum",
     "PrescribedMotion", "Loading", "envelope",
 ]

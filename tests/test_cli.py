@@ -213,3 +213,12 @@ def test_a_dynamic_run_stopped_by_ctrl_c_says_how_to_resume_and_resumes(tmp_path
 
     assert cli.main(shlex.split(hint)) == 0
     np.testing.assert_allclose(timeseries.read_series(out)["time"], [0.0, 0.05, 0.1, 0.15, 0.2], atol=1e-12)
+
+
+def test_a_dynamic_run_of_a_case_with_winches_is_refused_naming_them(capsys):
+    """FEMNET's purse seine p1 hauls its purse line by a winch (``input hauling_cable4``), which jaxnet does not
+    run in time yet: `jaxnet run p1.don --dynamic` says so, naming the command and its line, before compiling."""
+    p1 = pathlib.Path(__file__).resolve().parent / "data" / "femnet-corpus" / "12purse_seine" / "p1.don"
+    assert cli.main(["run", str(p1), "--dynamic", "--quiet", "--no-cache", "--out", "unused"]) == 2
+    err = capsys.readouterr().err
+    assert "input hauling_cable4 (line 122)" in err and "cannot be run in time by jaxnet yet" in err

@@ -348,3 +348,30 @@ def test_the_cage_in_waves_starts_from_its_static_equilibrium_without_a_shock(tm
     assert first < 0.15 * swing
     assert run.start_ramp_s == 6.0
     assert json.loads((tmp_path / "series.json").read_text())["run"] == {"start_ramp_s": 6.0}
+
+
+def test_a_pendulum_towed_by_a_speed_table_trails_at_the_drag_angle():
+    """FEMNET's towing speed table (forcing.SpeedTable): the top of a pendulum (a 10 kg body on a 1 m bar, drag
+    area 0.05 m²) towed through still water, its speed rising linearly from 0 to 1 m/s over 5 s then held,
+    settles at the angle where drag and weight balance, tan θ = ½ρ CdA V² / (m g); the top's path is the table's
+    integral, V (t - 2.5 s) after the rise."""
+    from jaxnet import forcing
+
+    m, cda, speed = 10.0, 0.05, 1.0
+    scene = spring_mass(m=m, L=1.0, ea=1e6, delta=0.0, drag_area=cda, gravity=9.81, free_axes="xyz")
+    # hanging under its top: the bar along -z
+    position = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+    import equinox as eqx
+
+    scene = eqx.tree_at(lambda s: s.nodes.position, scene, position)
+    table = forcing.SpeedTable([0.0, 5.0, 60.0], [[0.0, 0.0, 0.0], [speed, 0.0, 0.0], [speed, 0.0, 0.0]])
+    loading = dynamics.Loading(motions=(forcing.PrescribedMotion(np.array([0]), table),))
+    newton = statics.Newton(tol=1e-8, max_iter=30, damping=1e-12, stall_window=None)
+    tr = dynamics.simulate(scene, 40.0, dynamics.Implicit(time_step=0.05, newton=newton), loading, record_every=10.0,
+                           progress=False)
+    top, body = tr.positions[-1]
+    assert top[0] == pytest.approx(speed * (40.0 - 2.5), rel=1e-12)
+    drag, weight = 0.5 * 1025.0 * cda * speed**2, m * 9.81
+    angle = np.arctan2(top[0] - body[0], top[2] - body[2])
+    assert angle == pytest.approx(np.arctan(drag / weight), abs=1e-4)
+    np.testing.assert_allclose(tr.velocities[-1, 1], [speed, 0.0, 0.0], atol=1e-5)

@@ -611,3 +611,24 @@ def test_dynamic_settings_and_waves_are_read(tmp_path):
     path.write_text("\n".join(lines) + "\n")
     with pytest.raises(SceneError, match=r"waves.don:\d+: dynamic record time step 0.0 s"):
         femnet.read_don(path)
+
+
+def test_towing_speed_tables_become_prescribed_motions(tmp_path):
+    """FEMNET's ``input speed_type_node2 TYPE K`` and its table (0simple/a1b: type 1 towed at -0.6 m/s along x,
+    reached linearly from 0 s to 10 s, to 41 s) are the nodes of that type moved by a SpeedTable; a type that does
+    not hold its nodes on every axis is refused at the command's line."""
+    corpus = pathlib.Path(__file__).resolve().parent / "data" / "femnet-corpus" / "0simple"  # FEMNET's, its licence there
+    text = (corpus / "a1b.don").read_text()
+    case = femnet.read_don(corpus / "a1b.don")
+    assert "speed_type_node2" not in " ".join(case.info["dynamic_only"])
+    (motion,) = case.time.loading.motions
+    fixed = np.asarray(case.scene.nodes.fixed).all(axis=1)
+    assert len(motion.nodes) >= 1 and fixed[np.asarray(motion.nodes)].all()
+    np.testing.assert_allclose(np.asarray(motion.motion.times), [0.0, 10.0, 41.0])
+    np.testing.assert_allclose(np.asarray(motion.motion.velocity(25.0)), [-0.6, 0.0, 0.0], rtol=1e-15)
+    np.testing.assert_allclose(np.asarray(motion.motion(41.0)), [-0.6 * (41.0 - 5.0), 0.0, 0.0], rtol=1e-14)
+    line = text[: text.index("input speed_type_node2")].count("\n") + 1
+    path = tmp_path / "a1b.don"
+    path.write_text(text.replace("input speed_type_node2  1 3", "input speed_type_node2  2 3"))
+    with pytest.raises(SceneError, match=rf"a1b.don:{line}: 'input speed_type_node2': the nodes of type 2 are towed"):
+        femnet.read_don(path)

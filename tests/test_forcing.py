@@ -237,3 +237,23 @@ def test_traced_parameters_are_not_validated_but_work():
     f = jax.jit(lambda T, t: Oscillation(1.0, 2.0, T)(t))
     assert float(f(4.0, 1.0)) == pytest.approx(1.0 + 2.0 * math.sin(math.pi / 2), rel=1e-14)
     assert isinstance(Towing([1.0, 0.0, 0.0]), forcing.AbstractMotion)
+
+
+def test_speed_table_is_femnets_linear_speeds_and_their_exact_integral():
+    from jaxnet.forcing import SpeedTable
+
+    table = SpeedTable([10.0, 20.0, 40.0], [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 2.0, -1.0]])
+    t = np.array([0.0, 10.0, 15.0, 20.0, 30.0, 40.0, 55.0])
+    d, v, autodiff = (np.asarray(a) for a in motion_at(table, t))
+    # still before and after the table; linear in between
+    np.testing.assert_allclose(v, [[0, 0, 0], [0, 0, 0], [0.5, 0, 0], [1, 0, 0], [1, 1, -0.5], [1, 2, -1], [0, 0, 0]],
+                               atol=1e-15)
+    np.testing.assert_allclose(v, autodiff, atol=1e-15)
+    # the displacement: trapezoids of the linear speeds, held after the table
+    np.testing.assert_allclose(d, [[0, 0, 0], [0, 0, 0], [1.25, 0, 0], [5, 0, 0], [15, 5, -2.5], [25, 20, -10],
+                                   [25, 20, -10]], atol=1e-13)
+    np.testing.assert_allclose(integral_of_velocity(table, [0.0, 10.0, 20.0, 40.0, 55.0]), d[-1], rtol=1e-12)
+    for times, velocities, word in (([1.0], [[0.0, 0.0, 0.0]], "at least 2"), ([1.0, 1.0], np.zeros((2, 3)), "increase"),
+                                    ([0.0, 1.0], np.zeros((3, 3)), "velocities")):
+        with pytest.raises(ValueError, match=word):
+            SpeedTable(times, velocities)

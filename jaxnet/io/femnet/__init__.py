@@ -126,10 +126,11 @@ Conventions established from the files (see ``tests/test_femnet.py``):
   them first: ``info["global_nodes"]``). ``output NAME ...`` commands (prints and drawings) are read and listed in
   ``info["outputs"]``; they change nothing.
 * **Commands of the tail.** ``input wave_model N`` picks the waves' theory (1 Airy, 2 Stokes second order:
-  :class:`jaxnet.waves.Stokes2`; 3 is refused). FEMNET's dynamics-only commands (winches
-  ``hauling_cable4``/``6`` and towing speeds ``speed_type_node2`` with the time tables on their next lines)
-  are read and kept:
-  ``info["dynamic_only"]`` names them, left out of a static run; ``node_position``, which FEMNET's current
+  :class:`jaxnet.waves.Stokes2`; 3 is refused); ``input speed_type_node2`` (towing speeds, its time table on
+  the next lines) moves the nodes of its type in a dynamic run (:func:`.mapping.towing_of`). FEMNET's winches
+  (``hauling_cable4``/``6``, with their tables), which jaxnet does not run yet, are read and kept:
+  ``info["dynamic_only"]`` names them, left out of a static run, and a dynamic run of such a case is refused
+  (``jaxnet run CASE.don --dynamic``); ``node_position``, which FEMNET's current
   code has no handler for, is read and ignored (``info["ignored"]``); the table of a command commented out
   is skipped with it. A drag coefficient left out of its line (``Normal Cd:`` then the next label) is
   FEMNET's unset value, 0, said in ``info["warnings"]``.

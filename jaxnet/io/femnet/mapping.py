@@ -724,21 +724,59 @@ def result(case: DonFile, scene, net, planes, catch, femnet_laws, plan: JoinPlan
         # them (m), for the reports (which boxes rest at the surface z = 0)
         info["boxes"] = {int(i): max(case.types[t].length[2].value, 0.0) for i, t in enumerate(node_type)
                          if case.types[t].box_volume > 0 or case.types[t].has_body}
-    return Case(scene=scene, solver=solver, time=time_settings(case, solver), net=net, label=label, info=info)
+    return Case(scene=scene, solver=solver, time=time_settings(case, solver, node_type), net=net, label=label,
+                info=info)
 
 
-def time_settings(case: DonFile, solver: Newton) -> TimeSettings | None:
+TOWING = "speed_type_node2"
+
+
+def towing_of(case: DonFile, node_type) -> tuple:
+    """The prescribed motions of FEMNET's ``input speed_type_node2 TYPE K`` and its table (times, then the speeds
+    along x, y and z at them): the nodes of TYPE moved by a :class:`jaxnet.forcing.SpeedTable`, as FEMNET's
+    ``dyna`` moves them (``mvb``: the interpolated speed within the table's times, standing still outside). A
+    case without it, or read without node types, has none. FEMNET holds the towed coordinates while it moves
+    them; jaxnet holds its prescribed nodes throughout, so the type must hold them on every axis: a
+    SceneError naming the line says so otherwise."""
+    from jaxnet import forcing
+
+    if TOWING not in case.inputs or node_type is None:
+        return ()
+    line = case.inputs[TOWING]
+    values = np.asarray(line.value, dtype=float)
+    t, k = int(values[0]), int(values[1])
+    table = values[2:].reshape(4, k)
+    if t not in case.types:
+        raise SceneError(f"{case.path}:{line.line}: 'input {TOWING}': node type {t} is not described")
+    if not all(bool(f.value) for f in case.types[t].fixed):
+        raise SceneError(f"{case.path}:{line.line}: 'input {TOWING}': the nodes of type {t} are towed but not held on "
+                         "every axis (its 'Displacement X,Y,Z' 1 1 1): jaxnet moves only held nodes")
+    nodes = np.array([i for i, typ in enumerate(node_type) if typ == t], dtype=np.int64)
+    if nodes.size == 0:
+        return ()
+    try:
+        table_motion = forcing.SpeedTable(table[0], table[1:].T)
+    except ValueError as err:
+        raise SceneError(f"{case.path}:{line.line}: 'input {TOWING}': {err}") from None
+    return (forcing.PrescribedMotion(nodes, table_motion),)
+
+
+def time_settings(case: DonFile, solver: Newton, node_type=None) -> TimeSettings | None:
     """FEMNET's dynamic settings as a run in time, None for a static case (end time 0): to the end of its
     records, a record every "record time step", steps of its "time step", each step's Newton the time steps'
     own (:data:`jaxnet.solve.options.TIME_STEP`) with the case's threshold, iterations and displacement limit
     (``solver``, FEMNET's numerics: its dynamics iterates each step to the same criterion). FEMNET's
-    "beginning time of record" is kept in ``info`` only: jaxnet records from the start."""
+    "beginning time of record" is kept in ``info`` only: jaxnet records from the start. Its towing speeds
+    (:func:`towing_of`, given the scene's ``node_type``) are the loading's motions."""
     n = case.numeric
     if not n["record_end"].value > 0:
         return None
+    from jaxnet.forcing import Loading
+
     newton = dataclasses.replace(TIME_STEP, tol=solver.tol, max_iter=solver.max_iter, max_step=solver.max_step)
     return TimeSettings(end_time=n["record_end"].value, record_every=n["record_dt"].value,
-                        solver=Implicit(time_step=n["dt"].value, newton=newton))
+                        solver=Implicit(time_step=n["dt"].value, newton=newton),
+                        loading=Loading(motions=towing_of(case, node_type)))
 
 
 def _info(case: DonFile, planes, catch, plan: JoinPlan | None = None):
