@@ -313,8 +313,9 @@ class Airy(eqx.Module):
         grow, grow_rate = forcing.envelope(t, self.ramp)
         amplitude = 0.5 * self.height * self.angular_frequency
         # d/dt of e a ω [C cos θ e + S sin θ up], θ = ... - ω t
-        horizontal = amplitude * cosh_ratio * (grow * self.angular_frequency * jnp.sin(theta) + grow_rate * jnp.cos(theta))
-        vertical = amplitude * sinh_ratio * (-grow * self.angular_frequency * jnp.cos(theta) + grow_rate * jnp.sin(theta))
+        omega, cos, sin = self.angular_frequency, jnp.cos(theta), jnp.sin(theta)
+        horizontal = amplitude * cosh_ratio * (grow * omega * sin + grow_rate * cos)
+        vertical = amplitude * sinh_ratio * (-grow * omega * cos + grow_rate * sin)
         return horizontal[..., None] * self.direction + vertical[..., None] * self.up
 
 

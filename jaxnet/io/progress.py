@@ -9,8 +9,9 @@ import time as _time
 class Progress:
     """Progress bar of a dynamic run from ``t0`` to ``t_end`` (s), over tqdm; a context manager.
 
-    The bar is the simulated time over the end time, of the whole run (a run resumed at t0 starts at t0); the postfix the time steps per second of wall-clock
-    time and the mean number of Newton iterations per step, both since this bar started.
+    The bar is the simulated time over the end time, of the whole run (a run resumed at t0 starts at t0); the
+    postfix the time steps per second of wall-clock time and the mean number of Newton iterations per step,
+    both since this bar started.
     ``update(t, steps, newton_iterations)``: t the simulated time now (s); steps the number of steps taken
     so far (cumulative, as ``Record.step``); newton_iterations the Newton iterations of the steps taken
     since the previous update (of the one step just taken when called at every step). ``steps0``: the

@@ -101,9 +101,9 @@ def cage_in_waves(wave_height: float = 2.0, wave_period: float = 6.0, water_dept
     wave_height H (m, crest to trough), wave_period T (s), water_depth (m): linear (Airy) waves
     (:class:`jaxnet.waves.Airy`); current (m/s) along x; ramp: time (s) over which the waves and the collar's
     heave grow together from still water to their full height (:attr:`jaxnet.forcing.Loading.ramp`; None:
-    one wave period), so that the run starts from the static equilibrium without a shock. A :class:`~jaxnet.case.Case` whose
-    time settings run it to ``end_time`` (s) with steps of ``time_step`` (s), a record every ``record_every``
-    (s), the collar's heave its :class:`~jaxnet.forcing.Loading`.
+    one wave period), so that the run starts from the static equilibrium without a shock. A
+    :class:`~jaxnet.case.Case` whose time settings run it to ``end_time`` (s) with steps of ``time_step`` (s), a
+    record every ``record_every`` (s), the collar's heave its :class:`~jaxnet.forcing.Loading`.
     """
     options = {k: v.default for k, v in inspect.signature(fish_cage).parameters.items() if k != "current"}
     unknown = set(cage) - set(options)

@@ -72,8 +72,9 @@ from jaxnet.solve.results import Timing
 from jaxnet.terms import cable, drag, inertia, tension, term as term_lib
 
 __all__ = ["Implicit", "Loading", "TimeStep", "State", "Trajectory", "DynamicsError", "lumped_masses", "scene_at",
-           "water_acceleration", "out_of_balance", "prescribed_velocity", "check_loading", "with_start_ramp", "advance", "simulate",
-           "out_of_balance_jit", "advance_jit", "record_figures", "RUNNING", "DONE", "STEP_FAILED", "REASONS"]
+           "water_acceleration", "out_of_balance", "prescribed_velocity", "check_loading", "with_start_ramp", "advance",
+           "simulate", "out_of_balance_jit", "advance_jit", "record_figures", "RUNNING", "DONE", "STEP_FAILED",
+           "REASONS"]
 
 #: stop reasons of a dynamic run (``State.status``, ``Trajectory.status``)
 RUNNING, DONE, STEP_FAILED = 0, 1, 2

@@ -507,7 +507,8 @@ def _wave_model(values):
     if n == 3:
         return "'input wave_model 3' (Stokes third order in deep water): " + _UNSUPPORTED + " (1 Airy and 2 Stokes " \
                "second order are)"
-    return None if n in (1, 2) else f"'input wave_model': the model must be 1 (Airy) or 2 (Stokes second order), got {n!r}"
+    return None if n in (1, 2) else \
+        f"'input wave_model': the model must be 1 (Airy) or 2 (Stokes second order), got {n!r}"
 
 
 def _drag_forces_type(values):

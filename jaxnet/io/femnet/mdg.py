@@ -134,8 +134,8 @@ def read_mdg(path, don=None, femnet_laws=True):
         bad = np.flatnonzero(~(portion > 0))
         if bad.size:
             r = bar_lines[int(bad[0])]
-            raise SceneError(f"{where}:{r[-1]}: bar {int(r[0])}: its share of the cable (pro2 - pro1 = {portion[bad[0]]!r}) "
-                             "must be > 0")
+            raise SceneError(f"{where}:{r[-1]}: bar {int(r[0])}: its share of the cable (pro2 - pro1 = "
+                             f"{portion[bad[0]]!r}) must be > 0")
         ropes = [rope_of(c) for c in case.cables]
         rest = portion * np.array([case.cables[c].material["l0"].value for c in cable])
         bars = Bars(ends=ends, rest_length=rest, cable=cable, **bar_rows(ropes, cable))
