@@ -1,9 +1,13 @@
-"""Regular linear (Airy) waves in water of finite or infinite depth: the water's elevation, velocity and
-acceleration at a point and a time, for the drag (relative velocity, book 4.272-4.276) and the force of
-inertia (the water's acceleration γ_h of 4.265) in dynamics.
+"""Waves in water of finite or infinite depth: the water's elevation, velocity and acceleration at a point and a
+time, for the drag (relative velocity, book 4.272-4.276) and the force of inertia (the water's acceleration γ_h
+of 4.265) in dynamics. :class:`Airy`, regular linear waves (below); :class:`Stokes2`, regular second-order
+Stokes waves (FEMNET's ``wave_model 2``); :class:`Irregular` and :func:`sea_state`, an irregular sea as a sum of
+linear components drawn from a spectrum (:mod:`jaxnet.spectra`). Each takes a ``ramp`` over which a dynamic run
+grows it in from still water (:attr:`jaxnet.forcing.Loading.ramp`).
 
-The book gives no wave model (γ_h and the water's velocity c_i are inputs there); this is textbook
-first-order (Airy) theory. Units: m, s, rad; velocities m/s, accelerations m/s².
+The book gives no wave model (γ_h and the water's velocity c_i are inputs there); this is textbook theory.
+Units: m, s, rad; velocities m/s, accelerations m/s². What follows is :class:`Airy`'s first-order theory, on
+which the others build.
 
 Conventions. ``up`` is the unit vertical (z along it, up positive); z is measured from the mean free
 surface, z = up·x - surface_level, so z = 0 at the mean surface and z = -h at the sea bed (h the depth,
@@ -527,8 +531,8 @@ def sea_state(hs, tp, direction=(1.0, 0.0, 0.0), spectrum="jonswap", gamma=None,
     for a long-crested sea, else the exponent n of DNV's cos^n spreading about ``direction`` (2-4 for a wind
     sea): a short-crested one. ``band``: the frequencies covered, in multiples of the peak's. ``depth`` (m, inf
     for deep water), ``surface_level`` (m), ``gravity``, ``up``, ``stretching``: as :class:`Irregular`'s. The
-    record repeats after 2π/Δω = components × Tp / (band[1] - band[0]) seconds (1111 s for the defaults and
-    Tp = 25 s)."""
+    record repeats after 2π/Δω = components × Tp / (band[1] - band[0]) seconds (444 s for the defaults and
+    Tp = 10 s)."""
     amplitude, omega, phase, angle = spectra.components(hs, tp, spectrum, gamma, components, band, seed, spreading)
     up_unit = np.asarray(up, dtype=float) / np.linalg.norm(up)
     mean = np.asarray(direction, dtype=float)

@@ -45,8 +45,10 @@ interval, writes each record at once (:mod:`jaxnet.io.timeseries`: time series a
 and can resume a stopped run from its last record.
 
 Loading in time (:class:`Loading`): a current whose speed follows a history (:mod:`jaxnet.forcing`),
-regular waves (``Environment.waves``, :mod:`jaxnet.waves`), and prescribed motions of nodes (a towing
-speed, the heave of a collar): those nodes are held (fixed in the scene) at start + displacement(t).
+waves (``Environment.waves``, :mod:`jaxnet.waves`: regular, Stokes, an irregular sea), and prescribed motions
+of nodes (a towing speed or speed table, the heave of a collar): those nodes are held (fixed in the scene) at
+start + displacement(t). A run grows the waves and the motions in over its start ramp
+(:func:`with_start_ramp`: one wave period by default), so that it leaves its static start without a shock.
 
 Units: m, s, kg, N.
 """
