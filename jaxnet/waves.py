@@ -492,14 +492,15 @@ class Irregular(eqx.Module):
         x = jnp.asarray(x, dtype=float)
         theta = self._phase(x, t)
         z = x @ self.up - self.surface_level
+        grow = forcing.envelope(t, self.ramp)[0]
         if self.stretching == "wheeler":
-            eta = forcing.envelope(t, self.ramp)[0] * (jnp.cos(theta) @ self.amplitude)
+            eta = grow * (jnp.cos(theta) @ self.amplitude)
             deep = jnp.isinf(self.depth)
             h = jnp.where(deep, 1.0, self.depth)
             # above the instantaneous surface z* > 0: depth_ratios holds the surface's kinematics there
             z = jnp.where(deep, z - eta, h * (z - eta) / jnp.maximum(h + eta, 1e-9 * h))
         cosh_ratio, sinh_ratio = depth_ratios(self.wavenumber, z[..., None], self.depth)
-        scale = forcing.envelope(t, self.ramp)[0] * self.amplitude * self.angular_frequency
+        scale = grow * self.amplitude * self.angular_frequency
         horizontal = (scale * cosh_ratio * jnp.cos(theta)) @ self.direction
         vertical = jnp.sum(scale * sinh_ratio * jnp.sin(theta), axis=-1)
         return horizontal + vertical[..., None] * self.up
