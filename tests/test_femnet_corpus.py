@@ -330,3 +330,20 @@ def test_purse_seine_difference_is_what_femnet_left_unbalanced():
     total = np.array(femnet.femnet_figures(scene, eq, info["symmetry_axes"], info["fixity"])["total_force_N"])
     assert abs(total[2] - printed[2]) > 0.01 * scale  # the difference to explain: more than 1 %
     np.testing.assert_allclose(total, printed + leftover, atol=1e-3 * scale)
+
+
+def test_a_net_free_along_x_is_held_at_its_gauge_on_either_mesh():
+    """11bottom_seine/s4_libre: no node type holds the seine along x (FEMNET's added stiffness finds one of its
+    equilibria). jaxnet holds one node along x, the one nearest the net's centre, on its own mesh and on FEMNET's
+    .mdg alike, and says so; at the equilibrium of the free net that node's reaction is zero."""
+    on_don = femnet.read_don(CORPUS / "11bottom_seine" / "s4_libre.don")
+    on_mdg = femnet.read_mdg(CORPUS / "11bottom_seine" / "s4_libre.mdg", CORPUS / "11bottom_seine" / "s4_libre.don")
+    for case in (on_don, on_mdg):
+        gauge = case.info["gauge"]
+        assert gauge["axes"] == "x" and any("free to translate along it" in w for w in case.info["warnings"])
+        assert np.asarray(case.scene.nodes.fixed)[:, 0].sum() == 1 and np.asarray(case.scene.nodes.fixed)[gauge["node"], 0]
+    from jaxnet.solve.statics import solve
+
+    eq = solve(on_mdg.scene, on_mdg.solver)
+    assert eq.converged
+    assert abs(float(np.asarray(eq.reaction(on_mdg.scene))[on_mdg.info["gauge"]["node"], 0])) < 1e-3

@@ -630,7 +630,7 @@ def read_don(path, femnet_laws=True, refine=1.0):
         held |= [a in axes for a in "xyz"]
         if axes:
             net.fix(tuple(position[i]), axes)
-    gauge = _gauge(case, position, held, warnings)
+    gauge = gauge_of(case, position, held, warnings)
     if gauge is not None:
         net.fix(tuple(position[gauge[0]]), gauge[1])
     fields = node_type_fields(case, position, node_type)
@@ -690,7 +690,7 @@ def _global_nodes(plan: JoinPlan, position):
     return out
 
 
-def _gauge(case: DonFile, position, held, warnings):
+def gauge_of(case: DonFile, position, held, warnings):
     """A net that no node holds along some axis (but along another) is free to translate along it: FEMNET's solver
     finds one of its equilibria (its added diagonal stiffness holds it), which exist when the loads along that axis
     balance. jaxnet holds the node nearest the net's centre along those axes instead (the gauge: its reaction is

@@ -15,7 +15,7 @@ from jaxnet.io.femnet.grammar import twine_coordinates
 from jaxnet.io.femnet.mapping import (catch_of, check_types, environment_of, femnet_panel_catch_sides,
                                       gravity_catch_density, node_type_fields, panel_catches_of, result, rope_of,
                                       spheres_folded, symmetry_planes, symmetry_share, twine_of,
-                                      with_added_masses)
+                                      with_added_masses, gauge_of)
 from jaxnet.io.femnet.parse import parse_don
 from jaxnet.io.femnet.twines import mdg_twine_bars, numerical_twines
 from jaxnet.materials import bar_rows, netting_rows
@@ -94,6 +94,11 @@ def read_mdg(path, don=None, femnet_laws=True):
     planes = symmetry_planes(case, position, node_type)
     fixed = np.array([[case.types[t].fixed[a].value or case.types[t].symmetry[a].value for a in range(3)]
                       for t in node_type], dtype=bool)
+    # a net its node types leave free along an axis: held there at its gauge node, as on jaxnet's own mesh
+    warnings = []
+    gauge = gauge_of(case, position, fixed.any(axis=0), warnings)
+    if gauge is not None:
+        fixed[gauge[0], ["xyz".index(a) for a in gauge[1]]] = True
     share = symmetry_share(case, node_type)
     mass = share * np.array([case.types[t].mass[0] for t in node_type])
     force = share[:, None] * np.array([case.types[t].force for t in node_type], dtype=float)
@@ -160,7 +165,9 @@ def read_mdg(path, don=None, femnet_laws=True):
     scene = with_added_masses(case, femnet_panel_catch_sides(scene), node_type, share)
     validate(scene)
     out = result(case, scene, None, planes, catch_spec, femnet_laws, label=f"FEMNET case {don} on FEMNET's mesh {path}",
-                  node_type=node_type)
+                  node_type=node_type, warnings=warnings)
+    if gauge is not None:
+        out.info["gauge"] = {"node": gauge[0], "axes": gauge[1]}
     # FEMNET's global nodes are the first nodes of its .mdg, in order (its text outputs name nodes by them)
     out.info["global_nodes"] = list(range(scene.n_nodes))
     return out
