@@ -802,7 +802,7 @@ def _info(case: DonFile, planes, catch, plan: JoinPlan | None = None):
         "water_density": environment_of(case).water_density,
         "inputs": {k: v.value for k, v in case.inputs.items()},
         "outputs": list(case.outputs),
-        # FEMNET's commands that act in its dynamics only, left out of a static run (winches, towing)
+        # FEMNET's commands that act in its dynamics only, left out of a static run (the winches)
         "dynamic_only": [f"input {name} (line {line})" for name, values, line in case.commands
                          if INPUTS[name].use == "dynamic"],
         # commands FEMNET itself does nothing with
