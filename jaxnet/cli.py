@@ -3,8 +3,10 @@
 With no SCENE, solves a built-in scene (``--scene``, default ``cage``: a fish cage in a current; see
 ``jaxnet run --help`` for the list). SCENE may be a jaxnet scene file (.json, .toml) or a FEMNET case
 (.don, :mod:`jaxnet.io.femnet`); for a FEMNET case ``--mesh CASE.mdg`` solves on FEMNET's own mesh instead
-of jaxnet's, and result.json gets a "femnet" section with FEMNET's summary figures (drag on netting,
-cables and catch, total force on the fixings, catch thickness and diameter). A FEMNET case uses FEMNET's own
+of jaxnet's, and ``--start CASE.sta`` (with ``--mesh``) starts it from FEMNET's stored node positions (its
+equilibrium, or an earlier case's, as FEMNET's ``phobos`` and ``dyna`` start theirs); result.json gets a "femnet"
+section with FEMNET's summary figures (drag on netting, cables and catch, total force on the fixings, catch
+thickness and diameter). A FEMNET case uses FEMNET's own
 laws where they differ from the book's (``docs/errata.md``), so that it gives FEMNET's answers;
 ``--jaxnet-laws`` solves it with jaxnet's.
 Writes DIR/result.json (figures, see README), DIR/net.vtu (ParaView) and DIR/net.png, prints one line
@@ -14,7 +16,7 @@ per Newton iteration and a short summary. Exit status 0 on convergence, 1 on a f
 from its static equilibrium (computed first), to ``--end`` seconds with steps of ``--dt`` seconds, a record
 every ``--record`` seconds written to DIR as it goes (series.json + raw/ arrays, series.npz at the end,
 series.pvd + net_NNNNN.vtu for ParaView, checkpoint.npz; ``--resume`` continues a stopped run from its last
-record), with a progress bar. A FEMNET case takes its own time settings and numerics (its threshold, iterations
+record), with a progress bar. A FEMNET case takes its own time settings, towing tables, winches and numerics (its threshold, iterations
 and displacement limit, for the static start and for every time step); ``--tol``, ``--max-iter`` and
 ``--stiffness`` apply to both as in a static run. The built-in ``cage_waves`` (the default with ``--dynamic``) is
 the cage in regular waves, its collar heaving.
@@ -49,7 +51,10 @@ def _use_compilation_cache(directory):
 
 
 def _case(args, dynamic):
-    """The case the command names (a built-in scene, a scene file, a FEMNET case on jaxnet's or FEMNET's mesh)."""
+    """The case the command names (a built-in scene, a scene file, a FEMNET case on jaxnet's or FEMNET's mesh,
+    started from a FEMNET .sta)."""
+    import dataclasses
+
     from jaxnet.io import femnet, scene_file
     from jaxnet.scene import SceneError
     from jaxnet.scenes import BUILT_IN, DYNAMIC, DYNAMIC_DEFAULT
@@ -68,13 +73,20 @@ def _case(args, dynamic):
             raise SceneError(f"the built-in scene '{args.builtin}' is a dynamic one: run it with --dynamic")
         make, description = BUILT_IN[args.builtin]
         return make(), f"built-in scene '{args.builtin}': {description}"
+    if args.start is not None and args.mesh is None:
+        raise SceneError("--start (FEMNET's node positions, a .sta) goes with --mesh: they are numbered on its mesh")
     if str(args.scene).endswith(".don"):
         laws = not args.jaxnet_laws
         case = (femnet.read_mdg(args.mesh, args.scene, femnet_laws=laws) if args.mesh is not None
                 else femnet.read_don(args.scene, femnet_laws=laws, refine=1.0 if args.refine is None else args.refine))
+        if args.start is not None:
+            case = femnet.started_from_sta(case, args.start)
+            case = dataclasses.replace(case, label=f"{case.label}, started from {args.start}")
         return case, case.label
     case = scene_file.read(args.scene)
     return case, case.label
+
+
 
 
 def _overrides(args):
@@ -175,10 +187,6 @@ def _run_dynamic(args):
     from jaxnet.solve.statics import solve
 
     case, label = _case(args, dynamic=True)
-    left_out = case.info.get("dynamic_only", [])
-    if left_out:
-        raise SceneError(f"{args.scene}: FEMNET's {', '.join(left_out)} cannot be run in time by jaxnet yet (winches): "
-                         "a run without them would not be this case's")
     overrides = _overrides(args)
     settings, implicit = time_stepping(case, args)
     end_time = args.end if args.end is not None else settings.end_time
@@ -194,6 +202,11 @@ def _run_dynamic(args):
     scene, loading, ramp = dynamics.with_start_ramp(scene, settings.loading)
     if ramp > 0:
         print(f"  the waves and the prescribed motions grow in over the first {ramp:g} s")
+    for k, winch in enumerate(loading.winches):
+        times = np.asarray(winch.table.times)
+        total = float(winch.hauled(times[-1]))
+        print(f"  winch {k}: {'hauls in' if total >= 0 else 'pays out'} {abs(total):g} m of {len(winch.bars)} bars "
+              f"between {times[0]:g} and {times[-1]:g} s (drum at bar {winch.drum_bar})")
     x0 = None
     if not args.resume:
         eq = solve(dynamics.scene_at(scene, loading, 0.0), case.solver, verbose=False, throw=False, **overrides)
@@ -226,6 +239,8 @@ def argument_parser() -> argparse.ArgumentParser:
                          description=f"Built-in scenes ({DEFAULT} by default): {listing}.")
     run.add_argument("scene", nargs="?", help="scene file (.json or .toml) or FEMNET case (.don)")
     run.add_argument("--mesh", help="with a FEMNET case: solve on FEMNET's mesh (CASE.mdg) instead of jaxnet's")
+    run.add_argument("--start", help="with --mesh: start from FEMNET's node positions in this .sta, held nodes too "
+                     "(its equilibrium on that mesh, where its dyna starts; or an earlier case's, as its phobos does)")
     run.add_argument("--refine", type=float, help="with a FEMNET case: mesh it this many times finer than its file "
                                                   "says (nodes grow about as its square; for mesh convergence)")
     run.add_argument("--scene", dest="builtin", choices=sorted(set(BUILT_IN) | set(DYNAMIC)), default=DEFAULT,

@@ -14,7 +14,8 @@ form (the tests check both agree):
   :class:`Harmonic`;
 * :class:`Sum` (also ``a + b``) adds histories, or motions;
 * :class:`PrescribedMotion` pairs node indices with a motion: the dynamics holds those nodes at
-  start + m(t).
+  start + m(t);
+* :class:`Winch` hauls in or pays out a cable by a speed table: the rest lengths of its bars at t.
 
 Smoothness, and why it matters. The implicit step takes the water's acceleration from the derivative of
 the current's speed, and a prescribed node's velocity from the derivative of its displacement; a kink in a
@@ -463,6 +464,84 @@ class PrescribedMotion(eqx.Module):
         return self.motion.velocity(t)
 
 
+class Winch(eqx.Module):
+    """A winch hauling in or paying out a cable by a speed table: FEMNET's ``input hauling_cable4``.
+
+    The cable keeps its bars and nodes (none is added or removed, as in FEMNET): the winch changes the bars'
+    rest lengths. The length hauled in by time t is
+
+        H(t) = ∫ s(τ) dτ    (m),
+
+    the speed s (m/s; > 0 hauls in, < 0 pays out) linear between the table's times and 0 outside them,
+    integrated exactly (:class:`SpeedTable`). Hauling in shortens the bars in the order of ``bars``, each down
+    to ``shortest`` before the next starts; paying out lengthens them in that order, each up to ``longest``:
+
+        l_k(t) = l_k(0) - clip(H - Σ_{j<k} c_j, 0, c_k),    c_k = max(l_k(0) - shortest, 0)    (H >= 0)
+        l_k(t) = l_k(0) + clip(-H - Σ_{j<k} c_j, 0, c_k),   c_k = max(longest - l_k(0), 0)     (H < 0)
+
+    the lengths FEMNET's ``dyna`` reaches step by step (``hauling_cable``: the first bar of its list above
+    the shortest length is shortened, the rest of the step's length passing to the next). The sum of the
+    rest lengths changes by exactly H until every bar is at its limit; the winch then stops. The lengths are
+    continuous and piecewise quadratic in t (the bars' tensions change smoothly; their rates jump where a
+    bar reaches its limit and the next one starts).
+
+    bars: (K,) indices into ``scene.bars``, in the order the winch takes them. drum_bar: the bar at the
+    drum, whose tension is the winch's pull (the records' ``winch_tension_N``). times: (M,) increasing
+    times (s), M >= 2; speeds: (M,) the hauling speed at them (m/s), all >= 0 (hauling) or all <= 0
+    (paying out): a table of both signs is refused (FEMNET then changes the bar it starts from).
+    shortest, longest: the bars' limits (m), 0 < shortest < longest.
+    """
+
+    bars: np.ndarray = eqx.field(converter=_as_nodes)
+    drum_bar: int = eqx.field(static=True)
+    table: SpeedTable
+    shortest: jax.Array
+    longest: jax.Array
+
+    def __init__(self, bars, drum_bar, times, speeds, shortest, longest):
+        if _is_concrete((times, speeds, shortest, longest)):
+            v = np.asarray(speeds, dtype=float)
+            if v.ndim != 1:
+                raise ValueError(f"Winch: speeds must be a 1-D array (m/s), got shape {v.shape}")
+            if (v > 0).any() and (v < 0).any():
+                raise ValueError(f"Winch: the speeds must all haul in (>= 0) or all pay out (<= 0), got {v.tolist()}")
+            _check("Winch", "shortest", shortest, lower=0.0)
+            _check("Winch", "longest", longest, lower=float(shortest))
+        bars = _as_nodes(bars)
+        if _is_concrete(bars):
+            array = np.asarray(bars)
+            if array.ndim != 1 or array.size == 0 or array.dtype.kind not in "iu" or (array < 0).any():
+                raise ValueError(f"Winch: bars must be a non-empty 1-D array of bar indices >= 0, got {array!r}")
+            if int(drum_bar) not in array.tolist():
+                raise ValueError(f"Winch: drum_bar {drum_bar} is not one of its bars")
+        self.bars = bars
+        self.drum_bar = int(drum_bar)
+        speeds = _as_float(speeds)
+        self.table = SpeedTable(times, jnp.stack([speeds, jnp.zeros_like(speeds), jnp.zeros_like(speeds)], axis=-1))
+        self.shortest = _as_float(shortest)
+        self.longest = _as_float(longest)
+
+    def hauled(self, t):
+        """H(t): the length (m) hauled in by time t (s), negative when paid out."""
+        return self.table(t)[0]
+
+    def speed(self, t):
+        """The hauling speed (m/s) at time t (s)."""
+        return self.table.velocity(t)[0]
+
+    def rest_lengths(self, rest_length, t):
+        """(B,) every bar's rest length (m) at time t: ``rest_length`` (the scene's, at the start) with the
+        winch's bars shortened or lengthened by H(t), in their order."""
+        rest_length = jnp.asarray(rest_length, dtype=float)
+        start = rest_length[self.bars]
+        h = self.hauled(t)
+        hauling = h >= 0.0
+        capacity = jnp.where(hauling, jnp.maximum(start - self.shortest, 0.0), jnp.maximum(self.longest - start, 0.0))
+        before = jnp.cumsum(capacity) - capacity
+        moved = jnp.clip(jnp.abs(h) - before, 0.0, capacity)
+        return rest_length.at[self.bars].set(jnp.where(hauling, start - moved, start + moved))
+
+
 class Loading(eqx.Module):
     """What changes with time besides the net (pytree: its numbers can be traced and differentiated): what a
     run in time (:func:`jaxnet.solve.dynamics.simulate`) is given with its scene.
@@ -471,6 +550,8 @@ class Loading(eqx.Module):
       environment's current (its direction and depth profile kept); None: the environment's constant speed.
     motions: prescribed motions (:class:`PrescribedMotion`): each moves its nodes, which must be fixed in the
       scene, to their start positions plus its displacement at t.
+    winches: :class:`Winch` es: each sets its cable's bars' rest lengths at t from the scene's. Not ramped (a
+      winch starts at its table's first time, with its speed there).
     ramp: the time (s) over which a run grows in what its static start leaves out, so that it starts without
       a shock: the waves (their ``ramp``: elevation and velocity times :func:`envelope`) and the
       :class:`Towing` and :class:`Harmonic` motions that have no ramp of their own (theirs set to it: a towing
@@ -486,10 +567,11 @@ class Loading(eqx.Module):
     current_speed: Callable | None = None
     motions: tuple = ()
     ramp: float | None = None
+    winches: tuple = ()
 
 
 __all__ = [
     "AbstractHistory", "AbstractMotion", "Constant", "Ramp", "Step", "Oscillation", "Towing", "SpeedTable", "Harmonic",
     "Sum",
-    "PrescribedMotion", "Loading", "envelope",
+    "PrescribedMotion", "Winch", "Loading", "envelope",
 ]

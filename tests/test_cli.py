@@ -215,10 +215,48 @@ def test_a_dynamic_run_stopped_by_ctrl_c_says_how_to_resume_and_resumes(tmp_path
     np.testing.assert_allclose(timeseries.read_series(out)["time"], [0.0, 0.05, 0.1, 0.15, 0.2], atol=1e-12)
 
 
-def test_a_dynamic_run_of_a_case_with_winches_is_refused_naming_them(capsys):
-    """FEMNET's purse seine p1 hauls its purse line by a winch (``input hauling_cable4``), which jaxnet does not
-    run in time yet: `jaxnet run p1.don --dynamic` says so, naming the command and its line, before compiling."""
+def test_a_dynamic_run_of_a_case_with_a_winch_pays_out_its_cable(tmp_path, capsys):
+    """FEMNET's purse seine p1 pays out its purse line by a winch (``input hauling_cable4 1 ... -15.4 -15.4``):
+    `jaxnet run p1.don --dynamic` says what the winch does and records the length paid out, the table's
+    integral."""
+    from jaxnet.io import timeseries
+
     p1 = pathlib.Path(__file__).resolve().parent / "data" / "femnet-corpus" / "12purse_seine" / "p1.don"
-    assert cli.main(["run", str(p1), "--dynamic", "--quiet", "--no-cache", "--out", "unused"]) == 2
-    err = capsys.readouterr().err
-    assert "input hauling_cable4 (line 122)" in err and "cannot be run in time by jaxnet yet" in err
+    out = tmp_path / "p1"
+    assert cli.main(["run", str(p1), "--dynamic", "--end", "0.3", "--quiet", "--no-cache", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "winch 0: pays out 2002 m of 100 bars between 0 and 130 s (drum at bar 0)" in printed
+    series = timeseries.read_series(out)
+    np.testing.assert_allclose(series["time"], [0.0, 0.1, 0.2, 0.3], atol=1e-12)
+    np.testing.assert_allclose(series["winch_hauled_m"][:, 0], -15.4 * series["time"], rtol=1e-12, atol=1e-12)
+    assert np.all(np.isfinite(series["winch_tension_N"]))
+
+
+def test_a_run_starts_from_femnets_stored_equilibrium(tmp_path, capsys):
+    """``--start CASE.sta`` on FEMNET's mesh: the seine s4_libre, which no load holds any more (many equilibria
+    on the sea bed, held along x at jaxnet's gauge node only), starts where FEMNET's .sta has it, laid out over
+    2 km, where its drawn shape would fold it up; its winch then hauls cable 14 in. Without --mesh, and with a .sta too short for the mesh, --start is
+    refused naming the file and line."""
+    from jaxnet.io import femnet, timeseries
+
+    folder = pathlib.Path(__file__).resolve().parent / "data" / "femnet-corpus" / "11bottom_seine"
+    don, mdg, sta = (folder / f"s4_libre.{ext}" for ext in ("don", "mdg", "sta"))
+    out = tmp_path / "s4"
+    args = ["run", str(don), "--mesh", str(mdg), "--start", str(sta), "--dynamic", "--end", "20", "--record", "10",
+            "--quiet", "--no-cache", "--out", str(out)]
+    assert cli.main(args) == 0
+    series = timeseries.read_series(out)
+    stored = femnet.sta_positions(sta, series["position"].shape[1])
+    assert np.ptp(stored[:, 0]) > 2000.0
+    # jaxnet's equilibrium from FEMNET's: the seine stays laid out where FEMNET has it, to 1 % of its 2 km (its
+    # drawn shape lies 2.2 km away)
+    assert np.abs(series["position"][0] - stored).max() < 0.01 * np.ptp(stored[:, 0])
+    np.testing.assert_allclose(series["winch_hauled_m"][:, 0], [0.0, 0.0, 10.0], atol=1e-12)
+    capsys.readouterr()
+    assert cli.main(["run", str(don), "--start", str(sta), "--quiet", "--no-cache", "--out", str(out)]) == 2
+    assert "--start (FEMNET's node positions, a .sta) goes with --mesh" in capsys.readouterr().err
+    short = tmp_path / "short.sta"
+    short.write_text("\n".join(sta.read_text().splitlines()[:40]))
+    assert cli.main(["run", str(don), "--mesh", str(mdg), "--start", str(short), "--quiet", "--no-cache",
+                     "--out", str(out)]) == 2
+    assert f"{short}:41: expected node 41's number and x y z" in capsys.readouterr().err

@@ -210,6 +210,57 @@ def test_dynamic_only_commands_and_their_tables(tmp_path):
         femnet.parse_don(bad)
 
 
+def test_winches_take_femnets_bars_in_femnets_order(tmp_path):
+    """``input hauling_cable4`` as FEMNET's ``dyna`` applies it: s4_fixe hauls cable 14 (60 bars of 50 m) in at
+    1 m/s from its extremity 2, so its winch takes the bars from the node at the .don's extremity 2 down the
+    chain; p1 pays its cable 1 out from extremity 1, so FEMNET lengthens the bars from the other end first, the
+    drum's bar staying the one at extremity 1. A table whose extremity changes, or whose speeds change sign, is
+    refused naming its line; u1's ``hauling_cable6`` is read as ``hauling_cable4`` with a warning."""
+    case = femnet.read_don(_don("11bottom_seine/s4_fixe"))
+    (winch,) = case.time.loading.winches
+    parsed = femnet.parse_don(_don("11bottom_seine/s4_fixe"))
+    scene = case.scene
+    ends, position = np.asarray(scene.bars.ends), np.asarray(scene.nodes.position)
+    bars = np.asarray(winch.bars)
+    assert bars.size == 60 and set(np.asarray(scene.bars.cable)[bars].tolist()) == {13}
+    np.testing.assert_allclose(np.asarray(scene.bars.rest_length)[bars], 50.0)
+    assert winch.drum_bar == bars[0]
+    tip = min(ends[bars[0]], key=lambda n: np.linalg.norm(position[n] - parsed.cables[13].ends[1]))
+    np.testing.assert_allclose(position[tip], parsed.cables[13].ends[1], atol=1e-9)
+    for a, b in zip(bars[:-1], bars[1:]):  # each next bar shares a node with the one before
+        assert set(ends[a].tolist()) & set(ends[b].tolist())
+    assert float(winch.hauled(3010.0)) == pytest.approx(3000.0, rel=1e-14)
+    assert float(winch.shortest) == 0.01 and float(winch.longest) == 50.0
+
+    p1 = femnet.read_don(_don("12purse_seine/p1"))
+    (out,) = p1.time.loading.winches
+    order = np.asarray(out.bars)
+    ends, position = np.asarray(p1.scene.bars.ends), np.asarray(p1.scene.nodes.position)
+    drum_end = femnet.parse_don(_don("12purse_seine/p1")).cables[0].ends[0]
+    assert out.drum_bar == order[-1]
+    assert min(np.linalg.norm(position[ends[order[-1]]] - drum_end, axis=1)) < 1e-9
+    assert min(np.linalg.norm(position[ends[order[0]]] - drum_end, axis=1)) > 0.09
+    assert float(out.hauled(130.0)) == pytest.approx(-15.4 * 130.0, rel=1e-14)
+
+    text = _don("11bottom_seine/s4_fixe").read_text()
+    for old, new, message in (("10 \t3010  \n1.0 \t1.0 \n2 \t2", "10 \t1000 \t3010\n1.0 \t1.0 \t1.0\n2 \t1 \t1",
+                               "the extremity hauled from must be 1 or 2, the same in every row"),
+                              ("1.0 \t1.0 \n2 \t2", "1.0 \t-1.0 \n2 \t2", "the speeds must all haul in")):
+        assert old in text
+        edited = text.replace(old, new, 1)
+        if "3010\n" in new:
+            edited = edited.replace("input hauling_cable4   14 0.010 50.0 2 ", "input hauling_cable4   14 0.010 50.0 3 ", 1)
+        bad = tmp_path / "s4_fixe.don"
+        bad.write_text(edited)
+        with pytest.raises(SceneError, match=r"s4_fixe\.don:722: 'input hauling_cable4': " + message):
+            femnet.read_don(bad)
+
+    u1 = femnet.read_don(_don("12purse_seine/u1"))
+    assert len(u1.time.loading.winches) == 4
+    assert any("'input hauling_cable6': not in FEMNET's manual; read as 'input hauling_cable4'" in w
+               for w in u1.info["warnings"])
+
+
 def test_linked_points_with_different_types_keep_the_first():
     """q1 links cable ends of types 3 and 2: FEMNET warns and keeps one; jaxnet keeps the first and says so."""
     case = femnet.read_don(_don("3bottom_trawl/q1"))

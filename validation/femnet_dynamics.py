@@ -4,7 +4,9 @@
                                          [--resume] [--table FILE]
 
 Every corpus case with time settings (an end time > 0) and a stored ``.dyn``. Each is read on FEMNET's own mesh
-(``.mdg``: the nodes in the ``.dyn``'s order), solved statically (the start), then run in time by
+(``.mdg``: the nodes in the ``.dyn``'s order), solved statically from FEMNET's stored equilibrium (``.sta``, where
+FEMNET's ``dyna`` starts; the drawn shape without one; how far jaxnet's equilibrium lies from it is recorded),
+then run in time by
 :func:`jaxnet.solve.dynamics.simulate` with the case's time step, to its end time, records every record step
 of the case (the default start ramp: one wave period). FEMNET's ``.dyn`` holds, per line, the time and x y z
 of every node from its "beginning time of record". jaxnet's records are interpolated linearly in time to the
@@ -18,7 +20,7 @@ periods of seconds the interpolation is good to millimetres), then per case:
 * jaxnet's wall time per step (the first record interval, which compiles, apart) and its steps. FEMNET's own
   dynamic wall time is not in the corpus's answers (``ANSWERS.md`` times its statics), so no ratio is printed.
 
-A case that cannot run says why (a FEMNET command jaxnet does not run in time yet: winches, towing speeds). Each
+A case that cannot run says why (the reader's error: a FEMNET command jaxnet does not run in time). Each
 case runs in its own process, its record written as it ends (``--resume`` skips the cases in ``--out``). A
 benchmark, not a test.
 """
@@ -67,9 +69,13 @@ def one(name):
 
     don, mdg = CORPUS / f"{name}.don", CORPUS / f"{name}.mdg"
     case = femnet.read_mdg(mdg, don)
-    left_out = case.info.get("dynamic_only", [])
-    if left_out:
-        return {"case": name, "ran": False, "reason": "not run in time by jaxnet yet: " + ", ".join(left_out)}
+    # FEMNET's dyna starts from the case's .sta; jaxnet's static solve starts there too (from the drawn shape
+    # without one): where the statics has many equilibria (a seine with no load left, s4), this is the one
+    sta = CORPUS / f"{name}.sta"
+    start = None
+    if sta.exists():
+        case = femnet.started_from_sta(case, sta)
+        start = np.asarray(case.scene.nodes.position)
     settings = case.time
     if settings is None or settings.end_time is None:
         return {"case": name, "ran": False, "reason": "no end time"}
@@ -91,9 +97,11 @@ def one(name):
     steps = int(run.steps)
     per_step = (wall - run.timing.compile_s) / max(steps - int(round(settings.record_every / settings.solver.time_step)), 1)
     return {"case": name, "ran": True, "status": run.reason, "reached_s": float(run.times[-1]),
-            "end_s": float(settings.end_time), "nodes": scene.n_nodes, "waves": type(scene.environment.waves).__name__
+            "end_s": float(settings.end_time), "nodes": scene.n_nodes, "winches": len(loading.winches), "waves": type(scene.environment.waves).__name__
             if scene.environment.waves is not None else "none", "start_ramp_s": ramp,
-            "static_converged": bool(eq.converged), "records_compared": int(len(femnet_t)),
+            "static_converged": bool(eq.converged), "start": "FEMNET's .sta" if start is not None else "the drawn shape",
+            "start_from_sta_m": float(np.linalg.norm(np.asarray(eq.x) - start, axis=1).max()) if start is not None
+            else None, "records_compared": int(len(femnet_t)),
             "window_s": [float(femnet_t[0]), float(femnet_t[-1])] if len(femnet_t) else None,
             "largest_difference_m": float(diff.max()) if diff.size else float("nan"),
             "rms_difference_m": float(np.sqrt(np.mean(diff**2))) if diff.size else float("nan"),
@@ -103,13 +111,15 @@ def one(name):
 
 
 def table(records):
-    lines = ["| case | nodes | waves | ran | records | largest difference m | RMS m | largest motion m | "
-             "mean shape offset m | steps | Newton/step | s/step | wall s |", "|" + "---|" * 13]
+    lines = ["| case | nodes | waves | winches | start off .sta m | ran | records | largest difference m | RMS m | "
+             "largest motion m | mean shape offset m | steps | Newton/step | s/step | wall s |", "|" + "---|" * 15]
     for r in records:
         if not r["ran"]:
-            lines.append(f"| {r['case']} | | | no: {r['reason']} | | | | | | | | | |")
+            lines.append(f"| {r['case']} | | | | | no: {r['reason']} | | | | | | | | | |")
             continue
-        lines.append(f"| {r['case']} | {r['nodes']} | {r['waves']} | {r['status']} to {r['reached_s']:g} s | "
+        off = r.get("start_from_sta_m")
+        lines.append(f"| {r['case']} | {r['nodes']} | {r['waves']} | {r.get('winches', 0)} | "
+                     f"{'' if off is None else f'{off:.3g}'} | {r['status']} to {r['reached_s']:g} s | "
                      f"{r['records_compared']} | {r['largest_difference_m']:.3g} | {r['rms_difference_m']:.3g} | "
                      f"{r['largest_motion_m']:.3g} | {r['mean_shape_offset_m']:.3g} | {r['steps']} | "
                      f"{r['newton_per_step']:.2f} | {r['s_per_step']:.2e} | {r['wall_s']:.1f} |")

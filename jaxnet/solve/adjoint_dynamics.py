@@ -181,6 +181,9 @@ def _check(scene, structure, loading, time_step, n_steps, segment, x0, v0, start
     for name, value in (("x0", x0), ("v0", v0)):
         if value is not None and tuple(np.shape(value)) != shape:
             raise ValueError(f"{name} must have the shape of the scene's positions {shape}, got {np.shape(value)}")
+    if loading.winches:
+        raise ValueError("winches (Loading.winches) are not differentiated here: its masses are the start's, where a "
+                         "winch's cable changes length; run them with dynamics.simulate")
     if _is_concrete((scene.nodes.fixed, [motion.nodes for motion in loading.motions])):
         dynamics.check_loading(scene, loading)
     if _is_concrete(scene):

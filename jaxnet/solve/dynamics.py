@@ -47,7 +47,8 @@ and can resume a stopped run from its last record.
 Loading in time (:class:`Loading`): a current whose speed follows a history (:mod:`jaxnet.forcing`),
 waves (``Environment.waves``, :mod:`jaxnet.waves`: regular, Stokes, an irregular sea), and prescribed motions
 of nodes (a towing speed or speed table, the heave of a collar): those nodes are held (fixed in the scene) at
-start + displacement(t). A run grows the waves and the motions in over its start ramp
+start + displacement(t); winches (:class:`jaxnet.forcing.Winch`) set their cables' rest lengths at t, the
+lumped masses following them at every step. A run grows the waves and the motions in over its start ramp
 (:func:`with_start_ramp`: one wave period by default), so that it leaves its static start without a shock.
 
 Units: m, s, kg, N.
@@ -194,7 +195,8 @@ def with_start_ramp(scene, loading: Loading):
 
 
 def scene_at(scene, loading: Loading, t):
-    """The scene at time t: the environment's time and current speed, the prescribed nodes moved."""
+    """The scene at time t: the environment's time and current speed, the prescribed nodes moved, the winches'
+    bars at their rest lengths."""
     env = scene.environment
     speed = env.current_speed if loading.current_speed is None else loading.current_speed(t)
     env = eqx.tree_at(lambda e: (e.time, e.current_speed), env, (t, speed))
@@ -202,7 +204,13 @@ def scene_at(scene, loading: Loading, t):
     for prescribed in loading.motions:
         nodes = jnp.asarray(prescribed.nodes)
         position = position.at[nodes].set(jnp.asarray(scene.nodes.position)[nodes] + prescribed.displacement(t))
-    return eqx.tree_at(lambda s: (s.environment, s.nodes.position), scene, (env, position))
+    out = eqx.tree_at(lambda s: (s.environment, s.nodes.position), scene, (env, position))
+    if loading.winches:
+        rest = jnp.asarray(scene.bars.rest_length, dtype=float)
+        for winch in loading.winches:
+            rest = winch.rest_lengths(rest, t)
+        out = eqx.tree_at(lambda s: s.bars.rest_length, out, rest)
+    return out
 
 
 def water_acceleration(points, scene_t, loading: Loading, waves: bool):
@@ -277,8 +285,10 @@ def advance(state: State, t_end, scene, pattern, masses, loading: Loading, time_
         h = jnp.where(land, remaining, s.next_step)
         t_new = jnp.where(land, end, s.t + h)
         scene_t = scene_at(scene, loading, t_new)
-        load = water_mass * water_acceleration(s.x, scene_t, loading, waves) if moving_water else jnp.zeros_like(s.x)
-        step = TimeStep(s.x, s.v, h, mass, load)
+        # a winch moves cable into or out of the water: the masses follow the bars' rest lengths at t + Δt
+        m, m_water = lumped_masses(scene_t, jnp) if loading.winches else (mass, water_mass)
+        load = m_water * water_acceleration(s.x, scene_t, loading, waves) if moving_water else jnp.zeros_like(s.x)
+        step = TimeStep(s.x, s.v, h, m, load)
         # Newton starts from the constant-velocity prediction: carrying the last step's backward-difference
         # acceleration over as well takes more Newton iterations per step on the cage in waves
         x_guess = (s.x + h * s.v).ravel()[free]
@@ -338,8 +348,13 @@ def _totals(state: State, scene, loading, model):
                                                     net.ea_compression)
         out["max_twine_tension_N"] = jnp.maximum(jnp.max(tu), jnp.max(tv))
     if bars is not None:
-        out["max_bar_tension_N"] = jnp.max(jax.vmap(cable.bar_tension)(state.x[bars.ends], bars.rest_length,
-                                                                       bars.ea_traction, bars.ea_compression))
+        bars = scene_t.bars
+        bar_tension = jax.vmap(cable.bar_tension)(state.x[bars.ends], bars.rest_length, bars.ea_traction,
+                                                  bars.ea_compression)
+        out["max_bar_tension_N"] = jnp.max(bar_tension)
+        if loading.winches:
+            out["winch_tension_N"] = jnp.stack([bar_tension[w.drum_bar] for w in loading.winches])
+            out["winch_hauled_m"] = jnp.stack([w.hauled(state.t) for w in loading.winches])
     return out
 
 
@@ -412,6 +427,16 @@ def check_loading(scene, loading: Loading):
         if loose.size:
             raise scene_lib.SceneError(f"prescribed motion {k}: node {int(loose[0])} is not fixed on every axis; "
                                        "a prescribed node must be held (fixed) in the scene")
+    n_bars = 0 if scene.bars is None else len(np.asarray(scene.bars.rest_length))
+    taken = {}
+    for k, winch in enumerate(loading.winches):
+        bars = np.asarray(winch.bars)
+        if bars.max() >= n_bars:
+            raise scene_lib.SceneError(f"winch {k}: bar index {int(bars.max())} outside the scene's {n_bars} bars")
+        for b in bars.tolist():
+            if b in taken:
+                raise scene_lib.SceneError(f"winches {taken[b]} and {k} both take bar {b}: a bar has one winch")
+            taken[b] = k
 
 
 def simulate(scene, end_time=None, solver: Implicit | None = None, loading: Loading | None = None, record_every=None,

@@ -362,6 +362,9 @@ def reference(scene, end_time, loading=None, saveat=None, rtol=1e-6, atol=1e-9, 
     checks.validate(scene)
     scene, loading, _ = dynamics.with_start_ramp(scene, loading)  # the run's start, as simulate's
     dynamics.check_loading(scene, loading)
+    if loading.winches:
+        raise ValueError("reference: winches (Loading.winches) are not integrated here: its masses are the start's, "
+                         "where a winch's cable changes length; run them with dynamics.simulate")
     if not (np.isfinite(end_time) and end_time > 0):
         raise ValueError(f"reference: end_time must be finite and > 0, got {end_time!r}")
     if solver not in IMPLICIT and solver not in EXPLICIT:

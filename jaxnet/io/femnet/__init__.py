@@ -128,9 +128,9 @@ Conventions established from the files (see ``tests/test_femnet.py``):
 * **Commands of the tail.** ``input wave_model N`` picks the waves' theory (1 Airy, 2 Stokes second order:
   :class:`jaxnet.waves.Stokes2`; 3 is refused); ``input speed_type_node2`` (towing speeds, its time table on
   the next lines) moves the nodes of its type in a dynamic run (:func:`.mapping.towing_of`). FEMNET's winches
-  (``hauling_cable4``/``6``, with their tables), which jaxnet does not run yet, are read and kept:
-  ``info["dynamic_only"]`` names them, left out of a static run, and a dynamic run of such a case is refused
-  (``jaxnet run CASE.don --dynamic``); ``node_position``, which FEMNET's current
+  (``hauling_cable4``/``6``, with their tables) change their cables' rest lengths in a dynamic run
+  (:func:`.mapping.winches_of`, :class:`jaxnet.forcing.Winch`); ``info["dynamic_only"]`` names them, left out
+  of a static run; ``node_position``, which FEMNET's current
   code has no handler for, is read and ignored (``info["ignored"]``); the table of a command commented out
   is skipped with it. A drag coefficient left out of its line (``Normal Cd:`` then the next label) is
   FEMNET's unset value, 0, said in ``info["warnings"]``.
@@ -194,10 +194,11 @@ from jaxnet.io.femnet.mapping import GRAVITY, WATER_DENSITY, read_don
 from jaxnet.io.femnet.mdg import read_mdg
 from jaxnet.io.femnet.parse import parse_don
 from jaxnet.io.femnet.reader import MAX_COORDINATE, MAX_MESHES, Value
-from jaxnet.io.femnet.results import (femnet_figures, printed_figure, read_sta, read_sta_summary,
+from jaxnet.io.femnet.results import (femnet_figures, printed_figure, read_sta, read_sta_summary, sta_positions,
+                                      started_from_sta,
                                       text_output_figures)
 
 __all__ = ["GRAVITY", "MAX_BARS", "MAX_COORDINATE", "MAX_MESHES", "MAX_PANEL_NODES", "MERGE_TOLERANCE", "WATER_DENSITY",
            "DonFile", "Value", "femnet_figures", "parse_don", "printed_figure", "read_don", "read_mdg", "read_sta",
-           "read_sta_summary", "text_output_figures",
+           "read_sta_summary", "sta_positions", "started_from_sta", "text_output_figures",
            "twine_coordinates"]

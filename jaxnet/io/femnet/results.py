@@ -48,11 +48,44 @@ def femnet_figures(scene, eq, symmetry_axes=(), fixity=None):
     return out
 
 
+def sta_positions(path, n_nodes):
+    """(N, 3) the node positions (m) of FEMNET's ``.sta`` (its first N lines: number, x, y, z): its equilibrium
+    on its own mesh (``.mdg``), the start of its dynamics (``dyna``)."""
+    from jaxnet.scene import SceneError
+
+    lines = pathlib.Path(path).read_text().split("\n")
+    out = np.zeros((n_nodes, 3))
+    for i in range(n_nodes):
+        words = lines[i].split() if i < len(lines) else []
+        try:
+            out[i] = [float(w) for w in words[1:4]]
+        except ValueError:
+            out[i] = np.nan
+        if len(words) < 4 or not np.isfinite(out[i]).all():
+            raise SceneError(f"{path}:{i + 1}: expected node {i + 1}'s number and x y z (the mesh has {n_nodes} "
+                             f"nodes), got {lines[i].strip()[:80] if i < len(lines) else 'the end of the file'!r}")
+    return out
+
+
+def started_from_sta(case, path):
+    """``case`` (read on FEMNET's mesh, ``read_mdg``) with every node at its position in FEMNET's ``.sta`` at
+    ``path``, the held nodes too: the shape FEMNET's ``dyna`` starts from (the case's own .sta), or the one its
+    ``phobos`` starts a case from (an earlier case's). A net held only at jaxnet's gauge (:func:`.mapping.gauge_of`)
+    is then held where FEMNET's equilibrium has it. SceneError naming the file and line for a .sta too short for
+    the mesh."""
+    import dataclasses
+
+    import equinox as eqx
+
+    position = sta_positions(path, case.scene.n_nodes)
+    return dataclasses.replace(case, scene=eqx.tree_at(lambda s: s.nodes.position, case.scene, position))
+
+
 def read_sta(path, n_nodes, n_bars, n_triangles):
     """FEMNET's ``.sta``: (positions (N, 3) m, bar strains (B,), twine vectors (E, 2, 3) m as written (v then u),
     summary dict of the labelled lines)."""
     lines = pathlib.Path(path).read_text().split("\n")
-    pos = np.array([[float(w) for w in lines[i].split()[1:4]] for i in range(n_nodes)])
+    pos = sta_positions(path, n_nodes)
     strain = np.array([float(lines[n_nodes + i]) for i in range(n_bars)])
     rest = [ln for ln in lines[n_nodes + n_bars:] if ln.strip()]
     vec = np.array([[float(w) for w in rest[i].split()] for i in range(n_triangles)]).reshape(-1, 2, 3)
