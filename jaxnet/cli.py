@@ -109,6 +109,8 @@ def time_stepping(case, args):
     implicit = settings.solver
     if args.dt is not None:
         implicit = dataclasses.replace(implicit, time_step=args.dt, min_time_step=min(implicit.min_time_step, args.dt))
+    if args.loop is not None:
+        implicit = dataclasses.replace(implicit, loop=args.loop)
     implicit = dataclasses.replace(implicit, newton=dataclasses.replace(implicit.newton, **_overrides(args)))
     return settings, implicit
 
@@ -261,6 +263,10 @@ def argument_parser() -> argparse.ArgumentParser:
     run.add_argument("--end", type=float, help="with --dynamic: end time (s)")
     run.add_argument("--dt", type=float,
                      help=f"with --dynamic: time step (s), default {Implicit.time_step:g} or the case's")
+    run.add_argument("--loop", choices=("host", "compiled"),
+                     help="with --dynamic: who drives the steps (jaxnet.solve.options.Implicit.loop): host (default; "
+                     "its programs kept on disk) or compiled (one program, compiled by every run; cheaper steps on "
+                     "small nets)")
     run.add_argument("--record", type=float, help="with --dynamic: time between records (s), default every step")
     run.add_argument("--resume", action="store_true", help="with --dynamic: continue the run in --out from its last record")
     default_cache = pathlib.Path(os.environ.get("XDG_CACHE_HOME") or pathlib.Path.home() / ".cache") / "jaxnet"

@@ -1,7 +1,7 @@
 """Waves in water of finite or infinite depth: the water's elevation, velocity and acceleration at a point and a
 time, for the drag (relative velocity, book 4.272-4.276) and the force of inertia (the water's acceleration γ_h
 of 4.265) in dynamics. :class:`Airy`, regular linear waves (below); :class:`Stokes2`, regular second-order
-Stokes waves (FEMNET's ``wave_model 2``); :class:`Irregular` and :func:`sea_state`, an irregular sea as a sum of
+Stokes waves (FEMNET's ``wave_model 2``); :class:`Stokes3`, third-order ones in deep water (``wave_model 3``); :class:`Irregular` and :func:`sea_state`, an irregular sea as a sum of
 linear components drawn from a spectrum (:mod:`jaxnet.spectra`). Each takes a ``ramp`` over which a dynamic run
 grows it in from still water (:attr:`jaxnet.forcing.Loading.ramp`).
 
@@ -323,6 +323,20 @@ class Airy(eqx.Module):
         return horizontal[..., None] * self.direction + vertical[..., None] * self.up
 
 
+def _time_derivative(velocity, x, t):
+    """∂u/∂t (..., 3) of ``velocity(x, t)`` at points x (..., 3) and time t: forward-mode autodiff."""
+    x = jnp.asarray(x, dtype=float)
+    t = jnp.asarray(t, dtype=float)
+    return jax.jvp(lambda s: velocity(x, s), (t,), (jnp.ones_like(t),))[1]
+
+
+def _gradient(velocity, x, t):
+    """∂u/∂x (..., 3, 3) of ``velocity(x, t)``, entry [..., m, n] = ∂u_m/∂x_n: forward-mode autodiff per point."""
+    x = jnp.asarray(x, dtype=float)
+    gradient = jax.vmap(jax.jacfwd(lambda p: velocity(p, t)))(x.reshape(-1, 3))
+    return gradient.reshape(x.shape[:-1] + (3, 3))
+
+
 class Stokes2(Airy):
     """Regular second-order Stokes waves in water of finite or infinite depth: FEMNET's ``input wave_model 2``
     (a pytree; the same parameters as :class:`Airy`, whose first-order field it adds to).
@@ -379,15 +393,73 @@ class Stokes2(Airy):
 
     def acceleration(self, x, t):
         """Local acceleration ∂u/∂t (..., 3) (m/s²) at points x (..., 3) (m), time t (s)."""
-        x = jnp.asarray(x, dtype=float)
-        t = jnp.asarray(t, dtype=float)
-        return jax.jvp(lambda s: self.velocity(x, s), (t,), (jnp.ones_like(t),))[1]
+        return _time_derivative(self.velocity, x, t)
 
     def velocity_gradient(self, x, t):
         """Gradient ∂u/∂x (..., 3, 3) (1/s), entry [..., m, n] = ∂u_m/∂x_n, at points x (..., 3) (m), time t (s)."""
+        return _gradient(self.velocity, x, t)
+
+
+class Stokes3(Airy):
+    """Regular third-order Stokes waves in deep water: FEMNET's ``input wave_model 3`` (a pytree; the parameters
+    of :class:`Airy`, its ``depth`` not used: the theory is the deep-water one, as FEMNET's, whatever the depth).
+
+    With a = H/2 (as FEMNET takes it), ε = k a, θ = k e·x - ω t + phase (the series of the Stokes wave in
+    deep water to third order, e.g. Whitham, *Linear and nonlinear waves*, 1974, §13.13; FEMNET's
+    ``vitesse_houle``, ``acceleration_houle`` and elevation):
+
+        ω = √(g k) (1 + ε²/2)                          (amplitude dispersion: k from T by Newton's method)
+        η = a [(1 - ε²/16) cos θ + (ε/2) cos 2θ + (3ε²/8) cos 3θ]
+        Φ = a √(g/k) e^{kz} sin θ,    u = a √(g k) e^{kz} [cos θ e + sin θ up]
+
+    In deep water the potential has no second or third harmonic at this order: the waves are steeper than
+    Airy's (crest above trough H (1 + 5ε²/16)) and faster (their k is smaller for a given T), their
+    velocity profile the first-order one with amplitude a √(g k), not a ω. Above the mean surface the
+    kinematics are held at their z = 0 values, as :class:`Airy`'s. The local acceleration and the velocity
+    gradient are the exact derivatives of this velocity (forward-mode autodiff); the ramp acts as Airy's.
+    Valid for small steepness (ε below about 0.3; the series diverges near the limiting wave, H/L = 0.142).
+    """
+
+    @property
+    def wavenumber(self):
+        """k (rad/m) of ω = √(g k) (1 + (k a)²/2), a = H/2: Newton's method from the linear k = ω²/g (which it
+        reaches at H = 0); a fixed number of iterations, differentiable."""
+        omega, g, a = self.angular_frequency, self.gravity, 0.5 * self.height
+
+        def newton(_, k):
+            root = jnp.sqrt(g * k)
+            f = root * (1.0 + 0.5 * (a * k) ** 2) - omega
+            df = 0.5 * root / k * (1.0 + 0.5 * (a * k) ** 2) + root * a**2 * k
+            return k - f / df
+
+        return jax.lax.fori_loop(0, 30, newton, omega**2 / g)
+
+    def elevation(self, x, t):
+        """Elevation η (m) of the free surface above its mean level at points x (..., 3), time t (s)."""
         x = jnp.asarray(x, dtype=float)
-        gradient = jax.vmap(jax.jacfwd(lambda p: self.velocity(p, t)))(x.reshape(-1, 3))
-        return gradient.reshape(x.shape[:-1] + (3, 3))
+        theta = self._phase(x, t)
+        a = 0.5 * self.height
+        eps = self.wavenumber * a
+        series = ((1.0 - eps**2 / 16.0) * jnp.cos(theta) + 0.5 * eps * jnp.cos(2.0 * theta)
+                  + 0.375 * eps**2 * jnp.cos(3.0 * theta))
+        return forcing.envelope(t, self.ramp)[0] * a * series
+
+    def velocity(self, x, t):
+        """Orbital velocity (..., 3) (m/s) of the water at points x (..., 3) (m), time t (s)."""
+        x = jnp.asarray(x, dtype=float)
+        theta = self._phase(x, t)
+        k = self.wavenumber
+        decay = jnp.exp(k * jnp.minimum(x @ self.up - self.surface_level, 0.0))
+        amplitude = 0.5 * self.height * jnp.sqrt(self.gravity * k) * forcing.envelope(t, self.ramp)[0] * decay
+        return (amplitude * jnp.cos(theta))[..., None] * self.direction + (amplitude * jnp.sin(theta))[..., None] * self.up
+
+    def acceleration(self, x, t):
+        """Local acceleration ∂u/∂t (..., 3) (m/s²) at points x (..., 3) (m), time t (s)."""
+        return _time_derivative(self.velocity, x, t)
+
+    def velocity_gradient(self, x, t):
+        """Gradient ∂u/∂x (..., 3, 3) (1/s), entry [..., m, n] = ∂u_m/∂x_n, at points x (..., 3) (m), time t (s)."""
+        return _gradient(self.velocity, x, t)
 
 
 class Irregular(eqx.Module):
@@ -547,4 +619,4 @@ def sea_state(hs, tp, direction=(1.0, 0.0, 0.0), spectrum="jonswap", gamma=None,
                      stretching=stretching, peak_period=tp)
 
 
-__all__ = ["Airy", "Stokes2", "Irregular", "sea_state", "wavenumber", "depth_ratios"]
+__all__ = ["Airy", "Stokes2", "Stokes3", "Irregular", "sea_state", "wavenumber", "depth_ratios"]

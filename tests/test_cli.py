@@ -116,6 +116,30 @@ def test_compiled_programs_are_kept_on_disk_and_reused(tmp_path):
     np.testing.assert_allclose(third["reaction_N"], first["reaction_N"], rtol=1e-12)
 
 
+def test_a_dynamic_run_keeps_its_programs_and_a_resumed_run_loads_them(tmp_path):
+    """A run in time keeps its step's programs on disk (the step's setup, its evaluation and tangent, as the
+    static solver's): resumed in a fresh process, it loads them and compiles nothing (no program written, no
+    new entry in JAX's own cache), and its records go on as one run's."""
+    from jaxnet.io import timeseries
+
+    path = tmp_path / "scene.json"
+    path.write_text(json.dumps(wall_scene()))
+    cache, out = tmp_path / "cache", tmp_path / "dyn"
+    programs = cache / "jaxnet-programs"
+
+    def run(*extra):
+        cmd = [sys.executable, "-m", "jaxnet.cli", "run", str(path), "--dynamic", "--dt", "0.01", "--record", "0.05",
+               "--quiet", "--cache", str(cache), "--out", str(out), *extra]
+        subprocess.run(cmd, check=True, capture_output=True)
+        return {p.name: p.stat().st_mtime_ns for p in programs.iterdir()}, set(p.name for p in cache.iterdir())
+
+    kept, entries = run("--end", "0.1")
+    assert {"step_setup", "evaluate", "tangent", "scatter", "springs", "loads"} <= {n.split("-")[0] for n in kept}
+    kept_after, entries_after = run("--end", "0.2", "--resume")
+    assert kept_after == kept and entries_after == entries  # loaded: nothing compiled, nothing written
+    np.testing.assert_allclose(timeseries.read_series(out)["time"], [0.0, 0.05, 0.1, 0.15, 0.2], atol=1e-12)
+
+
 def test_dynamic_run_of_a_net_at_rest_stays_at_rest_and_resumes(tmp_path):
     """`jaxnet run SCENE --dynamic`: started at its static equilibrium under constant loads, a net stays there
     (reactions constant, no motion); a stopped run resumed with a later end time continues its records."""

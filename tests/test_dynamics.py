@@ -377,3 +377,37 @@ def test_a_pendulum_towed_by_a_speed_table_trails_at_the_drag_angle():
     angle = np.arctan2(top[0] - body[0], top[2] - body[2])
     assert angle == pytest.approx(np.arctan(drag / weight), abs=1e-4)
     np.testing.assert_allclose(tr.velocities[-1, 1], [speed, 0.0, 0.0], atol=1e-5)
+
+
+@pytest.mark.parametrize("case", ["current", "retries"])
+def test_the_host_loop_takes_the_compiled_loops_steps(case):
+    """``Implicit(loop="host")`` (the default: the steps driven from Python, each Newton the static solver's host
+    loop) and ``loop="compiled"`` (one program per record interval) take the same steps: a body settling in a
+    current, and a swinging pendulum whose big steps fail and are halved. The same times, step counts, retries
+    and Newton iterations; positions to rounding (tests/test_winch.py: the same with a winch)."""
+    newton = TIGHT
+    if case == "current":
+        scene, end, h = spring_mass(m=3.0, ea=500.0, delta=0.0, drag_area=0.2, current=1.0), 2.0, 0.05
+    else:
+        scene, end, h = spring_mass(m=1.0, ea=1e4, delta=0.0, gravity=9.81, free_axes="xz"), 0.4, 0.05
+        newton = statics.Newton(tol=1e-9, max_iter=2, damping=1e-12, stall_window=None)
+    host, compiled = same_run_both_loops(scene, end, h, newton)
+    if case == "retries":
+        assert int(host.state.retries) > 0
+    with pytest.raises(ValueError, match="loop must be one of"):
+        dynamics.Implicit(loop="python")
+
+
+def same_run_both_loops(scene, end, h, newton, loading=None):
+    """Runs ``scene`` with either loop and asserts they took the same steps; (host run, compiled run)."""
+    runs = {loop: dynamics.simulate(scene, end, dynamics.Implicit(time_step=h, newton=newton, loop=loop), loading,
+                                    record_every=end / 4, progress=False) for loop in ("host", "compiled")}
+    host, compiled = runs["host"], runs["compiled"]
+    np.testing.assert_array_equal(host.times, compiled.times)
+    assert host.steps == compiled.steps and int(host.state.retries) == int(compiled.state.retries)
+    assert int(host.state.iterations) == int(compiled.state.iterations)
+    scale = np.abs(compiled.positions).max()
+    np.testing.assert_allclose(host.positions, compiled.positions, rtol=0, atol=1e-12 * scale)
+    np.testing.assert_allclose(host.velocities, compiled.velocities, rtol=0,
+                               atol=1e-9 * max(np.abs(compiled.velocities).max(), 1e-3))
+    return host, compiled

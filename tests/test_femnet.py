@@ -595,12 +595,13 @@ def test_dynamic_settings_and_waves_are_read(tmp_path):
     if not np.isfinite(float(waves.depth)):
         assert float(waves.wavelength) == pytest.approx(9.81 * 100 / (2 * np.pi), rel=1e-12)
     assert type(waves).__name__ == "Airy"  # FEMNET's default theory
-    # 'input wave_model 2': Stokes second order, the same parameters; 3 is refused naming its line
-    path.write_text("\n".join(lines) + "\ninput wave_model 2\n")
-    stokes = femnet.read_don(path).scene.environment.waves
-    assert type(stokes).__name__ == "Stokes2" and float(stokes.height) == 1.5 and float(stokes.period) == 10.0
-    path.write_text("\n".join(lines) + "\ninput wave_model 3\n")
-    with pytest.raises(SceneError, match=rf"waves.don:{len(lines) + 1}: 'input wave_model 3' \(Stokes third order"):
+    # 'input wave_model 2' and 3: Stokes second and third order, the same parameters; 4 is refused naming its line
+    for model, theory in ((2, "Stokes2"), (3, "Stokes3")):
+        path.write_text("\n".join(lines) + f"\ninput wave_model {model}\n")
+        stokes = femnet.read_don(path).scene.environment.waves
+        assert type(stokes).__name__ == theory and float(stokes.height) == 1.5 and float(stokes.period) == 10.0
+    path.write_text("\n".join(lines) + "\ninput wave_model 4\n")
+    with pytest.raises(SceneError, match=rf"waves.don:{len(lines) + 1}: 'input wave_model': the model must be 1"):
         femnet.read_don(path)
     edit("Wave period", "0.0")
     path.write_text("\n".join(lines) + "\n")

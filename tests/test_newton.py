@@ -200,7 +200,7 @@ def test_a_solve_with_a_catch_compiles_its_evaluation_and_tangent_once(caplog):
     compiled = [r.getMessage().split(" with ")[0] for r in caplog.records if r.getMessage().startswith("Compiling jit(")]
     assert eq.converged
     # the evaluation (from the last states: _evaluate_from), the tangent: its element matrices, their sum
-    once = ("_evaluate_from", "tangent_blocks", "scatter_stiffnesses")
+    once = ("_evaluate_from", "_tangent_from", "scatter_stiffnesses")
     assert all(compiled.count(f"Compiling jit({name})") == 1 for name in once), sorted(set(compiled))
     # and nothing else but the spring network and the loads: no JAX operation run one by one on the way (jax
     # 0.10 compiles a program for each: jnp.asarray of a numpy array, a comparison, a placeholder's zeros;

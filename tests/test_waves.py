@@ -305,3 +305,53 @@ def test_stokes2_in_deep_water_is_airy_with_a_second_harmonic_surface():
     # 1500 m is deep for these waves: the finite depth gives the deep answer to rounding
     finite = waves.Stokes2(H, T, depth=1500.0)
     np.testing.assert_allclose(np.asarray(finite.velocity(x, 2.0)), np.asarray(deep.velocity(x, 2.0)), rtol=1e-12)
+
+
+# -- third-order Stokes waves in deep water (FEMNET's wave_model 3) ------------------------------------------
+
+
+def test_stokes3_is_the_deep_water_series_and_a_potential_flow():
+    """Whitham's deep-water series to third order, with a = H/2 as FEMNET takes it: k from ω = √(gk)(1 + (ka)²/2),
+    the elevation's three harmonics, u = a √(gk) e^{kz} (cos θ, sin θ); a potential flow (divergence-free,
+    irrotational); the acceleration the velocity's time derivative; the wavenumber differentiable in H."""
+    H, T, g = 6.0, 9.0, 9.81
+    wave = waves.Stokes3(H, T)
+    a, omega = H / 2, 2 * np.pi / T
+    k = float(wave.wavenumber)
+    assert np.sqrt(g * k) * (1 + 0.5 * (k * a) ** 2) == pytest.approx(omega, rel=1e-14)
+    assert k < omega**2 / g  # amplitude dispersion: longer and faster than Airy's
+    x = np.array([[0.0, 0.0, -1.0], [11.0, 0.0, -6.0], [37.0, 0.0, -40.0], [60.0, 0.0, 0.5]])
+    t = np.full(4, 2.1)
+    out = field(wave, x, t)
+    theta = k * x[:, 0] - omega * 2.1
+    eps = k * a
+    eta = a * ((1 - eps**2 / 16) * np.cos(theta) + eps / 2 * np.cos(2 * theta) + 3 * eps**2 / 8 * np.cos(3 * theta))
+    np.testing.assert_allclose(np.asarray(out["eta"]), eta, rtol=1e-12)
+    speed = a * np.sqrt(g * k) * np.exp(k * np.minimum(x[:, 2], 0.0))  # above the surface: its z = 0 value
+    expected = np.stack([speed * np.cos(theta), 0.0 * theta, speed * np.sin(theta)], axis=1)
+    np.testing.assert_allclose(np.asarray(out["u"]), expected, rtol=1e-12, atol=1e-14)
+    grad = np.asarray(out["du_dx"])[:3]
+    np.testing.assert_allclose(np.trace(grad, axis1=1, axis2=2), 0.0, atol=1e-13)
+    np.testing.assert_allclose(grad, np.swapaxes(grad, 1, 2), atol=1e-13)
+    np.testing.assert_allclose(np.asarray(out["a"]), np.asarray(out["du_dt"]), rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(np.asarray(wave.velocity_gradient(x, 2.1)), np.asarray(out["du_dx"]), rtol=1e-12,
+                               atol=1e-15)
+    # dk/dH by autodiff against the implicit function theorem on ω = √(gk)(1 + (ka)²/2), a = H/2
+    dk_dh = float(jax.grad(lambda h: waves.Stokes3(h, T).wavenumber)(H))
+    df_dk = 0.5 * np.sqrt(g / k) * (1 + 0.5 * eps**2) + np.sqrt(g * k) * a**2 * k
+    df_da = np.sqrt(g * k) * a * k**2
+    assert dk_dh == pytest.approx(-df_da * 0.5 / df_dk, rel=1e-10)
+
+
+def test_stokes3_of_small_waves_is_airy_in_deep_water():
+    """As H → 0 the velocity reduces to Airy's in deep water, relative to it as ε² (k and a √(gk) against a ω):
+    a quarter of the difference when H halves."""
+    T = 8.0
+    x = np.array([[5.0, 1.0, -3.0], [30.0, 0.0, -12.0]])
+    gaps = []
+    for H in (0.4, 0.2):
+        s3, airy = waves.Stokes3(H, T), waves.Airy(H, T)
+        du = np.abs(np.asarray(s3.velocity(x, 1.7)) - np.asarray(airy.velocity(x, 1.7))).max()
+        gaps.append(du / (H / 2 * 2 * np.pi / T))
+    assert gaps[1] / gaps[0] == pytest.approx(0.25, rel=0.05)
+    assert gaps[1] < 1e-3

@@ -119,6 +119,16 @@ def test_a_winch_hauls_a_hanging_weight_at_its_speed():
     assert tr.positions[0, -1, 2] == pytest.approx(-bar * n_bars * (1.0 + m * g / ea), rel=1e-12)
 
 
+def test_the_host_loop_hauls_as_the_compiled_loop():
+    """A winch hauling a weight (its masses following the cable): the host-driven steps are the compiled loop's."""
+    from test_dynamics import same_run_both_loops
+
+    scene = hanging_weight(50.0, 4, 2.0, 1e7)
+    winch = forcing.Winch(np.arange(4), 0, [0.0, 1.0, 9.0], [0.0, 2.0, 2.0], shortest=0.01, longest=50.0)
+    newton = statics.Newton(tol=1e-7, max_iter=30, damping=1e-12, stall_window=None)
+    same_run_both_loops(scene, 3.0, 0.01, newton, dynamics.Loading(winches=(winch,)))
+
+
 def test_bad_winches_are_refused_naming_the_culprit():
     with pytest.raises(ValueError, match="all haul in"):
         forcing.Winch([0, 1], 0, [0.0, 1.0], [1.0, -1.0], 0.01, 5.0)

@@ -39,10 +39,14 @@ the run stops: :class:`DynamicsError` naming the time, the node with the largest
 reason, or with ``throw=False`` the run so far, its state's ``status`` STEP_FAILED. Nothing non-finite is
 accepted (Newton's NON_FINITE status is a failure).
 
-The loop. :func:`advance` is one jitted program (``lax.while_loop`` over steps, Newton's
-``lax.while_loop`` inside, the factorisation a host callback); :func:`simulate` calls it once per record
-interval, writes each record at once (:mod:`jaxnet.io.timeseries`: time series and VTK), shows progress,
-and can resume a stopped run from its last record.
+The loop. :func:`simulate` advances the run one record interval at a time, writes each record at once
+(:mod:`jaxnet.io.timeseries`: time series and VTK), shows progress, and can resume a stopped run from its last
+record. Two drivers take the same steps (:attr:`jaxnet.solve.options.Implicit.loop`): by default the host
+(:class:`Stepper`: a compiled :func:`step_setup` per step, then the static solver's host Newton loop given the
+step, whose programs are kept on disk, so that the next run and a resumed one load them); or one jitted
+program per interval (:func:`advance`: ``lax.while_loop`` over steps, Newton's ``lax.while_loop`` inside, the
+factorisation a host callback, which keeps it from the disk: compiled by every process, cheaper per step on
+small nets). ``validation/dynamics_loops.py`` measures both.
 
 Loading in time (:class:`Loading`): a current whose speed follows a history (:mod:`jaxnet.forcing`),
 waves (``Environment.waves``, :mod:`jaxnet.waves`: regular, Stokes, an irregular sea), and prescribed motions
@@ -68,7 +72,7 @@ import numpy as np
 from jaxnet import assemble, catch as catch_lib, checks, forcing, linalg, model as model_lib, scene as scene_lib
 from jaxnet.case import Case
 from jaxnet.forcing import Loading  # simulate's argument, offered here as dynamics.Loading too
-from jaxnet.solve import newton, programs, results
+from jaxnet.solve import newton, programs, results, statics
 from jaxnet.solve.masses import lumped_masses
 from jaxnet.solve.options import Implicit, Newton
 from jaxnet.solve.results import Timing
@@ -76,8 +80,8 @@ from jaxnet.terms import cable, drag, inertia, tension, term as term_lib
 
 __all__ = ["Implicit", "Loading", "TimeStep", "State", "Trajectory", "DynamicsError", "lumped_masses", "scene_at",
            "water_acceleration", "out_of_balance", "prescribed_velocity", "check_loading", "with_start_ramp", "advance",
-           "simulate", "out_of_balance_jit", "advance_jit", "record_figures", "RUNNING", "DONE", "STEP_FAILED",
-           "REASONS"]
+           "simulate", "out_of_balance_jit", "advance_jit", "step_setup", "Stepper", "record_figures", "RUNNING", "DONE",
+           "STEP_FAILED", "REASONS"]
 
 #: stop reasons of a dynamic run (``State.status``, ``Trajectory.status``)
 RUNNING, DONE, STEP_FAILED = 0, 1, 2
@@ -256,6 +260,32 @@ def prescribed_velocity(scene, loading: Loading, t):
 # -- the step loop -----------------------------------------------------------------------------------
 
 
+def step_setup(x, v, h, t_new, scene, masses, loading: Loading):
+    """(the scene at ``t_new``, the :class:`TimeStep`) of the implicit step from positions x and velocities v
+    (N, 3) at t_new - h to t_new (s): the surroundings at t_new (:func:`scene_at`), the masses (``masses``,
+    :func:`lumped_masses`; with winches, those of the scene at t_new: a winch moves cable into or out of the
+    water), and the water's inertia (M_a + ρV) γ_h at the positions x."""
+    mass, water_mass = (jnp.asarray(m) for m in masses)
+    scene_t = scene_at(scene, loading, t_new)
+    if loading.winches:
+        mass, water_mass = lumped_masses(scene_t, jnp)
+    waves = scene.environment.waves is not None
+    if waves or loading.current_speed is not None:
+        load = water_mass * water_acceleration(x, scene_t, loading, waves)
+    else:
+        load = jnp.zeros_like(x)
+    return scene_t, TimeStep(x, v, h, mass, load)
+
+
+def _step_setup_leaves(x, v, h, t_new, scene, masses, loading):
+    # the program returns leaves only: a program kept on disk keeps its output's structure, and an equinox
+    # module's does not survive that; the caller puts them back in their tree
+    return jax.tree.leaves(step_setup(x, v, h, t_new, scene, masses, loading))
+
+
+_step_setup_jit = programs.jit(_step_setup_leaves)
+
+
 def _easy_iterations(solver: Newton):
     """The most Newton iterations of a step after which the next step may double: a third of the allowed."""
     return max(1, solver.max_iter // 3)
@@ -267,10 +297,7 @@ def advance(state: State, t_end, scene, pattern, masses, loading: Loading, time_
     below ``min_time_step`` (s). ``time_step``: the step taken when Newton converges (s). Jittable; ``model``
     (the dynamic active terms, ``active_terms(scene, dynamic=True)``) and ``solver`` (each step's options)
     are static, the steps are not (a study over Δt compiles once). ``masses``: :func:`lumped_masses`."""
-    mass, water_mass = (jnp.asarray(m) for m in masses)
     free = pattern.free
-    waves = scene.environment.waves is not None
-    moving_water = waves or loading.current_speed is not None
     end = jnp.asarray(t_end, dtype=float)
     state = eqx.tree_at(lambda s: s.status, state, jnp.asarray(np.int64(RUNNING)))
 
@@ -284,11 +311,7 @@ def advance(state: State, t_end, scene, pattern, masses, loading: Loading, time_
         land = remaining <= 1.01 * s.next_step
         h = jnp.where(land, remaining, s.next_step)
         t_new = jnp.where(land, end, s.t + h)
-        scene_t = scene_at(scene, loading, t_new)
-        # a winch moves cable into or out of the water: the masses follow the bars' rest lengths at t + Δt
-        m, m_water = lumped_masses(scene_t, jnp) if loading.winches else (mass, water_mass)
-        load = m_water * water_acceleration(s.x, scene_t, loading, waves) if moving_water else jnp.zeros_like(s.x)
-        step = TimeStep(s.x, s.v, h, m, load)
+        scene_t, step = step_setup(s.x, s.v, h, t_new, scene, masses, loading)
         # Newton starts from the constant-velocity prediction: carrying the last step's backward-difference
         # acceleration over as well takes more Newton iterations per step on the cage in waves
         x_guess = (s.x + h * s.v).ravel()[free]
@@ -323,6 +346,78 @@ def advance(state: State, t_end, scene, pattern, masses, loading: Loading, time_
 
 #: :func:`advance` compiled (``model``, ``solver`` static): what :func:`simulate` calls once per record
 advance_jit = programs.jit(advance, static_argnames=("model", "solver"))
+
+
+class Stepper:
+    """:func:`advance`'s steps driven from the host: what :func:`simulate` runs. Each step calls the compiled
+    :func:`step_setup` once, then the static solver's host Newton loop (:func:`jaxnet.solve.statics.host_loop`
+    given the step: the same iteration as :func:`advance`'s jitted ``newton_loop``, from the same prediction,
+    with the same step control). Its programs (the step's setup, the evaluation and tangent of a time step,
+    compiled once per run for the scene's shape) hold no host callback, so they are kept on disk like the static
+    solver's (:mod:`jaxnet.solve.programs`, when a compilation cache directory is set: the command line sets
+    one): the next run of a scene of the same shape, and a resumed run, load them instead of compiling them.
+    The jitted :func:`advance` holds the factorisation as a host callback, which no executable kept on disk
+    may hold.
+
+    scene, pattern, masses, loading, model: as :func:`advance`'s; ``solver``: its :class:`Implicit` options.
+    """
+
+    def __init__(self, scene, pattern, masses, loading: Loading, model, solver: Implicit):
+        self.scene, self.pattern, self.masses, self.loading = jax.device_put((scene, pattern, masses, loading))
+        self.model, self.solver = model, solver
+        self.free = np.asarray(pattern.free)
+        self._setup = self._tree = self._pieces = None
+
+    def _setup_of(self, x, v, h, t_new):
+        args = (x, v, np.float64(h), np.float64(t_new), self.scene, self.masses, self.loading)
+        if self._setup is None:
+            self._tree = jax.tree.structure(jax.eval_shape(step_setup, *args))
+            self._setup = programs.obtain("step_setup", _step_setup_jit, args)
+        return jax.tree.unflatten(self._tree, self._setup(*args))
+
+    def advance(self, state: State, t_end) -> State:
+        """:func:`advance` from ``state`` to ``t_end`` (s): the same steps, step control and stop reasons."""
+        options, newton_options = self.solver, self.solver.newton
+        x, v = np.asarray(state.x, dtype=float), np.asarray(state.v, dtype=float)
+        t, next_step, last_step = float(state.t), float(state.next_step), float(state.last_step)
+        force = state.force
+        steps, iterations, retries = int(state.steps), int(state.iterations), int(state.retries)
+        status, newton_status = RUNNING, int(state.newton_status)
+        worst_node, residual = int(state.worst_node), float(state.residual_N)
+        end = float(t_end)
+        while status == RUNNING and t < end:
+            # the step that would end within 1 % of t_end lands on it exactly (advance says why)
+            remaining = end - t
+            land = remaining <= 1.01 * next_step
+            h = remaining if land else next_step
+            t_new = end if land else t + h
+            scene_t, step = self._setup_of(x, v, h, t_new)
+            x_guess = (x + h * v).ravel()[self.free]
+            if self._pieces is None:
+                self._pieces = statics.compile_pieces(x_guess, scene_t, self.pattern, self.model,
+                                                      newton_options.stiffness, step)
+            eq = statics.host_loop(x_guess, scene_t, self.pattern, self.model, newton_options, self._pieces, step)
+            ok = int(eq.status) == results.CONVERGED
+            its = int(eq.iterations)
+            if ok:
+                x_new = np.asarray(eq.x)
+                x, v, t = x_new, (x_new - x) / h, t_new
+                next_step = min(options.time_step, 2.0 * next_step) if its <= _easy_iterations(newton_options) \
+                    else next_step
+                last_step, force, steps = h, eq.force, steps + 1
+            else:
+                next_step, retries = 0.5 * h, retries + 1
+                if 0.5 * h < options.min_time_step:
+                    status = STEP_FAILED
+            iterations += its
+            newton_status, worst_node, residual = int(eq.status), int(eq.worst_node), float(eq.residual_N)
+        f64, i64 = np.float64, np.int64
+        return State(x=jnp.asarray(x), v=jnp.asarray(v), t=jnp.asarray(f64(t)), next_step=jnp.asarray(f64(next_step)),
+                     last_step=jnp.asarray(f64(last_step)), force=jnp.asarray(force, dtype=np.float64),
+                     steps=jnp.asarray(i64(steps)), iterations=jnp.asarray(i64(iterations)),
+                     retries=jnp.asarray(i64(retries)), status=jnp.asarray(i64(DONE if status == RUNNING else status)),
+                     newton_status=jnp.asarray(i64(newton_status)), worst_node=jnp.asarray(i64(worst_node)),
+                     residual_N=jnp.asarray(f64(residual)))
 
 
 # -- what a record holds ---------------------------------------------------------------------------------
@@ -527,13 +622,17 @@ def simulate(scene, end_time=None, solver: Implicit | None = None, loading: Load
     targets = np.minimum(record_every * np.arange(1, int(np.ceil(end_time / record_every - 1e-9)) + 1), end_time)
     targets = targets[targets > float(state.t) + 1e-9 * record_every]
     bar = Progress(float(state.t), end_time, disable=not progress, steps0=int(state.steps))
+    stepper = Stepper(scene, pattern, masses, loading, model, solver) if solver.loop == "host" else None
     try:
         with bar:
             for k, target in enumerate(targets):
                 t_call = _time.perf_counter()
-                state = advance_jit(state, float(target), scene_arg, pattern, masses, loading_arg, solver.time_step,
-                                     solver.min_time_step, model=model, solver=solver.newton)
-                jax.block_until_ready(state)
+                if stepper is not None:
+                    state = stepper.advance(state, float(target))
+                else:
+                    state = advance_jit(state, float(target), scene_arg, pattern, masses, loading_arg,
+                                        solver.time_step, solver.min_time_step, model=model, solver=solver.newton)
+                    jax.block_until_ready(state)
                 if k == 0:
                     compile_s = _time.perf_counter() - t_call  # the first call compiles (and runs one interval)
                 if int(state.status) == STEP_FAILED:

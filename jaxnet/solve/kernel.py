@@ -105,14 +105,15 @@ def tangent(x, state, scale, scene, pattern, model, stiffness="autodiff", step=N
     return data.at[pattern.diagonal].add(step.inertia_stiffness().ravel()[pattern.free])
 
 
-def tangent_blocks(x, state, scale, scene, pattern, model, stiffness="autodiff"):
+def tangent_blocks(x, state, scale, scene, pattern, model, stiffness="autodiff", step=None):
     """The tangent's element matrices at free coordinates x, {family: (E, 3k, 3k)} (N/m,
-    :func:`jaxnet.assemble.tangent_blocks`): what :func:`tangent` sums into the pattern in statics. The
-    static solve sums them in a program of its own (:func:`jaxnet.assemble.scatter_stiffnesses`), which XLA
-    runs faster than the pair compiled as one (``tangent_blocks`` says why; ``validation/femnet_cases.py``
-    times the solves)."""
+    :func:`jaxnet.assemble.tangent_blocks`): what :func:`tangent` sums into the pattern, without the inertia's
+    diagonal of a time step (``step``: its drag's dependence on the velocities is in). The host loop
+    (:func:`jaxnet.solve.statics.host_loop`) sums them in a program of its own
+    (:func:`jaxnet.assemble.scatter_stiffnesses`), which XLA runs faster than the pair compiled as one
+    (``tangent_blocks`` says why; ``validation/femnet_cases.py`` times the solves)."""
     X = assemble.positions(x, scene, pattern)
-    return assemble.tangent_blocks(X, scene, model, state, scale, stiffness)
+    return assemble.tangent_blocks(X, scene, model, state, scale, stiffness, None if step is None else step.motion)
 
 
 def springs(scene, pattern, model):

@@ -116,6 +116,10 @@ TIME_STEP = Newton(tol=TOL_N, max_iter=30, damping=1e-12, stall_window=None, lin
 DIFFERENTIABLE = Newton(tol=1e-8, max_iter=200, damping=1e-6, stall_window=None, line_search=30)
 
 
+#: who drives a run's time steps (:attr:`Implicit.loop`)
+LOOPS = ("host", "compiled")
+
+
 @dataclasses.dataclass(frozen=True)
 class Implicit:
     """Options of the implicit time stepping (hashable). Only ``newton`` is part of the compiled program's
@@ -124,13 +128,23 @@ class Implicit:
     time_step: Δt (s), the step the run takes when Newton converges.
     min_time_step: the smallest step a failed step may be retried with (s); below it the run stops.
     newton: the options of each step's Newton iteration (:class:`Newton`); default :data:`TIME_STEP`.
+    loop: who drives the steps, the same steps either way. ``"host"`` (default): Python, each step's Newton
+      the static solver's host loop (:class:`jaxnet.solve.dynamics.Stepper`): its programs are kept on disk,
+      so the next run of a scene of that shape and a resumed run load them instead of compiling; each step
+      costs a few milliseconds of dispatch more. ``"compiled"``: one program runs the steps of a record
+      interval (:func:`jaxnet.solve.dynamics.advance`), with the factorisation as a host callback, which no
+      program kept on disk may hold: compiled again by every process, cheaper per step on small nets
+      (``validation/REPORT.md``, "Dynamics: host-driven steps" measures both).
     """
 
     time_step: float = 0.01
     min_time_step: float = 1e-7
     newton: Newton = TIME_STEP
+    loop: str = "host"
 
     def __post_init__(self):
+        if self.loop not in LOOPS:
+            raise ValueError(f"Implicit: loop must be one of {LOOPS}, got {self.loop!r}")
         for name in ("time_step", "min_time_step"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value > 0):

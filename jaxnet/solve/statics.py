@@ -71,14 +71,20 @@ __all__ = ["solve", "host_loop", "compile_pieces", "constant_loads", "Newton", "
 # -- the compiled pieces ----------------------------------------------------------------------------------
 
 
-def _evaluate_from(x, f_frozen, load, scale, scene, pattern, previous, model):
-    """:func:`jaxnet.solve.kernel.evaluate` in statics from the force terms' states ``previous`` (the host
-    loop's evaluation: every dynamic argument positional, the model last)."""
-    return kernel.evaluate(x, f_frozen, load, scale, scene, pattern, model, None, previous)
+def _evaluate_from(x, f_frozen, load, scale, scene, pattern, previous, step, model):
+    """:func:`jaxnet.solve.kernel.evaluate` from the force terms' states ``previous``, in statics (``step``
+    None) or in a time step (the host loop's evaluation: every dynamic argument positional, the model last)."""
+    return kernel.evaluate(x, f_frozen, load, scale, scene, pattern, model, step, previous)
+
+
+def _tangent_from(x, state, scale, scene, pattern, step, model, stiffness):
+    """:func:`jaxnet.solve.kernel.tangent_blocks`, in statics or in a time step (every dynamic argument
+    positional)."""
+    return kernel.tangent_blocks(x, state, scale, scene, pattern, model, stiffness, step)
 
 
 _evaluate_jit = programs.jit(_evaluate_from, static_argnames=("model",))
-_tangent_blocks_jit = programs.jit(kernel.tangent_blocks, static_argnames=("model", "stiffness"))
+_tangent_blocks_jit = programs.jit(_tangent_from, static_argnames=("model", "stiffness"))
 _scatter_jit = programs.jit(assemble.scatter_stiffnesses)
 _springs_jit = programs.jit(kernel.springs, static_argnames=("model",))
 # jitted although it runs once per solve: op by op, its vmaps would compile dozens of small programs
@@ -104,10 +110,12 @@ def _unknown_states(scene, pattern, model):
     return kernel.placeholders(_STATE_SHAPES.get_or_make(key, lambda: kernel.state_shapes(scene, pattern, model)))
 
 
-def compile_pieces(start, scene, pattern, model, stiffness="autodiff"):
+def compile_pieces(start, scene, pattern, model, stiffness="autodiff", step=None):
     """The evaluation, the tangent's element matrices ("tangent"), their sum into the pattern ("scatter",
     :func:`jaxnet.solve.kernel.tangent_blocks` says why apart), the spring network and the loads, compiled
-    for this scene's shape and terms, as a dict of callables taking their dynamic arguments only
+    for this scene's shape and terms (and for a time step, given one of its shape: ``step``, a
+    :class:`jaxnet.solve.dynamics.TimeStep`), as a dict of callables taking their dynamic arguments only (and
+    under "states" the placeholders of the force terms' states the first evaluation starts from)
     (:mod:`jaxnet.solve.programs`: from this process's memory, else from disk, else compiled in parallel
     threads). A second solve of a scene of the same shape (another load, another panel cut, another start)
     reuses them and compiles nothing; a second process loads them from disk, without tracing.
@@ -119,7 +127,8 @@ def compile_pieces(start, scene, pattern, model, stiffness="autodiff"):
     next one's argument shapes: the evaluation's, the force terms' states (the catch front); the tangent's,
     its element matrices."""
     zero = np.zeros(scene.nodes.position.shape)
-    evaluate_args = (start, zero, zero, 1.0, scene, pattern, _unknown_states(scene, pattern, model))
+    unknown = _unknown_states(scene, pattern, model)
+    evaluate_args = (start, zero, zero, 1.0, scene, pattern, unknown, step)
     found = {"evaluate": programs.lookup("evaluate", evaluate_args, {"model": model})}
     jobs = {}
     with concurrent.futures.ThreadPoolExecutor(4) as pool:
@@ -132,7 +141,8 @@ def compile_pieces(start, scene, pattern, model, stiffness="autodiff"):
             shapes = found["evaluate"].out_info[4]
         # placeholders for the states: strongly typed as the evaluation returns them
         state = jax.tree.map(lambda s: np.zeros(s.shape, s.dtype), shapes)
-        tangent_args, tangent_static = (start, state, 1.0, scene, pattern), {"model": model, "stiffness": stiffness}
+        tangent_args = (start, state, 1.0, scene, pattern, step)
+        tangent_static = {"model": model, "stiffness": stiffness}
         found["tangent"] = programs.lookup("tangent", tangent_args, tangent_static)
         if found["tangent"] is None:
             traced = _tangent_blocks_jit.trace(*tangent_args, **tangent_static)
@@ -151,22 +161,26 @@ def compile_pieces(start, scene, pattern, model, stiffness="autodiff"):
             if found[name] is None:
                 jobs[name] = pool.submit(programs.compile, name, jitted, args, static)
         found.update({name: job.result() for name, job in jobs.items()})
+    found["states"] = unknown  # the first evaluation's force-term states (placeholders), for the host loop
     return found
 
 
 # -- the host loop ----------------------------------------------------------------------------------------
 
 
-def host_loop(start, scene, pattern, model, solver: Newton, pieces=None):
+def host_loop(start, scene, pattern, model, solver: Newton, pieces=None, step=None):
     """The Newton iteration of :func:`jaxnet.solve.newton.newton_loop` with the stiffness continuation,
     driven from Python: each iteration calls the compiled tangent once, factorises on the host and
     calls the compiled evaluation once per line-search trial. Same rules (shared functions), same result;
     prints progress as it goes when verbose. ``pieces``: the compiled programs (:func:`compile_pieces`),
-    obtained here if not given. Returns an :class:`Equilibrium` whose :class:`Timing` splits the loop's
-    time (its ``compile_s`` 0: :func:`solve` adds the compilation)."""
+    obtained here if not given. ``step``: None for a static equilibrium; for an implicit time step its past
+    and masses (:class:`jaxnet.solve.dynamics.TimeStep`, on the device), as ``newton_loop``'s, without the
+    continuation (a step starts near its answer: as the jitted loop, plain Newton). Returns an
+    :class:`Equilibrium` whose :class:`Timing` splits the loop's time (its ``compile_s`` 0: :func:`solve` adds
+    the compilation)."""
     t_start = time.perf_counter()
     if pieces is None:
-        pieces = compile_pieces(np.asarray(start, dtype=float), scene, pattern, model, solver.stiffness)
+        pieces = compile_pieces(np.asarray(start, dtype=float), scene, pattern, model, solver.stiffness, step)
     evaluate, tangent, scatter = pieces["evaluate"], pieces["tangent"], pieces["scatter"]
     n_nodes = scene.n_nodes
     free = np.asarray(pattern.free)
@@ -181,10 +195,18 @@ def host_loop(start, scene, pattern, model, solver: Newton, pieces=None):
         spent["factorisations"] += 1
         return out
     # The scene and pattern moved to the device once: the programs take them at every call, and a numpy
-    # leaf would be copied to the device at each (a good part of a call's dispatch on small nets).
-    scene_on_device, pattern_on_device = jax.device_put((scene, pattern))
+    # leaf would be copied to the device at each (a good part of a call's dispatch on small nets). A time step's
+    # are there already (device_put would still walk every leaf, at every step).
+    on_host = any(isinstance(leaf, np.ndarray) for leaf in jax.tree.leaves((scene, pattern)))
+    scene_on_device, pattern_on_device = jax.device_put((scene, pattern)) if on_host else (scene, pattern)
     springs = np.asarray(pieces["springs"](scene_on_device, pattern_on_device))
     load_device = pieces["loads"](scene_on_device)  # constant: computed once, passed to every evaluation
+    inertia = None
+    if step is not None:
+        load_device = load_device + step.water_load  # the water's inertia (M_a + ρV) γ_h, as kernel.loads adds
+        # the inertia's stiffness (M + M_a)/Δt² on the diagonal, as kernel.tangent adds it
+        inertia = (np.asarray(step.mass) / float(step.time_step) ** 2).ravel()[free]
+        diagonal = np.asarray(pattern.diagonal)
     load = np.asarray(load_device)
     X0 = np.asarray(scene.nodes.position, dtype=float).ravel()
 
@@ -201,21 +223,22 @@ def host_loop(start, scene, pattern, model, solver: Newton, pieces=None):
     def matvec(data, v):
         return linalg.host_matvec(data, indptr, indices, v)
 
-    scales = newton.stiffness_stages(solver)
+    scales = newton.stiffness_stages(solver) if step is None else [1.0]
     stage = len(scales) - 1  # plain Newton (the net as it is) until the continuation starts
 
     def run(x, f_frozen, previous):
         # previous: the force terms' states at the last accepted iterate, where their solutions start
         t = time.perf_counter()
         e, force, f_nc, m, state = evaluate(x, f_frozen, load_device, scales[stage], scene_on_device,
-                                            pattern_on_device, previous)
+                                            pattern_on_device, previous, step)
         out = float(e), np.asarray(force), np.asarray(f_nc), float(m), state
         spent["evaluation_s"] += time.perf_counter() - t
         spent["evaluations"] += 1
         return out
 
     x = np.asarray(start, dtype=float)
-    e_stored, force, f_nc, _, state = run(x, np.zeros_like(load), _unknown_states(scene, pattern, model))
+    unknown = pieces["states"] if "states" in pieces else _unknown_states(scene, pattern, model)
+    e_stored, force, f_nc, _, state = run(x, np.zeros_like(load), unknown)
     f = force.ravel()[free]
     hist = np.full(solver.max_iter + 1, np.nan)
     res = nodal(f).max()
@@ -261,8 +284,11 @@ def host_loop(start, scene, pattern, model, solver: Newton, pieces=None):
             # an iteration that took no step leaves x as it was: its tangent serves again, only mu changes
             # element matrices, on the device
             t = time.perf_counter()
-            blocks = tangent(x, state, scales[stage], scene_on_device, pattern_on_device)
+            blocks = tangent(x, state, scales[stage], scene_on_device, pattern_on_device, step)
             data, tangent_at = np.asarray(scatter(blocks, pattern_on_device)), (x, state, stage)
+            if inertia is not None:
+                data = data.copy()
+                data[diagonal] += inertia
             spent["assembly_s"] += time.perf_counter() - t
         dx, slope, predicted, usable, roundoff, res_now = newton.direction(f, data, springs, mu, e, work, solver,
                                                                            factor_solve, matvec, nodal, np)

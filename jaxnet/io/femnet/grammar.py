@@ -502,13 +502,11 @@ def _towing(values):
 
 def _wave_model(values):
     """``input wave_model N`` (FEMNET's manual, "Waves"): 1 Airy, 2 Stokes second order (intermediate and deep
-    water); its 3, Stokes third order in deep water, is used by no worked case and not modelled."""
+    water), 3 Stokes third order in deep water (used by no worked case)."""
     n = values[0]
-    if n == 3:
-        return "'input wave_model 3' (Stokes third order in deep water): " + _UNSUPPORTED + " (1 Airy and 2 Stokes " \
-               "second order are)"
-    return None if n in (1, 2) else \
-        f"'input wave_model': the model must be 1 (Airy) or 2 (Stokes second order), got {n!r}"
+    return None if n in (1, 2, 3) else \
+        f"'input wave_model': the model must be 1 (Airy), 2 (Stokes second order) or 3 (Stokes third order in " \
+        f"deep water), got {n!r}"
 
 
 def _drag_forces_type(values):

@@ -153,12 +153,13 @@ def environment_of(case: DonFile) -> Environment:
     friction = case.ocean["bottom_friction"].value if "moving_bottom" in case.inputs else 0.0
     waves = None
     if case.ocean["wave_height"].value > 0:
-        # regular waves on FEMNET's surface z = 0 (felt in dynamics only), linear or, with 'input wave_model 2',
-        # Stokes second order (FEMNET's default is Airy); a depth of 0 is deep water
+        # regular waves on FEMNET's surface z = 0 (felt in dynamics only), linear or, with 'input wave_model 2'
+        # or 3, Stokes second order or third order in deep water (FEMNET's default is Airy); a depth of 0 is
+        # deep water
         heading = math.radians(case.ocean["wave_direction"].value)
         depth = case.ocean["depth"].value
         model = int(case.inputs["wave_model"].value) if "wave_model" in case.inputs else 1
-        theory = waves_lib.Stokes2 if model == 2 else waves_lib.Airy
+        theory = {1: waves_lib.Airy, 2: waves_lib.Stokes2, 3: waves_lib.Stokes3}[model]
         waves = theory(case.ocean["wave_height"].value, case.ocean["wave_period"].value,
                                direction=(math.cos(heading), math.sin(heading), 0.0),
                                depth=depth if depth > 0 else float("inf"), surface_level=0.0, gravity=GRAVITY)
