@@ -217,22 +217,22 @@ def test_a_dynamic_run_stopped_by_ctrl_c_says_how_to_resume_and_resumes(tmp_path
     out = tmp_path / "dyn"
     args = ["run", str(path), "--dynamic", "--dt", "0.01", "--record", "0.05", "--end", "0.2", "--out", str(out),
             "--quiet", "--no-cache"]
-    advance, calls = dynamics.advance_jit, []
+    advance, calls = dynamics.Stepper.advance, []
 
-    def interrupted(*a, **k):
+    def interrupted(self, *a, **k):
         calls.append(1)
         if len(calls) == 3:  # during the third record interval
             raise KeyboardInterrupt
-        return advance(*a, **k)
+        return advance(self, *a, **k)
 
-    monkeypatch.setattr(dynamics, "advance_jit", interrupted)
+    monkeypatch.setattr(dynamics.Stepper, "advance", interrupted)
     assert cli.main(args) == 130
     err = capsys.readouterr().err
     assert "its records in" in err and "end at t = 0.1 s" in err
     hint = err.split("Continue with: jaxnet ")[1].strip()
     assert hint.endswith("--resume") and str(out) in hint
     assert len(timeseries.read_series(out)["time"]) == 3  # t = 0, 0.05, 0.1
-    monkeypatch.setattr(dynamics, "advance_jit", advance)
+    monkeypatch.setattr(dynamics.Stepper, "advance", advance)
     import shlex
 
     assert cli.main(shlex.split(hint)) == 0
