@@ -312,8 +312,10 @@ def _check_cable_joints(scene, n):
         raise SceneError(f"{culprit(int(bad[0]))}: neutral turning angle must be in [0, pi] rad, got {angle[bad[0]]!r}")
 
 
-def validate(scene: Scene) -> None:
-    """Raise :class:`SceneError` if the scene cannot be solved; the message names the culprit."""
+def validate(scene: Scene, dynamic: bool = False) -> None:
+    """Raise :class:`SceneError` if the scene cannot be solved; the message names the culprit. ``dynamic``: for
+    a run in time, where the nodes' masses hold a net that nothing fixes (along an axis, or at all): the
+    checks that a static equilibrium is held are left out."""
     nodes = scene.nodes
     pos = np.asarray(nodes.position, dtype=float)
     if pos.ndim != 2 or pos.shape[1] != 3:
@@ -430,6 +432,8 @@ def validate(scene: Scene) -> None:
     free_unused = np.flatnonzero(~used & ~fixed.all(axis=1))
     if free_unused.size:
         raise SceneError(f"node {int(free_unused[0])} belongs to no element and is not fixed: nothing holds it")
+    if dynamic:
+        return
     if not fixed.any():
         raise SceneError("no node is fixed: the net is free to drift as a rigid body (fix at least one node)")
     floating = has_free_surface(scene)

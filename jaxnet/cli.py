@@ -184,6 +184,8 @@ def _stopped(out, argv):
 def _run_dynamic(args):
     import numpy as np
 
+    import equinox as eqx
+
     from jaxnet.scene import SceneError
     from jaxnet.solve import dynamics
     from jaxnet.solve.statics import solve
@@ -215,6 +217,12 @@ def _run_dynamic(args):
         print(f"  start: static equilibrium {'converged' if eq.converged else 'NOT converged (' + eq.reason + ')'}"
               f" in {int(eq.iterations)} iterations")
         x0 = np.asarray(eq.x)
+    if "gauge" in case.info:  # a FEMNET net held only at jaxnet's gauge for its static start: free in time
+        from jaxnet.io import femnet
+
+        scene = eqx.tree_at(lambda s: s.nodes.fixed, scene, femnet.released_gauge(case).nodes.fixed)
+        print(f"  its gauge node {case.info['gauge']['node']} ({case.info['gauge']['axes']}), held for the static "
+              "start, is free in time")
     try:
         run = dynamics.simulate(scene, end_time, implicit, loading, record_every=record_every, out=out,
                                 resume=args.resume, x0=x0, progress=not args.quiet)

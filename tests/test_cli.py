@@ -259,7 +259,7 @@ def test_a_dynamic_run_of_a_case_with_a_winch_pays_out_its_cable(tmp_path, capsy
 def test_a_run_starts_from_femnets_stored_equilibrium(tmp_path, capsys):
     """``--start CASE.sta`` on FEMNET's mesh: the seine s4_libre, which no load holds any more (many equilibria
     on the sea bed, held along x at jaxnet's gauge node only), starts where FEMNET's .sta has it, laid out over
-    2 km, where its drawn shape would fold it up; its winch then hauls cable 14 in. Without --mesh, and with a .sta too short for the mesh, --start is
+    2 km, where its drawn shape would fold it up; its winch then hauls cable 14 in, its gauge free in time. Without --mesh, and with a .sta too short for the mesh, --start is
     refused naming the file and line."""
     from jaxnet.io import femnet, timeseries
 
@@ -276,7 +276,11 @@ def test_a_run_starts_from_femnets_stored_equilibrium(tmp_path, capsys):
     # drawn shape lies 2.2 km away)
     assert np.abs(series["position"][0] - stored).max() < 0.01 * np.ptp(stored[:, 0])
     np.testing.assert_allclose(series["winch_hauled_m"][:, 0], [0.0, 0.0, 10.0], atol=1e-12)
-    capsys.readouterr()
+    # the gauge that held the seine along x for its static start is free in time: no reaction there
+    gauge = femnet.read_mdg(mdg, don).info["gauge"]
+    assert f"its gauge node {gauge['node']} (x), held for the static start, is free in time" in capsys.readouterr().out
+    held = json.loads((out / "series.json").read_text())["run"]["reaction_nodes"]
+    assert held and gauge["node"] not in held
     assert cli.main(["run", str(don), "--start", str(sta), "--quiet", "--no-cache", "--out", str(out)]) == 2
     assert "--start (FEMNET's node positions, a .sta) goes with --mesh" in capsys.readouterr().err
     short = tmp_path / "short.sta"

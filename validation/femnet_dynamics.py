@@ -5,8 +5,9 @@
 
 Every corpus case with time settings (an end time > 0) and a stored ``.dyn``. Each is read on FEMNET's own mesh
 (``.mdg``: the nodes in the ``.dyn``'s order), solved statically from FEMNET's stored equilibrium (``.sta``, where
-FEMNET's ``dyna`` starts; the drawn shape without one; how far jaxnet's equilibrium lies from it is recorded),
-then run in time by
+FEMNET's ``dyna`` starts; the drawn shape without one; how far jaxnet's equilibrium lies from it is recorded; a
+net held only at jaxnet's gauge whose loads do not balance has no equilibrium and starts from the ``.sta`` as it
+is), its gauge then released (FEMNET's dynamics has none), then run in time by
 :func:`jaxnet.solve.dynamics.simulate` with the case's time step, to its end time, records every record step
 of the case (the default start ramp: one wave period). FEMNET's ``.dyn`` holds, per line, the time and x y z
 of every node from its "beginning time of record". jaxnet's records are interpolated linearly in time to the
@@ -61,6 +62,7 @@ def one(name):
     """The record of one case (module docstring), in this process."""
     import time
 
+    import equinox as eqx
     import numpy as np
 
     from jaxnet.io import femnet
@@ -81,9 +83,19 @@ def one(name):
         return {"case": name, "ran": False, "reason": "no end time"}
     scene, loading, ramp = dynamics.with_start_ramp(case.scene, settings.loading)
     eq = solve(dynamics.scene_at(scene, loading, 0.0), case.solver, throw=False)
+    x0, start_kind = np.asarray(eq.x), "jaxnet's equilibrium"
+    gauge = case.info.get("gauge")
+    if gauge is not None and start is not None:
+        # a free net whose loads do not balance has no equilibrium (s4_traction: 7 kN along x on the gauge):
+        # it starts, as FEMNET's, from the .sta as it is
+        axes = ["xyz".index(a) for a in gauge["axes"]]
+        if np.abs(np.asarray(eq.force)[gauge["node"], axes]).max() > case.solver.tol:
+            x0, start_kind = start, "FEMNET's .sta (no equilibrium: the gauge holds the loads' imbalance)"
     t0 = time.perf_counter()
+    # a net held only at jaxnet's gauge for its static start is free in time, as FEMNET's dyna has it
+    scene = eqx.tree_at(lambda s: s.nodes.fixed, scene, femnet.released_gauge(case).nodes.fixed)
     run = dynamics.simulate(scene, settings.end_time, settings.solver, loading, record_every=settings.record_every,
-                            x0=np.asarray(eq.x), progress=False, throw=False)
+                            x0=x0, progress=False, throw=False)
     wall = time.perf_counter() - t0
     femnet_t, femnet_x = read_dyn(CORPUS / f"{name}.dyn", scene.n_nodes)
     inside = (femnet_t >= run.times[0]) & (femnet_t <= run.times[-1])
@@ -99,8 +111,9 @@ def one(name):
     return {"case": name, "ran": True, "status": run.reason, "reached_s": float(run.times[-1]),
             "end_s": float(settings.end_time), "nodes": scene.n_nodes, "winches": len(loading.winches), "waves": type(scene.environment.waves).__name__
             if scene.environment.waves is not None else "none", "start_ramp_s": ramp,
-            "static_converged": bool(eq.converged), "start": "FEMNET's .sta" if start is not None else "the drawn shape",
-            "start_from_sta_m": float(np.linalg.norm(np.asarray(eq.x) - start, axis=1).max()) if start is not None
+            "static_converged": bool(eq.converged), "static_from": "FEMNET's .sta" if start is not None else
+            "the drawn shape", "start": start_kind,
+            "start_from_sta_m": float(np.linalg.norm(x0 - start, axis=1).max()) if start is not None
             else None, "records_compared": int(len(femnet_t)),
             "window_s": [float(femnet_t[0]), float(femnet_t[-1])] if len(femnet_t) else None,
             "largest_difference_m": float(diff.max()) if diff.size else float("nan"),

@@ -570,7 +570,7 @@ def simulate(scene, end_time=None, solver: Implicit | None = None, loading: Load
         raise ValueError("simulate: give end_time (s): the case has no time settings, or none with an end time")
     solver = solver or Implicit()
     loading = loading or Loading()
-    checks.validate(scene)
+    checks.validate(scene, dynamic=True)
     scene, loading, ramp = with_start_ramp(scene, loading)
     linalg.solver_choice()  # a sparse solver asked for that cannot run here: said before anything compiles
     check_loading(scene, loading)

@@ -190,7 +190,7 @@ Modules: :mod:`.reader` (FEMNET's way of reading, strict: labels, numbers, ``fil
 
 from jaxnet.io.femnet.grammar import MAX_BARS, MAX_PANEL_NODES, DonFile, twine_coordinates
 from jaxnet.io.femnet.links import MERGE_TOLERANCE
-from jaxnet.io.femnet.mapping import GRAVITY, WATER_DENSITY, read_don
+from jaxnet.io.femnet.mapping import GRAVITY, WATER_DENSITY, read_don, released_gauge
 from jaxnet.io.femnet.mdg import read_mdg
 from jaxnet.io.femnet.parse import parse_don
 from jaxnet.io.femnet.reader import MAX_COORDINATE, MAX_MESHES, Value
@@ -200,5 +200,6 @@ from jaxnet.io.femnet.results import (femnet_figures, printed_figure, read_sta, 
 
 __all__ = ["GRAVITY", "MAX_BARS", "MAX_COORDINATE", "MAX_MESHES", "MAX_PANEL_NODES", "MERGE_TOLERANCE", "WATER_DENSITY",
            "DonFile", "Value", "femnet_figures", "parse_don", "printed_figure", "read_don", "read_mdg", "read_sta",
+           "released_gauge",
            "read_sta_summary", "sta_positions", "started_from_sta", "text_output_figures",
            "twine_coordinates"]

@@ -706,6 +706,19 @@ def gauge_of(case: DonFile, position, held, warnings):
     return node, axes
 
 
+def released_gauge(case: Case):
+    """The scene of ``case`` (read by :func:`read_don` or :func:`~.mdg.read_mdg`) with its gauge node
+    (:func:`gauge_of`, ``info["gauge"]``) free again, for a run in time: there the nodes' masses hold a net that
+    no node type holds along an axis, and the loads along it need not balance (FEMNET's ``dyna`` has no gauge:
+    s4_traction's seine, pulled by 7 kN along x, slides). The case's scene as it is without a gauge."""
+    gauge = case.info.get("gauge")
+    if gauge is None:
+        return case.scene
+    fixed = np.array(case.scene.nodes.fixed, dtype=bool)
+    fixed[int(gauge["node"]), ["xyz".index(a) for a in gauge["axes"]]] = False
+    return eqx.tree_at(lambda s: s.nodes.fixed, case.scene, fixed)
+
+
 def result(case: DonFile, scene, net, planes, catch, femnet_laws, plan: JoinPlan | None = None, label="",
            warnings=(), node_type=None) -> Case:
     """What :func:`read_don` and :func:`~.mdg.read_mdg` return: the :class:`~jaxnet.case.Case` of ``scene``
