@@ -386,13 +386,18 @@ def test_purse_seine_difference_is_what_femnet_left_unbalanced():
 def test_a_net_free_along_x_is_held_at_its_gauge_on_either_mesh():
     """11bottom_seine/s4_libre: no node type holds the seine along x (FEMNET's added stiffness finds one of its
     equilibria). jaxnet holds one node along x, the one nearest the net's centre, on its own mesh and on FEMNET's
-    .mdg alike, and says so; at the equilibrium of the free net that node's reaction is zero."""
+    .mdg alike, and says so; at the equilibrium of the free net that node's reaction is zero. A run in time
+    releases it (femnet.released_gauge)."""
     on_don = femnet.read_don(CORPUS / "11bottom_seine" / "s4_libre.don")
     on_mdg = femnet.read_mdg(CORPUS / "11bottom_seine" / "s4_libre.mdg", CORPUS / "11bottom_seine" / "s4_libre.don")
     for case in (on_don, on_mdg):
         gauge = case.info["gauge"]
         assert gauge["axes"] == "x" and any("free to translate along it" in w for w in case.info["warnings"])
         assert np.asarray(case.scene.nodes.fixed)[:, 0].sum() == 1 and np.asarray(case.scene.nodes.fixed)[gauge["node"], 0]
+        # in time the gauge is released: nothing holds the net along x, the rest as it was
+        released = np.asarray(femnet.released_gauge(case).nodes.fixed)
+        assert not released[:, 0].any()
+        np.testing.assert_array_equal(released[:, 1:], np.asarray(case.scene.nodes.fixed)[:, 1:])
     from jaxnet.solve.statics import solve
 
     eq = solve(on_mdg.scene, on_mdg.solver)

@@ -512,7 +512,8 @@ class Trajectory:
 
 def check_loading(scene, loading: Loading):
     """Raise :class:`jaxnet.scene.SceneError` naming the motion and node when a prescribed motion moves a node
-    outside the scene or one not fixed on every axis (a prescribed node must be held)."""
+    outside the scene or one not fixed on every axis (a prescribed node must be held), and naming the winch
+    and bar when a winch takes a bar outside the scene or one another winch takes."""
     fixed = np.asarray(scene.nodes.fixed)
     for k, prescribed in enumerate(loading.motions):
         nodes = np.asarray(prescribed.nodes)
