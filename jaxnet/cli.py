@@ -232,7 +232,8 @@ def _run_dynamic(args):
     except KeyboardInterrupt:
         return _stopped(out, args.argv)
     print(f"  {run.steps} steps, {run.mean_iterations:.2f} Newton iterations per step, {int(run.state.retries)} "
-          f"retried; wall {run.timing.wall_s:.2f} s (first interval with compilation {run.timing.compile_s:.2f} s)")
+          f"retried; wall {run.timing.wall_s:.2f} s (first interval with compilation {run.timing.compile_s:.2f} s; "
+          f"{run.loop} loop)")
     print(f"  wrote {out / 'series.npz'}, {out / 'series.pvd'}")
     return 0
 
@@ -271,10 +272,10 @@ def argument_parser() -> argparse.ArgumentParser:
     run.add_argument("--end", type=float, help="with --dynamic: end time (s)")
     run.add_argument("--dt", type=float,
                      help=f"with --dynamic: time step (s), default {Implicit.time_step:g} or the case's")
-    run.add_argument("--loop", choices=("host", "compiled"),
-                     help="with --dynamic: who drives the steps (jaxnet.solve.options.Implicit.loop): host (default; "
-                     "its programs kept on disk) or compiled (one program, compiled by every run; cheaper steps on "
-                     "small nets)")
+    run.add_argument("--loop", choices=("auto", "host", "compiled"),
+                     help="with --dynamic: who drives the steps (jaxnet.solve.options.Implicit.loop): host (its "
+                     "programs kept on disk, reused by the next run and --resume), compiled (one program, compiled "
+                     "by every run, cheaper per step), or auto (default: compiled for a run of many steps)")
     run.add_argument("--record", type=float, help="with --dynamic: time between records (s), default every step")
     run.add_argument("--resume", action="store_true", help="with --dynamic: continue the run in --out from its last record")
     default_cache = pathlib.Path(os.environ.get("XDG_CACHE_HOME") or pathlib.Path.home() / ".cache") / "jaxnet"

@@ -396,6 +396,14 @@ def test_the_host_loop_takes_the_compiled_loops_steps(case):
         assert int(host.state.retries) > 0
     with pytest.raises(ValueError, match="loop must be one of"):
         dynamics.Implicit(loop="python")
+    # "auto" (the default): the compiled loop past AUTO_COMPILED_STEPS steps still to take, the host's below
+    from jaxnet.solve.options import AUTO_COMPILED_STEPS
+
+    auto = dynamics.Implicit(time_step=0.01)
+    assert auto.loop == "auto"
+    assert dynamics.chosen_loop(auto, 0.01 * AUTO_COMPILED_STEPS) == "host"
+    assert dynamics.chosen_loop(auto, 0.01 * (AUTO_COMPILED_STEPS + 1)) == "compiled"
+    assert dynamics.chosen_loop(dynamics.Implicit(time_step=0.01, loop="host"), 1e3) == "host"
 
 
 def same_run_both_loops(scene, end, h, newton, loading=None):

@@ -32,7 +32,7 @@ SCENES = [
                            "--start", str(CORPUS / "11bottom_seine" / "s4.sta")], 0.5, 10.0, (40.0, 80.0, 120.0)),
 ]
 
-SUMMARY = re.compile(r"(\d+) steps, .* wall ([\d.]+) s \(first interval with compilation ([\d.]+) s\)")
+SUMMARY = re.compile(r"(\d+) steps, .* wall ([\d.]+) s \(first interval with compilation ([\d.]+) s")
 
 
 def one_process(args, end, resume, loop, cache, out, dt, record):

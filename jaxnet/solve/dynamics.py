@@ -41,12 +41,13 @@ accepted (Newton's NON_FINITE status is a failure).
 
 The loop. :func:`simulate` advances the run one record interval at a time, writes each record at once
 (:mod:`jaxnet.io.timeseries`: time series and VTK), shows progress, and can resume a stopped run from its last
-record. Two drivers take the same steps (:attr:`jaxnet.solve.options.Implicit.loop`): by default the host
+record. Two drivers take the same steps (:attr:`jaxnet.solve.options.Implicit.loop`): the host
 (:class:`Stepper`: a compiled :func:`step_setup` per step, then the static solver's host Newton loop given the
 step, whose programs are kept on disk, so that the next run and a resumed one load them); or one jitted
 program per interval (:func:`advance`: ``lax.while_loop`` over steps, Newton's ``lax.while_loop`` inside, the
-factorisation a host callback, which keeps it from the disk: compiled by every process, cheaper per step on
-small nets). ``validation/dynamics_loops.py`` measures both.
+factorisation a host callback, which keeps it from the disk: compiled by every process, cheaper per step).
+By default a run of many steps takes the compiled loop, a shorter one the host's
+(:data:`jaxnet.solve.options.AUTO_COMPILED_STEPS`); ``validation/dynamics_loops.py`` measures both.
 
 Loading in time (:class:`Loading`): a current whose speed follows a history (:mod:`jaxnet.forcing`),
 waves (``Environment.waves``, :mod:`jaxnet.waves`: regular, Stokes, an irregular sea), and prescribed motions
@@ -72,7 +73,7 @@ import numpy as np
 from jaxnet import assemble, catch as catch_lib, checks, forcing, linalg, model as model_lib, scene as scene_lib
 from jaxnet.case import Case
 from jaxnet.forcing import Loading  # simulate's argument, offered here as dynamics.Loading too
-from jaxnet.solve import newton, programs, results, statics
+from jaxnet.solve import newton, options as options_lib, programs, results, statics
 from jaxnet.solve.masses import lumped_masses
 from jaxnet.solve.options import Implicit, Newton
 from jaxnet.solve.results import Timing
@@ -80,8 +81,8 @@ from jaxnet.terms import cable, drag, inertia, tension, term as term_lib
 
 __all__ = ["Implicit", "Loading", "TimeStep", "State", "Trajectory", "DynamicsError", "lumped_masses", "scene_at",
            "water_acceleration", "out_of_balance", "prescribed_velocity", "check_loading", "with_start_ramp", "advance",
-           "simulate", "out_of_balance_jit", "advance_jit", "step_setup", "Stepper", "record_figures", "RUNNING", "DONE",
-           "STEP_FAILED", "REASONS"]
+           "simulate", "out_of_balance_jit", "advance_jit", "step_setup", "Stepper", "chosen_loop", "record_figures",
+           "RUNNING", "DONE", "STEP_FAILED", "REASONS"]
 
 #: stop reasons of a dynamic run (``State.status``, ``Trajectory.status``)
 RUNNING, DONE, STEP_FAILED = 0, 1, 2
@@ -480,7 +481,8 @@ class Trajectory:
     stopped, ``throw=False``: the records then end at the last one before the failure), and its
     :class:`~jaxnet.solve.results.Timing` (``compile_s``: the first record interval, which compiles), and the
     time (s) over which its waves and motions grew in (:attr:`jaxnet.forcing.Loading.ramp`); ``reaction_nodes``
-    (F,): the node indices of the rows of ``figures["reaction_N"]`` (the nodes held on some axis)."""
+    (F,): the node indices of the rows of ``figures["reaction_N"]`` (the nodes held on some axis); ``loop``: the
+    loop that drove its steps, "host" or "compiled" (:func:`chosen_loop`)."""
 
     times: np.ndarray
     positions: np.ndarray
@@ -490,6 +492,7 @@ class Trajectory:
     timing: Timing
     start_ramp_s: float = 0.0
     reaction_nodes: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    loop: str = "host"
 
     @property
     def status(self):
@@ -623,7 +626,8 @@ def simulate(scene, end_time=None, solver: Implicit | None = None, loading: Load
     targets = np.minimum(record_every * np.arange(1, int(np.ceil(end_time / record_every - 1e-9)) + 1), end_time)
     targets = targets[targets > float(state.t) + 1e-9 * record_every]
     bar = Progress(float(state.t), end_time, disable=not progress, steps0=int(state.steps))
-    stepper = Stepper(scene, pattern, masses, loading, model, solver) if solver.loop == "host" else None
+    loop = chosen_loop(solver, end_time - float(state.t))
+    stepper = Stepper(scene, pattern, masses, loading, model, solver) if loop == "host" else None
     try:
         with bar:
             for k, target in enumerate(targets):
@@ -654,7 +658,15 @@ def simulate(scene, end_time=None, solver: Implicit | None = None, loading: Load
     return Trajectory(times=np.asarray(times), positions=np.asarray(positions), velocities=np.asarray(velocities),
                       figures={k: np.asarray(v) for k, v in figures.items()}, state=state,
                       timing=Timing(compile_s=compile_s, wall_s=_time.perf_counter() - t0), start_ramp_s=ramp,
-                      reaction_nodes=fixed_nodes)
+                      reaction_nodes=fixed_nodes, loop=loop)
+
+
+def chosen_loop(solver: Implicit, duration):
+    """The loop that drives a run of ``duration`` (s) still to go (:attr:`Implicit.loop`): "host" or
+    "compiled", "auto" resolved by the number of steps left (:data:`jaxnet.solve.options.AUTO_COMPILED_STEPS`)."""
+    if solver.loop != "auto":
+        return solver.loop
+    return "compiled" if duration / solver.time_step > options_lib.AUTO_COMPILED_STEPS else "host"
 
 
 def _checkpoint(state: State):

@@ -117,7 +117,12 @@ DIFFERENTIABLE = Newton(tol=1e-8, max_iter=200, damping=1e-6, stall_window=None,
 
 
 #: who drives a run's time steps (:attr:`Implicit.loop`)
-LOOPS = ("host", "compiled")
+LOOPS = ("auto", "host", "compiled")
+
+#: ``loop="auto"`` takes the compiled loop for a run of more steps than this still to take: the host loop's
+#: extra cost, about 5 ms a step on small nets (``validation/dynamics_loops.py``: the cage in waves, the seine
+#: s4), then outweighs the compiled loop's compilation in every process (5-8 s there)
+AUTO_COMPILED_STEPS = 1500
 
 
 @dataclasses.dataclass(frozen=True)
@@ -128,19 +133,21 @@ class Implicit:
     time_step: Δt (s), the step the run takes when Newton converges.
     min_time_step: the smallest step a failed step may be retried with (s); below it the run stops.
     newton: the options of each step's Newton iteration (:class:`Newton`); default :data:`TIME_STEP`.
-    loop: who drives the steps, the same steps either way. ``"host"`` (default): Python, each step's Newton
-      the static solver's host loop (:class:`jaxnet.solve.dynamics.Stepper`): its programs are kept on disk,
-      so the next run of a scene of that shape and a resumed run load them instead of compiling; each step
-      costs a few milliseconds of dispatch more. ``"compiled"``: one program runs the steps of a record
-      interval (:func:`jaxnet.solve.dynamics.advance`), with the factorisation as a host callback, which no
-      program kept on disk may hold: compiled again by every process, cheaper per step on small nets
-      (``validation/REPORT.md``, "Dynamics: host-driven steps" measures both).
+    loop: who drives the steps, the same steps either way. ``"host"``: Python, each step's Newton the static
+      solver's host loop (:class:`jaxnet.solve.dynamics.Stepper`): its programs are kept on disk, so the next
+      run of a scene of that shape and a resumed run load them instead of compiling; each step costs a few
+      milliseconds more (Python and dispatch). ``"compiled"``: one program runs the steps of a record interval
+      (:func:`jaxnet.solve.dynamics.advance`), with the factorisation as a host callback, which no program kept
+      on disk may hold: compiled again by every process (seconds), cheaper per step. ``"auto"`` (default): the
+      compiled loop for a run of more than :data:`AUTO_COMPILED_STEPS` steps still to take, where the host's
+      cost per step outweighs a compilation, the host loop otherwise (``validation/REPORT.md``,
+      "dynamics_loops.py", measures both).
     """
 
     time_step: float = 0.01
     min_time_step: float = 1e-7
     newton: Newton = TIME_STEP
-    loop: str = "host"
+    loop: str = "auto"
 
     def __post_init__(self):
         if self.loop not in LOOPS:
