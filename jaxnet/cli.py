@@ -16,9 +16,9 @@ per Newton iteration and a short summary. Exit status 0 on convergence, 1 on a f
 from its static equilibrium (computed first), to ``--end`` seconds with steps of ``--dt`` seconds, a record
 every ``--record`` seconds written to DIR as it goes (series.json + raw/ arrays, series.npz at the end,
 series.pvd + net_NNNNN.vtu for ParaView, checkpoint.npz; ``--resume`` continues a stopped run from its last
-record), with a progress bar. A FEMNET case takes its own time settings, towing tables, winches and numerics (its threshold, iterations
-and displacement limit, for the static start and for every time step); ``--tol``, ``--max-iter`` and
-``--stiffness`` apply to both as in a static run. The built-in ``cage_waves`` (the default with ``--dynamic``) is
+record), with a progress bar. A FEMNET case takes its own time settings, towing tables, winches and numerics
+(its threshold, iterations and displacement limit, for the static start and for every time step); ``--tol``,
+``--max-iter`` and ``--stiffness`` apply to both as in a static run. The built-in ``cage_waves`` (the default with ``--dynamic``) is
 the cage in regular waves, its collar heaving.
 
 Compiled programs are kept on disk (in ``--cache DIR``, default ``$XDG_CACHE_HOME/jaxnet`` or

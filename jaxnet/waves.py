@@ -1,9 +1,10 @@
 """Waves in water of finite or infinite depth: the water's elevation, velocity and acceleration at a point and a
 time, for the drag (relative velocity, book 4.272-4.276) and the force of inertia (the water's acceleration γ_h
 of 4.265) in dynamics. :class:`Airy`, regular linear waves (below); :class:`Stokes2`, regular second-order
-Stokes waves (FEMNET's ``wave_model 2``); :class:`Stokes3`, third-order ones in deep water (``wave_model 3``); :class:`Irregular` and :func:`sea_state`, an irregular sea as a sum of
-linear components drawn from a spectrum (:mod:`jaxnet.spectra`). Each takes a ``ramp`` over which a dynamic run
-grows it in from still water (:attr:`jaxnet.forcing.Loading.ramp`).
+Stokes waves (FEMNET's ``wave_model 2``); :class:`Stokes3`, third-order ones in deep water (``wave_model 3``);
+:class:`Irregular` and :func:`sea_state`, an irregular sea as a sum of linear components drawn from a spectrum
+(:mod:`jaxnet.spectra`). Each takes a ``ramp`` over which a dynamic run grows it in from still water
+(:attr:`jaxnet.forcing.Loading.ramp`).
 
 The book gives no wave model (γ_h and the water's velocity c_i are inputs there); this is textbook theory.
 Units: m, s, rad; velocities m/s, accelerations m/s². What follows is :class:`Airy`'s first-order theory, on
@@ -451,7 +452,8 @@ class Stokes3(Airy):
         k = self.wavenumber
         decay = jnp.exp(k * jnp.minimum(x @ self.up - self.surface_level, 0.0))
         amplitude = 0.5 * self.height * jnp.sqrt(self.gravity * k) * forcing.envelope(t, self.ramp)[0] * decay
-        return (amplitude * jnp.cos(theta))[..., None] * self.direction + (amplitude * jnp.sin(theta))[..., None] * self.up
+        horizontal, vertical = amplitude * jnp.cos(theta), amplitude * jnp.sin(theta)
+        return horizontal[..., None] * self.direction + vertical[..., None] * self.up
 
     def acceleration(self, x, t):
         """Local acceleration ∂u/∂t (..., 3) (m/s²) at points x (..., 3) (m), time t (s)."""
