@@ -28,6 +28,11 @@ In a time step (:mod:`jaxnet.solve.dynamics`) the drag terms depend on the verti
 :class:`Motion`, and the velocity is formed inside the differentiated element function, so the tangent
 holds the drag's damping (1/Δt) dF/dv as well as its dependence on the positions.
 
+In a time step in waves the free surface is the wave's, not the mean level: the environment then holds the
+elevation over each node (``Environment.surface_elevation``) and each element is evaluated in its own
+environment, whose ``surface_level`` is the surface's height over each of its vertices
+(:func:`element_environment`), so buoyancy and the wetted share of the drags take the local surface.
+
 Sign convention: ``force`` is the out-of-balance force on the nodes (N), zero at equilibrium;
 ``tangent`` is K = -d force / dx (book eq. 4.46).
 """
@@ -195,6 +200,27 @@ def _velocity(x, x_previous, motion):
     return None if motion is None else (x - x_previous) / motion.time_step
 
 
+def surface_levels(scene, family, conn):
+    """The height (m) of the free surface over each vertex of each element of a family: (E, k), (E,) for the
+    nodes (a node is its own element); a placeholder (E, 0) where the environment has no elevation over its
+    nodes (``Environment.surface_elevation`` None: the mean level ``surface_level``, the same for all)."""
+    env = scene.environment
+    if env.surface_elevation is None:
+        return jnp.zeros((conn.shape[0], 0))
+    level = env.surface_level + jnp.asarray(env.surface_elevation)[conn]
+    return level[:, 0] if family == "nodes" else level
+
+
+def element_environment(env, level):
+    """The environment one element sees: ``env`` with its free surface at ``level`` over the element's vertices
+    (a row of :func:`surface_levels`), where the environment has an elevation over its nodes (a time step in
+    waves); ``env`` itself otherwise. The terms read the surface's height as ``env.surface_level`` either way, a
+    scalar or one height per vertex, which their formulas take element-wise."""
+    if env.surface_elevation is None:
+        return env
+    return eqx.tree_at(lambda e: e.surface_level, env, level)
+
+
 def _previous(scene, conn, motion):
     """The elements' vertex positions at the last time (E, k, 3), or a placeholder in statics."""
     return jnp.zeros((conn.shape[0], 0)) if motion is None else motion.x_previous[conn]
@@ -225,7 +251,13 @@ def energy(x, scene, model: tuple[ActiveTerm, ...], elastic_scale=1.0):
     for family in _families(model, "energy"):
         conn = connectivity(scene, family)
         fam = getattr(scene, family)
-        e = jax.vmap(_family_energy(model, family, elastic_scale), in_axes=(0, 0, None))(x[conn], fam, scene.environment)
+        energy_of = _family_energy(model, family, elastic_scale)
+        env = scene.environment
+
+        def element(xe, p, level, energy_of=energy_of):
+            return energy_of(xe, p, element_environment(env, level))
+
+        e = jax.vmap(element)(x[conn], fam, surface_levels(scene, family, conn))
         total = total + jnp.sum(e)
     return total
 
@@ -261,10 +293,10 @@ def forces(x, scene, model, state=None, motion: Motion | None = None):
         fam = getattr(scene, family)
         force = _family_force(model, family)
 
-        def element(xe, p, xp, force=force):
-            return force(xe, p, scene.environment, state, _velocity(xe, xp, motion))
+        def element(xe, p, xp, level, force=force):
+            return force(xe, p, element_environment(scene.environment, level), state, _velocity(xe, xp, motion))
 
-        f = jax.vmap(element)(x[conn], fam, _previous(scene, conn, motion))
+        f = jax.vmap(element)(x[conn], fam, _previous(scene, conn, motion), surface_levels(scene, family, conn))
         total = total.at[conn.ravel()].add(f.reshape(-1, 3))
     return total
 
@@ -332,24 +364,26 @@ def element_stiffnesses(x, scene, element_energies, element_forces=None, state=N
         k = conn.shape[1]
         energy_fn, force_fn, block_fn = element_energies.get(family), element_forces.get(family), element_blocks.get(family)
 
-        def stiffness(xe, p, xp, energy_fn=energy_fn, force_fn=force_fn, block_fn=block_fn, k=k):
+        def stiffness(xe, p, xp, level, energy_fn=energy_fn, force_fn=force_fn, block_fn=block_fn, k=k):
+            env = element_environment(scene.environment, level)
             block = jnp.zeros((3 * k, 3 * k))
             if energy_fn is not None:
-                flat = lambda v: energy_fn(v.reshape(k, 3), p, scene.environment)  # noqa: E731
+                flat = lambda v: energy_fn(v.reshape(k, 3), p, env)  # noqa: E731
                 block = block + jax.jacfwd(jax.grad(flat))(xe.ravel())
             if force_fn is not None:
                 def flat(v):
                     v = v.reshape(k, 3)
-                    return force_fn(v, p, scene.environment, state, _velocity(v, xp, motion)).ravel()
+                    return force_fn(v, p, env, state, _velocity(v, xp, motion)).ravel()
 
                 block = block - jax.jacfwd(flat)(xe.ravel())
             if block_fn is not None:
                 # in a time step the moving drags' closed forms take the vertices' velocities and Δt
                 moving = {} if motion is None else {"velocity": _velocity(xe, xp, motion), "time_step": motion.time_step}
-                block = block + block_fn(xe, p, scene.environment, state, **moving)
+                block = block + block_fn(xe, p, env, state, **moving)
             return block
 
-        out[family] = jax.vmap(stiffness)(x[conn], fam, _previous(scene, conn, motion))
+        out[family] = jax.vmap(stiffness)(x[conn], fam, _previous(scene, conn, motion),
+                                          surface_levels(scene, family, conn))
     return out
 
 

@@ -280,6 +280,12 @@ class Environment(eqx.Module):
       are evaluated at it; 0 in statics).
     waves: regular waves (:class:`jaxnet.waves.Airy`), or None for none. Only dynamics feels them: their
       velocity adds to the current's in the drag, their acceleration gives the inertia force of the water.
+    surface_elevation: (N,) height (m) of the free surface above ``surface_level`` over each node, or None
+      (default) for the mean level everywhere. A time step in waves sets it to the waves' elevation η at the
+      nodes' positions at the step's start (:func:`jaxnet.solve.dynamics.scene_at`), so that buoyancy and the
+      wetted share of the drags follow the wave's surface, as FEMNET's ``dyna`` does (its immersion is taken
+      from the wave's height at each node, ``miseajourPondFS_dyna.c``). Each element sees the level over its
+      own vertices (:func:`jaxnet.assemble.element_environment`).
     added_mass_coefficient: Ca (dimensionless): the added mass of twines and bars is Ca rho V, V their
       volume (book 4.265's M_a, for which the book gives no formula; 1 is the potential-flow value of a
       cylinder moving across its axis, taken in every direction). Dynamics only.
@@ -303,6 +309,7 @@ class Environment(eqx.Module):
     bottom_band: float = 1e-3
     time: float = 0.0
     waves: object | None = None
+    surface_elevation: np.ndarray | None = None
     added_mass_coefficient: float = 1.0
     floating: tuple = eqx.field(static=True, default=("netting", "hexagonal", "bars", "nodes"))
 

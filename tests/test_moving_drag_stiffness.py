@@ -106,17 +106,26 @@ def element_rows(family, scene=SCENE):
 
 
 @functools.partial(jax.jit, static_argnames=("term",))
-def element_stiffness(term, env, x, p, xp, state=None):
-    """(closed form, -jacfwd) of one moving drag term on elements x (E, k, 3) with previous positions xp."""
-    def one(x, p, xp):
+def element_stiffness(term, env, x, p, xp, state=None, levels=None):
+    """(closed form, -jacfwd) of one moving drag term on elements x (E, k, 3) with previous positions xp;
+    ``levels``: the free surface's height over each vertex (E, k) (a time step in waves), None for the mean
+    level."""
+    if levels is not None:
+        env = eqx.tree_at(lambda e: e.surface_elevation, env, jnp.zeros(1), is_leaf=lambda v: v is None)
+    else:
+        levels = jnp.zeros((x.shape[0], 0))
+
+    def one(x, p, xp, level):
+        local = assemble.element_environment(env, level)
+
         def force(v):
             v = v.reshape(x.shape)
-            return term.force(v, p, env, state, velocity=(v - xp) / DT).ravel()
+            return term.force(v, p, local, state, velocity=(v - xp) / DT).ravel()
 
         auto = -jax.jacfwd(force)(x.ravel())
-        return term.stiffness(x, p, env, state, velocity=(x - xp) / DT, time_step=DT), auto
+        return term.stiffness(x, p, local, state, velocity=(x - xp) / DT, time_step=DT), auto
 
-    return jax.vmap(one)(x, p, xp)
+    return jax.vmap(one)(x, p, xp, levels)
 
 
 @jax.jit
@@ -164,8 +173,24 @@ def compare(closed, auto):
     return none.sum()
 
 
+def wave_surface_levels(family, x, rows, seed):
+    """(E, k) heights (m) of a wave's surface over the vertices x (E, k, 3) ((E,) for the nodes, as
+    :func:`jaxnet.assemble.surface_levels` gives them), each within its element's immersion band of the vertex
+    (1.2 bands wide): the wetted shares on their ramp and corners, each vertex its own."""
+    if family == "nodes":
+        band = drag_term.surface.node_band(rows.size, rows.volume)[:, None]
+    else:
+        band = drag_term.surface.immersion_band(rows.diameter)[:, None]
+    u = np.random.default_rng(seed).uniform(-0.6, 0.6, size=x.shape[:2])
+    levels = jnp.asarray(x[..., 2] + u * band)
+    return levels[:, 0] if family == "nodes" else levels  # a node is its own element: one height
+
+
+@pytest.mark.parametrize("surface", ["mean level", "waves"])
 @pytest.mark.parametrize("name, family", [("netting_drag", "netting"), ("bar_drag", "bars"), ("node_drag", "nodes")])
-def test_moving_drag_stiffness_equals_jacfwd(name, family):
+def test_moving_drag_stiffness_equals_jacfwd(name, family, surface):
+    """With the mean level the elements lie deep; with a wave's surface over each vertex (a time step in waves,
+    :func:`jaxnet.assemble.element_environment`) each is partly wetted, and its wetted shares' slopes enter."""
     term, env = TERMS[name], SCENE.environment
     env = eqx.tree_at(lambda e: e.time, env, 0.7)
     x, xp, rows = states(family, seed=3)
@@ -177,8 +202,14 @@ def test_moving_drag_stiffness_equals_jacfwd(name, family):
     if family == "nodes":
         keep = np.flatnonzero(np.asarray(rows.drag_area) > 0)
         x, xp, rows = x[keep], xp[keep], jax.tree.map(lambda a: a[keep], rows)
-    closed, auto = element_stiffness(term, env, jnp.asarray(x), rows, jnp.asarray(xp), state)
+    levels = wave_surface_levels(family, x, rows, seed=4) if surface == "waves" else None
+    closed, auto = element_stiffness(term, env, jnp.asarray(x), rows, jnp.asarray(xp), state, levels)
     hidden = compare(closed, auto)
+    if levels is not None:
+        # the wave's surface changes the stiffness: the shares and their slopes are not those of deep water
+        deep = element_stiffness(term, env, jnp.asarray(x), rows, jnp.asarray(xp), state)[1]
+        assert per_element_relative(np.asarray(auto)[~(np.abs(auto).max(axis=(1, 2)) == 0)],
+                                    np.asarray(deep)[~(np.abs(auto).max(axis=(1, 2)) == 0)]).min() > 0.01
     assert 3 <= hidden <= x.shape[0] - 5 if family == "netting" else hidden == 0
     # the vertex's own velocity enters: the damping -(1/Δt) dF/dc dominates the diagonal blocks here
     assert np.abs(np.asarray(auto)).max() > 10.0

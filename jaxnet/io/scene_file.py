@@ -211,7 +211,8 @@ def from_dict(doc: dict, label: str = "scene document") -> Case:
     """The :class:`~jaxnet.case.Case` of a parsed scene document: its :class:`~jaxnet.net.Net` (built here) and
     solver options."""
     _keys(doc, _TOP, "scene")
-    env_fields = {f.name for f in dataclasses.fields(Environment)}
+    # the free surface's elevation over each node is the dynamics' to set, step by step, not a file's
+    env_fields = {f.name for f in dataclasses.fields(Environment)} - {"surface_elevation"}
     env_spec = dict(_keys(doc.get("environment", {}), env_fields, "environment"))
     for key, value in env_spec.items():
         if key in ("up", "current_direction"):

@@ -141,7 +141,7 @@ def implicit_step(x, v, t_new, time_step, scene, structure, loading, masses,
     :data:`jaxnet.solve.options.DIFFERENTIABLE`). Returns the :class:`Instant` at t_new."""
     loading = loading or dynamics.Loading()
     mass, water_mass = masses
-    scene_t = dynamics.scene_at(scene, loading, t_new)
+    scene_t = dynamics.scene_at(scene, loading, t_new, surface_at=x)
     if _moving_water(scene, loading):
         waves = scene.environment.waves is not None
         load = water_mass * dynamics.water_acceleration(x, scene_t, loading, waves)

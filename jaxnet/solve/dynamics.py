@@ -199,12 +199,20 @@ def with_start_ramp(scene, loading: Loading):
     return scene, loading, ramp
 
 
-def scene_at(scene, loading: Loading, t):
+def scene_at(scene, loading: Loading, t, surface_at=None):
     """The scene at time t: the environment's time and current speed, the prescribed nodes moved, the winches'
-    bars at their rest lengths."""
+    bars at their rest lengths. ``surface_at``: in waves, the positions (N, 3) (m) at which the free surface's
+    elevation is taken (a step's start; :attr:`jaxnet.scene.Environment.surface_elevation`): buoyancy and the
+    wetted drags then follow the wave's surface, the elevation η(x_i, t) over each node held through the step as
+    FEMNET's ``dyna`` holds it (taken once per step, at the step's start positions and its end time, so that the
+    step's forces keep an energy: η moved with the node would give every immersed body a horizontal force ρgV∇η
+    that linear theory puts in the water's acceleration, already in the inertia). None: the mean level."""
     env = scene.environment
     speed = env.current_speed if loading.current_speed is None else loading.current_speed(t)
     env = eqx.tree_at(lambda e: (e.time, e.current_speed), env, (t, speed))
+    if surface_at is not None and env.waves is not None:
+        elevation = env.waves.elevation(jnp.asarray(surface_at, dtype=float), t)
+        env = eqx.tree_at(lambda e: e.surface_elevation, env, elevation, is_leaf=lambda leaf: leaf is None)
     position = jnp.asarray(scene.nodes.position)
     for prescribed in loading.motions:
         nodes = jnp.asarray(prescribed.nodes)
@@ -237,8 +245,9 @@ def out_of_balance(x, v, t, scene, masses, loading: Loading, model):
     inertia -(M + M_a) a left out: the loads, the water's inertia (M_a + ρV) γ_h, minus the gradient of the
     stored energy, and the force terms with the drag on the water's velocity relative to v. The equations
     of motion are (M + M_a) a = out_of_balance(x, v, t) at the free coordinates: what
-    :mod:`jaxnet.solve.reference` integrates, and what the implicit step balances with a = γ."""
-    scene_t = scene_at(scene, loading, t)
+    :mod:`jaxnet.solve.reference` integrates, and what the implicit step balances with a = γ. In waves the free
+    surface is the wave's elevation over the nodes at x (:func:`scene_at`)."""
+    scene_t = scene_at(scene, loading, t, surface_at=x)
     waves = scene.environment.waves is not None
     f = assemble.loads(scene_t, model) - jax.grad(assemble.energy)(x, scene_t, model)
     if waves or loading.current_speed is not None:
@@ -263,11 +272,12 @@ def prescribed_velocity(scene, loading: Loading, t):
 
 def step_setup(x, v, h, t_new, scene, masses, loading: Loading):
     """(the scene at ``t_new``, the :class:`TimeStep`) of the implicit step from positions x and velocities v
-    (N, 3) at t_new - h to t_new (s): the surroundings at t_new (:func:`scene_at`), the masses (``masses``,
+    (N, 3) at t_new - h to t_new (s): the surroundings at t_new (:func:`scene_at`; in waves, the free surface's
+    elevation over the nodes at x), the masses (``masses``,
     :func:`lumped_masses`; with winches, those of the scene at t_new: a winch moves cable into or out of the
     water), and the water's inertia (M_a + ρV) γ_h at the positions x."""
     mass, water_mass = (jnp.asarray(m) for m in masses)
-    scene_t = scene_at(scene, loading, t_new)
+    scene_t = scene_at(scene, loading, t_new, surface_at=x)
     if loading.winches:
         mass, water_mass = lumped_masses(scene_t, jnp)
     waves = scene.environment.waves is not None
@@ -427,8 +437,8 @@ def _totals(state: State, scene, loading, model):
     """(3,) total drag (N) of each drag group (:func:`jaxnet.terms.term.drag_groups`) at the state (relative
     velocities included), the volume held (m³) when the scene has an enclosure, and the largest twine and bar
     tensions (N; of one twine, not of the mesh's bundle of them); one compiled program per run."""
-    scene_t = scene_at(scene, loading, state.t)
     motion = assemble.Motion(state.x - state.last_step * state.v, state.last_step)
+    scene_t = scene_at(scene, loading, state.t, surface_at=motion.x_previous)
     out = {}
     for group, names in term_lib.drag_groups().items():
         terms = tuple(t for t in model if t.name in names)

@@ -529,8 +529,10 @@ def wetted_shares(x, band, env):
     with a smooth share, to its cap of 3000, as FEMNET's own solve does). So each corner is replaced by the
     parabola tangent to both its sides over |t ∓ 1/2| < e, e = :data:`WETTED_ROUNDING`: the share is C¹,
     differs from the ramp by at most e/4 (at the corners) and nowhere beyond them, and keeps the ramp's integral
-    over the heights (the two corners' differences cancel). The surface is the mean water plane
-    ``env.surface_level``, as for buoyancy (waves move the water, not the plane, in this version)."""
+    over the heights (the two corners' differences cancel). The surface is ``env.surface_level``, as for buoyancy:
+    the mean water plane, or in a time step in waves the wave's surface over each vertex
+    (:func:`jaxnet.assemble.element_environment`), as FEMNET's ``dyna`` weighs its drags
+    (``miseajourPondFS_dyna.c``)."""
     t = (x @ env.up - env.surface_level) / band
     e = WETTED_ROUNDING
     low, high = 1.0 - (t + 0.5 + e) ** 2 / (4.0 * e), (t - 0.5 - e) ** 2 / (4.0 * e)

@@ -75,8 +75,15 @@ minimum width is needed for correctness. Where pure Newton must be used, or to m
 slack netting at the surface, pass ``thickness`` >= rho g V_vertex / k to :func:`netting_gravity_energy`
 (it changes only the transition, never the immersed or emerged loads).
 
+Waves. In a time step in waves the water plane is the wave's surface: ``surface_level`` is then the surface's
+height over each vertex (one per vertex, the elevation η over its node at the step's start added to the mean
+level: :attr:`jaxnet.scene.Environment.surface_elevation`, :func:`jaxnet.assemble.element_environment`), so a
+float rides the wave and a collar under a crest is more immersed than under a trough, as in FEMNET's ``dyna``
+(``flotteurelement_dyna2.c``). Within the step η is held (a number per vertex, not a function of the position),
+so the energy above stays an energy and its gradient is vertical.
+
 Conventions: ``up`` is the unit vertical (m/m), ``surface_level`` the height of the water plane along up
-(m), g > 0 (m/s²). Every function here is a pure jnp function of one element (vmappable, no Python
+(m; a scalar, or one height per vertex in waves, which every formula here takes element-wise), g > 0 (m/s²). Every function here is a pure jnp function of one element (vmappable, no Python
 control flow on traced values). ``thickness`` must be > 0; a bar or twine of diameter 0 has no volume, and its
 band is taken as 1 m so that it stays finite.
 """
