@@ -201,6 +201,9 @@ def _check_environment(env):
     if np.isinf(_scalar(env.surface_level, "environment: surface_level")):
         raise SceneError(f"environment: surface_level must be a finite height (m), or NaN for no free surface, got "
                          f"{env.surface_level!r}")
+    if not isinstance(env.bottom_moving, (bool, np.bool_)):
+        raise SceneError(f"environment: bottom_moving says whether the sea bed slides under the net (True or False), "
+                         f"got {env.bottom_moving!r}")
     unknown = [f for f in env.floating if f not in FLOATING]
     if unknown or not isinstance(env.floating, tuple):
         raise SceneError(f"environment: floating names the families that feel the free surface, a tuple among "

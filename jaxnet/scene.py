@@ -273,9 +273,13 @@ class Environment(eqx.Module):
       buoyant out of the water (``flotteursurf3.c``): its scenes name ("bars", "nodes").
     bottom_stiffness: stiffness (N/m) of the penetration of a node beyond its limit (``Nodes.limit``):
       FEMNET's "stiffness of the insertion in the sea bottom".
-    bottom_friction: friction coefficient mu (dimensionless) of the sea bed *sliding under the net* in the
-      current's direction (FEMNET's "wearing coefficient" with ``input moving_bottom``: a towed gear on
-      the bottom); 0 for a still bottom, which in FEMNET's statics exerts no friction at all.
+    bottom_friction: friction coefficient mu (dimensionless) of the sea bed on the nodes pressed against it
+      (FEMNET's "wearing coefficient on the bottom"), kinetic friction mu times the normal reaction. In statics it
+      acts only where the bed slides under the net (``bottom_moving``), in the current's direction; in time it
+      opposes each node's velocity over the bed (:mod:`jaxnet.terms.bottom`), as FEMNET's ``dyna`` does.
+    bottom_moving: whether the sea bed slides under the net at the current's velocity (True, the default: a gear
+      towed over the ground, seen from the gear, FEMNET's ``input moving_bottom``) or is still (False: FEMNET's
+      default, whose statics have no friction at all). Static (it decides which terms a scene has).
     time: the time (s) at which the surroundings are taken (dynamics: the current's history and the waves
       are evaluated at it; 0 in statics).
     waves: regular waves (:class:`jaxnet.waves.Airy`), or None for none. Only dynamics feels them: their
@@ -312,6 +316,7 @@ class Environment(eqx.Module):
     surface_elevation: np.ndarray | None = None
     added_mass_coefficient: float = 1.0
     floating: tuple = eqx.field(static=True, default=("netting", "hexagonal", "bars", "nodes"))
+    bottom_moving: bool = eqx.field(static=True, default=True)
 
 
 #: the element families that can feel a free surface (``Environment.floating``)

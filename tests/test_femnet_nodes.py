@@ -101,11 +101,14 @@ def test_a_floor_goes_to_exactly_the_nodes_of_its_type_with_femnet_stiffness_and
     np.testing.assert_array_equal(limit[:, 2], np.where(limited, -2.5, 0.0))
     assert scene.nodes.drag_length is None and scene.nodes.drag_coefficient is None  # no body: no term
     env = scene.environment
-    # FEMNET's fond.c law exactly (no band); a still bottom: no friction although the case gives 0.5
-    assert (env.bottom_stiffness, env.bottom_band, env.bottom_friction) == (K_BOTTOM, 0.0, 0.0)
+    # FEMNET's fond.c law exactly (no band); a still bottom: no friction in statics although the case gives 0.5,
+    # which rubs the nodes moving over the bed in time (fond_dyn.c)
+    assert (env.bottom_stiffness, env.bottom_band, env.bottom_friction, env.bottom_moving) == (K_BOTTOM, 0.0, 0.5,
+                                                                                              False)
     names = [t.name for t in model.active_terms(scene)]
     assert "bottom_contact" in names and "bottom_friction" not in names and "node_box_drag" not in names
-    assert info["sea_bed"] == {"stiffness_N_per_m": K_BOTTOM, "moving_bottom": False, "friction": 0.0,
+    assert "bed_friction" in [t.name for t in model.active_terms(scene, dynamic=True)]
+    assert info["sea_bed"] == {"stiffness_N_per_m": K_BOTTOM, "moving_bottom": False, "friction": 0.5,
                                "limits": {3: {"limit_m": [0.0, 0.0, -2.5], "sense": [0, 0, 1]}}}
     json.dumps(info)
     # the case as FEMNET wrote it has neither: the fields stay None
@@ -118,6 +121,7 @@ def test_moving_bottom_gives_the_friction_and_a_ceiling_reads_as_sense_minus_one
                                                        inputs=("moving_bottom",))))
     scene, info = case.scene, case.info
     assert scene.environment.bottom_friction == 0.5 and info["sea_bed"]["moving_bottom"] is True
+    assert scene.environment.bottom_moving is True
     sinker = _sinker_nodes(scene)
     sense = np.asarray(scene.nodes.limit_sense)
     assert set(np.flatnonzero(sense[:, 1] == -1)) == set(sinker.tolist()) and not sense[:, [0, 2]].any()

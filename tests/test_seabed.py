@@ -348,3 +348,92 @@ def test_scene_file_limits_and_bottom_reach_the_scene(tmp_path):
     bad = dict(SCENE, limits=[{"at": [2, 0, 0], "limit": [0, 0, 0], "sense": [0, 0, 1], "stiffness": 1}])
     with pytest.raises(SceneError, match=r"limits\[0\]: unknown key\(s\) \['stiffness'\]"):
         scene_file.from_dict(bad)
+
+
+# -- the sea bed in time ----------------------------------------------------------------------------
+
+
+def sliding_body(mu=0.5, mass=2.0, stiffness=1e6, **environment):
+    """A body of ``mass`` kg resting on a still sea bed z >= 0 (FEMNET's penalty law, no band: it sits at the
+    penetration m g / k), its slack, weightless link to a far anchor; ``mu`` the bed's friction."""
+    from jaxnet.scene import Bars, Nodes, Scene
+
+    depth = mass * 9.81 / stiffness
+    nodes = Nodes(position=np.array([[-20.0, 0.0, 0.0], [0.0, 0.0, -depth]]), fixed=np.array([[True] * 3, [False] * 3]),
+                  mass=np.array([0.0, mass]), volume=np.zeros(2), force=np.zeros((2, 3)),
+                  limit=np.zeros((2, 3)), limit_sense=np.array([[0, 0, 0], [0, 0, 1]]))
+    bars = Bars(ends=np.array([[0, 1]]), rest_length=np.array([40.0]), ea_traction=np.array([1.0]),
+                ea_compression=np.zeros(1), diameter=np.zeros(1), density=np.zeros(1), cable=np.array([0]))
+    env = Environment(**{"bottom_stiffness": stiffness, "bottom_friction": mu, "bottom_band": 0.0,
+                         "bottom_moving": False, "added_mass_coefficient": 0.0, **environment})
+    return Scene(nodes=nodes, bars=bars, environment=env)
+
+
+def braking_recurrence(v0, mu_g, h, n):
+    """The book scheme's exact steps of a body braked by the bed's smooth Coulomb friction,
+    (v_{k+1} - v_k)/h = -mu g v_{k+1}/sqrt(v_{k+1}² + V_l²), each step's root by bisection: the speeds."""
+    out = [v0]
+    for _ in range(n):
+        lo, hi = 0.0, out[-1]
+        for _ in range(200):
+            mid = 0.5 * (lo + hi)
+            if mid - out[-1] + h * mu_g * mid / np.sqrt(mid**2 + bottom.SLIDING_SPEED**2) > 0:
+                hi = mid
+            else:
+                lo = mid
+        out.append(0.5 * (lo + hi))
+    return np.array(out)
+
+
+def test_in_time_the_bed_brakes_a_sliding_body_by_mu_times_its_weight_against_its_velocity():
+    """FEMNET's dyna rubs every node that presses on the bed (``fond_dyn.c``), moving bottom or not. A body sent
+    sliding at 1 m/s along (0.6, 0.8, 0) over a still bed of mu = 0.5 slows on a straight line at mu g (the
+    scheme's exact steps of the friction's smooth form) and stops after v0²/(2 mu g) to the scheme's accuracy."""
+    from jaxnet.solve import dynamics, statics
+
+    scene = sliding_body()
+    names = {t.name for t in model.active_terms(scene, dynamic=True)}
+    assert "bed_friction" in names and "bottom_friction" not in names
+    assert "bed_friction" not in {t.name for t in model.active_terms(scene)}  # statics: nothing moves
+    h, n, heading = 0.005, 60, np.array([0.6, 0.8, 0.0])
+    newton = statics.Newton(tol=1e-10, max_iter=30, damping=1e-12, stall_window=None)
+    v0 = np.zeros((2, 3))
+    v0[1] = heading
+    tr = dynamics.simulate(scene, n * h, dynamics.Implicit(time_step=h, newton=newton), v0=v0, progress=False)
+    travel = tr.positions[:, 1] - tr.positions[0, 1]
+    speeds = braking_recurrence(1.0, 0.5 * 9.81, h, n)
+    np.testing.assert_allclose(travel[:, :2], np.outer(h * np.concatenate([[0], np.cumsum(speeds[1:])]),
+                                                       heading[:2]), rtol=0, atol=1e-9)
+    np.testing.assert_allclose(travel[:, 2], 0.0, atol=1e-12)  # the friction acts along the bed only
+    stop = 1.0 / (2 * 0.5 * 9.81)
+    assert abs(np.linalg.norm(travel[-1]) - stop) < 2 * h  # it stops where Coulomb friction stops it
+    assert speeds[-1] < 1e-3
+
+
+def test_a_sliding_bed_pulls_a_body_at_rest_by_its_static_friction():
+    """On a bed sliding with a 1 m/s current (a towed gear seen from the gear) the friction in time at rest is the
+    static one, mu N along the current, to O(V_l²/U²): a run starts from a static equilibrium without a jump."""
+    from jaxnet.solve import dynamics
+
+    still = sliding_body(current_speed=1.0)
+    moving = sliding_body(current_speed=1.0, bottom_moving=True)
+    assert "bottom_friction" in {t.name for t in model.active_terms(moving)}
+    assert "bottom_friction" not in {t.name for t in model.active_terms(still)}
+    x = jnp.asarray(moving.nodes.position)
+    for scene, expected in ((still, 0.0), (moving, 0.5 * 2.0 * 9.81 / np.sqrt(1 + bottom.SLIDING_SPEED**2))):
+        masses = dynamics.lumped_masses(scene)
+        f = dynamics.out_of_balance(x, jnp.zeros_like(x), 0.0, scene, masses, dynamics.Loading(),
+                                    model.active_terms(scene, dynamic=True))
+        np.testing.assert_allclose(np.asarray(f[1]), [expected, 0.0, 0.0], atol=1e-9)
+    static = term_forces(moving, x)["bottom_friction"][1]
+    np.testing.assert_allclose(static, [0.5 * 2.0 * 9.81, 0.0, 0.0], rtol=1e-12)
+
+
+def test_scene_file_says_whether_the_bed_slides():
+    doc = dict(SCENE, environment=dict(SCENE["environment"], bottom_moving=False))
+    scene = scene_file.from_dict(doc).scene
+    assert scene.environment.bottom_moving is False
+    assert "bottom_friction" not in {t.name for t in model.active_terms(scene)}
+    assert "bed_friction" in {t.name for t in model.active_terms(scene, dynamic=True)}
+    with pytest.raises(SceneError, match=r"environment.bottom_moving: expected true or false, got 1"):
+        scene_file.from_dict(dict(SCENE, environment=dict(SCENE["environment"], bottom_moving=1)))

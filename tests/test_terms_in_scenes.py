@@ -55,13 +55,14 @@ _IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _traced_cache: dict = {}
 
 
-def traced_scopes(scene):
-    """Term and drag-model scopes in the name stacks of the scene's lowered Newton program."""
-    key = (model.active_terms(scene), jax.tree.structure(scene),
-           tuple(np.shape(a) for a in jax.tree.leaves(scene)))
+def traced_scopes(scene, dynamic=False):
+    """Term and drag-model scopes in the name stacks of the scene's lowered Newton program (``dynamic``: a time
+    step's)."""
+    key = (model.active_terms(scene, dynamic=dynamic), jax.tree.structure(scene),
+           tuple(np.shape(a) for a in jax.tree.leaves(scene)), dynamic)
     if key not in _traced_cache:  # the program depends on these only; the parameter values are arguments
         words = set()
-        for name in NAMED_LOCATION.findall(lowered_text(scene)):
+        for name in NAMED_LOCATION.findall(lowered_text(scene, dynamic)):
             if "/" in name:  # a name stack (scopes and transforms), not a Python call site
                 words.update(_IDENTIFIER.findall(name))
         _traced_cache[key] = frozenset(words & SCOPES)
@@ -167,6 +168,10 @@ ON_OFF = {
     "bottom_friction": (lambda: node_types(small_scene(twine(cd_normal=0.0), current=0.5),
                                            {"bottom_stiffness": 1e6, "bottom_friction": 0.5}, **SEA_BED),
                         lambda: node_types(small_scene(twine(cd_normal=0.0), current=0.5), {"bottom_stiffness": 1e6}, **SEA_BED)),
+    # in time only: a still bed rubs the nodes moving over it
+    "bed_friction": (lambda: node_types(small_scene(), {"bottom_stiffness": 1e6, "bottom_friction": 0.5,
+                                                        "bottom_moving": False}, **SEA_BED),
+                     lambda: node_types(small_scene(), {"bottom_stiffness": 1e6, "bottom_moving": False}, **SEA_BED)),
     "catch_pressure": (lambda: small_scene(twine(cd_normal=0.0), current=0.5, catch=True),
                        lambda: small_scene(twine(cd_normal=0.0), current=0.5)),
     "panel_catch_pressure": (lambda: small_scene(twine(cd_normal=0.0), current=0.5, panel_catch=True),
@@ -190,6 +195,8 @@ ON_OFF = {
                                      lambda: small_scene(twine(diameter=0.0), hexagonal=hex_twine(diameter=0.0),
                                                          surface=1.0)),
 }
+#: the terms only a time step has (their pairs are traced in a time step)
+IN_TIME_ONLY = {"bed_friction"}
 
 
 def test_every_registered_term_has_an_on_off_pair():
@@ -199,13 +206,16 @@ def test_every_registered_term_has_an_on_off_pair():
 @pytest.mark.parametrize("name", TERM_NAMES)
 def test_term_is_traced_exactly_when_its_parameters_are_present(name):
     on_scene, off_scene = (make() for make in ON_OFF[name])
-    on, off = traced_scopes(on_scene), traced_scopes(off_scene)
+    dynamic = name in IN_TIME_ONLY
+    on, off = traced_scopes(on_scene, dynamic), traced_scopes(off_scene, dynamic)
     assert name in on and name not in off
     terms = lambda s: s & set(TERM_NAMES)  # noqa: E731
     assert terms(on) - terms(off) == {name} and terms(off) <= terms(on)
     # what was traced is what the registry decided, from the parameter values alone
     for scene, traced in ((on_scene, on), (off_scene, off)):
-        assert terms(traced) == {t.name for t in model.active_terms(scene)}
+        assert terms(traced) == {t.name for t in model.active_terms(scene, dynamic=dynamic)}
+    if dynamic:
+        assert name not in {t.name for t in model.active_terms(on_scene)}  # statics never have it
     if name == "twine_bending":
         assert on_scene.hinges is not None and off_scene.hinges is None  # no EI: no hinges at all
 

@@ -15,12 +15,20 @@ from jaxnet.terms import term as term_lib
 NAMED_LOCATION = re.compile(r'loc\("([^"]+)"\(')
 
 
-def lowered_text(scene):
-    """The scene's whole Newton program, lowered with debug information (nothing is compiled)."""
-    m = model.active_terms(scene)
+def lowered_text(scene, dynamic=False):
+    """The scene's whole Newton program, lowered with debug information (nothing is compiled); ``dynamic``: that
+    of a time step (0.01 s from rest)."""
+    from jaxnet.solve import dynamics
+
+    m = model.active_terms(scene, dynamic=dynamic)
     p = assemble.build_pattern(scene, m)
-    x0 = np.asarray(scene.nodes.position).ravel()[np.asarray(p.free)]
-    return newton.newton_loop_jit.lower(x0, scene, p, model=m, solver=jn.Newton()).as_text(debug_info=True)
+    x = np.asarray(scene.nodes.position, dtype=float)
+    x0 = x.ravel()[np.asarray(p.free)]
+    step = None
+    if dynamic:
+        step = dynamics.TimeStep(x, np.zeros_like(x), np.float64(0.01), dynamics.lumped_masses(scene)[0],
+                                 np.zeros_like(x))
+    return newton.newton_loop_jit.lower(x0, scene, p, model=m, solver=jn.Newton(), step=step).as_text(debug_info=True)
 
 
 def traced_terms(scene):

@@ -4,7 +4,7 @@
 The format mirrors the Python API (see README, "Scene files"). Top-level keys::
 
     environment  {gravity, water_density, up, current_speed, current_direction, profile_depth,
-                  profile_factor, surface_level, bottom_stiffness, bottom_friction, bottom_band,
+                  profile_factor, surface_level, bottom_stiffness, bottom_friction, bottom_band, bottom_moving,
                   waves?: {height, period, direction?, depth?, phase?}             regular (Airy) waves
                         | {hs, tp, spectrum?, gamma?, spreading?, components?, band?, seed?,
                            direction?, depth?, stretching?}                       an irregular sea}
@@ -30,7 +30,8 @@ The format mirrors the Python API (see README, "Scene files"). Top-level keys::
 reference gets the body (sizes in m, a negative lz for a body hanging below its node) or the limits (m;
 sense +1 floor, -1 ceiling, 0 none, per axis); a later entry replaces an earlier one on the nodes they
 share. The sea bed's stiffness, friction and band are the environment's ``bottom_stiffness`` (N/m),
-``bottom_friction`` and ``bottom_band`` (m).
+``bottom_friction`` and ``bottom_band`` (m); ``bottom_moving`` (true, the default, or false) says whether the bed
+slides under the net at the current's velocity (a towed gear) or is still.
 
 A REF is ``{"panel": P, "corner": k}``, ``{"panel": P, "side": k}`` (SIDE), ``{"panel": P}`` (all its
 nodes), ``{"cable": C, "end": 0 | 1}``, ``{"cable": C}`` (all its nodes) or a point ``[x, y, z]``.
@@ -219,6 +220,9 @@ def from_dict(doc: dict, label: str = "scene document") -> Case:
             env_spec[key] = _triple(value, f"environment.{key}")
         elif key in ("profile_depth", "profile_factor"):
             env_spec[key] = _list(value, f"environment.{key}")
+        elif key == "bottom_moving":
+            if not isinstance(value, bool):
+                raise SceneError(f"environment.bottom_moving: expected true or false, got {value!r}")
         elif key != "waves":
             env_spec[key] = _number(value, f"environment.{key}")
     if "waves" in env_spec:

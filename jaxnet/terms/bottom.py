@@ -1,5 +1,6 @@
-"""Contact with the sea bed (and any floor or ceiling along a coordinate axis), and the friction of a
-bottom sliding under a towed gear: FEMNET's node limits and "BOTTOM SEA ENVIRONMENT".
+"""Contact with the sea bed (and any floor or ceiling along a coordinate axis), the friction of a bottom
+sliding under a towed gear, and in time the bed's friction on a net moving over it: FEMNET's node limits and
+"BOTTOM SEA ENVIRONMENT".
 
 What FEMNET does (statics, ``unix_2004/fond.c``, function ``fond``; data from ``chargement_don.c``:
 per node type "Limits X,Y,Z" and "Limits sense X,Y,Z", then "Wearing coefficient on the bottom" and
@@ -21,6 +22,8 @@ along the current. In FEMNET's frame the net is still and the water flows past i
 so a towed gear's sea bed also slides under it, in the current's direction: the friction it exerts on
 the net pulls the net *with* the current (it opposes the gear's motion over the ground). It is not
 capped and has no static branch: the bottom always slides, so the friction is always fully developed.
+jaxnet's statics add it where ``Environment.bottom_moving`` (the default; FEMNET's reader sets it from ``input
+moving_bottom``) and ``bottom_friction`` > 0.
 
 Here the same physics, written as an energy and a force:
 
@@ -54,6 +57,22 @@ Here the same physics, written as an energy and a force:
   the horizontal axes and the column of the vertical one; FEMNET puts the y one in row x, column y
   (``ze[3*zi-2][eca+1]``, pardiso ``(3*zi-2, 3*zi-1)``): a misplaced entry, harmless for a current along
   x (sin = 0), which slows its convergence otherwise; autodiff gets it right.
+
+In time (FEMNET's ``dyna``, ``dyna2/fond_dyn.c``) the sea bed rubs every node pressed against it, whatever
+``moving_bottom`` says: a Coulomb friction mu k (L_z - z) against the node's velocity v, -mu N v/|v| above a
+sliding speed V_l = 5 mm/s and -mu N v/V_l below it. Here (:func:`bed_friction_force`) it opposes the node's
+velocity relative to the bed along the bed's plane, v_r = v - v_bed with its normal part removed (v_bed the
+current's velocity where the bed slides, ``Environment.bottom_moving``, else 0), as
+
+    F = -mu N v_r / sqrt(|v_r|² + V_l²),
+
+which is FEMNET's to O(V_l²/|v_r|²) when sliding and the same viscous slope mu N/V_l at rest, but smooth: its
+derivative, which the implicit step's tangent holds (the velocity is (x - x_n)/Δt), has no jump at V_l. Two
+differences from FEMNET, by choice: the friction acts along the bed only (FEMNET's also opposes the vertical
+velocity of a node sinking into the bed, which is the penalty's business), and a sliding bed is friction against
+the velocity relative to it (FEMNET adds its static pull along the current to the friction against the
+velocity over the ground). At rest on a sliding bed it is the static friction above to O(V_l²/U²): a run in
+time starts from a static equilibrium without a jump. In statics this term is absent (the net does not move).
 
 Generalisation beyond FEMNET: FEMNET's friction uses the current's heading (its current is horizontal)
 and acts only on floors along z with z up. Here the sea bed is the limit along the coordinate axis of
@@ -149,6 +168,26 @@ def friction_force(x, limit, sense, stiffness, band, friction, direction, axis, 
     return (friction * normal) * direction
 
 
+#: V_l (m/s): the sliding speed of FEMNET's sea-bed friction in time, below which its friction is viscous
+#: (``fond_dyn.c``); here the speed scale of its smooth form (:func:`bed_friction_force`)
+SLIDING_SPEED = 0.005
+
+
+def bed_friction_force(x, velocity, limit, sense, stiffness, band, friction, bed_velocity, axis, floor):
+    """Friction (3,) in N of the sea bed on a node moving over it (a time step): -mu N v_r/sqrt(|v_r|² + V_l²),
+    N = k g'(p) the normal reaction, v_r the node's velocity relative to the bed along the bed's plane (module
+    docstring), V_l = :data:`SLIDING_SPEED`.
+
+    Args:
+      x: (3,) node position (m). velocity: (3,) its velocity (m/s). limit, sense, stiffness, band, friction,
+        axis, floor: as :func:`friction_force`'s.
+      bed_velocity: (3,) velocity of the bed (m/s): the current's where it slides, 0 where it is still.
+    """
+    v = (velocity - bed_velocity).at[axis].set(0.0)
+    resisting = -v / jnp.sqrt(jnp.dot(v, v) + SLIDING_SPEED**2)
+    return friction_force(x, limit, sense, stiffness, band, friction, resisting, axis, floor)
+
+
 # -- the terms -------------------------------------------------------------------------------------
 
 
@@ -160,6 +199,12 @@ def _friction(x, state, limit, sense, stiffness, band, friction, direction, axis
     return friction_force(x[0], limit, sense, stiffness, band, friction, direction, axis, floor)[None, :]
 
 
+def _bed_friction(x, state, limit, sense, stiffness, band, friction, bed_velocity, axis, floor, moving=True,
+                  velocity=None):
+    return bed_friction_force(x[0], velocity[0], limit, sense, stiffness, band, friction, bed_velocity, axis,
+                              floor)[None, :]
+
+
 def _contact_arguments(p, env):
     return {"limit": p.limit, "sense": p.limit_sense, "stiffness": env.bottom_stiffness, "band": env.bottom_band}
 
@@ -169,6 +214,21 @@ def _friction_arguments(p, env, axis, floor):
             "direction": sliding_direction(env.current_direction, axis), "axis": axis, "floor": floor}
 
 
+def _bed_friction_arguments(p, env, axis, floor, bed_moving, moving):
+    bed = env.current_speed * sliding_direction(env.current_direction, axis) if bed_moving else jnp.zeros(3)
+    return {**_contact_arguments(p, env), "friction": env.bottom_friction, "bed_velocity": bed, "axis": axis,
+            "floor": floor, "moving": moving}
+
+
+def _floor(scene):
+    """(axis, floor sense) of the sea bed where some node has it as a floor, else None."""
+    where = scene_lib.bottom_axis(scene.environment)
+    if where is None:
+        return None  # jaxnet.checks.validate names the problem where friction needs it
+    axis, floor = where
+    return where if np.any(np.asarray(scene.nodes.limit_sense)[:, axis] == floor) else None
+
+
 def _contact_active(scene, dynamic):
     n = scene.nodes
     limited = n.limit is not None and n.limit_sense is not None and any_nonzero(n.limit_sense)
@@ -176,16 +236,29 @@ def _contact_active(scene, dynamic):
 
 
 def _friction_active(scene, dynamic):
+    """Statics only (in time :data:`BED_FRICTION` holds the sliding bed too), on a bed that slides."""
     env = scene.environment
-    if _contact_active(scene, dynamic) is None or not env.bottom_friction > 0 or not has_current(scene):
+    if (dynamic or not env.bottom_moving or _contact_active(scene, dynamic) is None or not env.bottom_friction > 0
+            or not has_current(scene)):
         return None
-    where = scene_lib.bottom_axis(env)
+    where = _floor(scene)
     if where is None:
-        return None  # jaxnet.checks.validate names the problem
+        return None
     axis, floor = where
-    on_floor = np.any(np.asarray(scene.nodes.limit_sense)[:, axis] == floor)
     sliding = np.any(np.delete(np.asarray(env.current_direction, dtype=float), axis) != 0)
-    return {"axis": axis, "floor": floor} if on_floor and sliding else None
+    return {"axis": axis, "floor": floor} if sliding else None
+
+
+def _bed_friction_active(scene, dynamic):
+    """In time, wherever the bed has friction and some node has it as a floor, still or sliding."""
+    env = scene.environment
+    if not dynamic or _contact_active(scene, dynamic) is None or not env.bottom_friction > 0:
+        return None
+    where = _floor(scene)
+    if where is None:
+        return None
+    axis, floor = where
+    return {"axis": axis, "floor": floor, "bed_moving": bool(env.bottom_moving), "moving": True}
 
 
 BOTTOM_CONTACT = register(Term(
@@ -194,3 +267,6 @@ BOTTOM_CONTACT = register(Term(
 BOTTOM_FRICTION = register(Term(
     name="bottom_friction", family="nodes", kind=FORCE, element=_friction, arguments=_friction_arguments,
     active=_friction_active, group=BOTTOM))
+BED_FRICTION = register(Term(
+    name="bed_friction", family="nodes", kind=FORCE, element=_bed_friction, arguments=_bed_friction_arguments,
+    active=_bed_friction_active, group=BOTTOM, moving=True))

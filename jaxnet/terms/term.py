@@ -195,8 +195,9 @@ def groups(select=None) -> dict[str, tuple[str, ...]]:
 
 
 def drag_groups() -> dict[str, tuple[str, ...]]:
-    """The groups of the drag terms (those of a moving net's relative velocity): what a dynamic run records."""
-    return groups(lambda group, term: term.moving)
+    """The groups of the drag terms (the water's forces on a moving net's relative velocity, not the sea bed's
+    friction): what a dynamic run records."""
+    return groups(lambda group, term: term.moving and group.hydrodynamic)
 
 
 def hydrodynamic_terms() -> tuple[str, ...]:

@@ -140,9 +140,11 @@ Conventions established from the files (see ``tests/test_femnet.py``):
   (N/m), which is ``Environment.bottom_stiffness``; ``bottom_band`` = 0 gives this law exactly (jaxnet's
   default band smooths the contact: :mod:`jaxnet.terms.bottom`). A sense 0 is no limit (its value is
   unused). A limit with a stiffness 0 does nothing in FEMNET and is refused. The "wearing coefficient on the
-  bottom" is FEMNET's friction of a bottom sliding at the current's speed, which it applies only with
-  ``input moving_bottom`` (a still bottom exerts none, ``Bottom.moving`` = 0): ``bottom_friction`` is the
-  coefficient with that input, else 0. ``info["sea_bed"]`` and ``info["node_bodies"]`` say what was read.
+  bottom" is ``bottom_friction``: FEMNET's statics apply it only with ``input moving_bottom``, as the friction of a
+  bottom sliding at the current's speed (a still bottom exerts none, ``Bottom.moving`` = 0:
+  ``Environment.bottom_moving`` False), its dynamics on every node that presses on the bed, against the node's
+  velocity (``fond_dyn.c``; :mod:`jaxnet.terms.bottom`). ``info["sea_bed"]`` and ``info["node_bodies"]`` say
+  what was read.
 * **Catch.** FEMNET's catch volume is that of the *modelled* part (``c2``, a quarter model, asks for
   and reports 0.2 m³); jaxnet's :class:`~jaxnet.scene.Catch` takes the whole cod-end's volume and the
   number of copies (2 per symmetry plane used by the nodes): volume = 0.2 × 4 for ``c2``. The axis is

@@ -136,8 +136,9 @@ def rope_of(c: DonCable) -> Rope:
 
 def environment_of(case: DonFile) -> Environment:
     """The surroundings: FEMNET's water and current, its water plane z = 0, and its sea bed (``fond.c``): the
-    limits' penalty stiffness, its law exactly (no band), and the friction of the bottom only where FEMNET applies
-    it, with ``input moving_bottom`` (a still bottom exerts none).
+    limits' penalty stiffness, its law exactly (no band), and its friction coefficient, the "wearing coefficient
+    on the bottom": in statics FEMNET applies it only with ``input moving_bottom`` (``bottom_moving``; a still
+    bottom exerts none), in time on every node that presses on the bed (``fond_dyn.c``).
 
     The water plane. FEMNET's statics float node boxes (``flotteur2.c``) and bars (``flotteurelement2.c``: their
     wetted length) by their part under z = 0, and keep diamond netting buoyant wherever it is
@@ -150,7 +151,7 @@ def environment_of(case: DonFile) -> Environment:
     weights, as before."""
     angle = math.radians(case.ocean["current_direction"].value)
     rho = case.inputs["water_density"].value if "water_density" in case.inputs else WATER_DENSITY
-    friction = case.ocean["bottom_friction"].value if "moving_bottom" in case.inputs else 0.0
+    friction = case.ocean["bottom_friction"].value
     waves = None
     if case.ocean["wave_height"].value > 0:
         # regular waves on FEMNET's surface z = 0 (felt in dynamics only), linear or, with 'input wave_model 2'
@@ -167,7 +168,8 @@ def environment_of(case: DonFile) -> Environment:
                        current_speed=case.ocean["current_speed"].value,
                        current_direction=np.array([math.cos(angle), math.sin(angle), 0.0]),
                        bottom_stiffness=float(case.ocean["bottom_stiffness"].value), bottom_friction=float(friction),
-                       bottom_band=0.0, waves=waves, surface_level=0.0, floating=("bars", "nodes"))
+                       bottom_band=0.0, waves=waves, surface_level=0.0, floating=("bars", "nodes"),
+                       bottom_moving="moving_bottom" in case.inputs)
 
 
 def symmetry_share(case: DonFile, node_type):
