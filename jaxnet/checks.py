@@ -183,6 +183,16 @@ def _check_limits(scene, n):
                          f"coordinate axis (the sea bed is a limit along one axis), got {env.up!r}")
 
 
+def _check_symmetry_planes(scene):
+    """Mirror planes: (axis 0, 1 or 2, finite position) pairs, one per axis at most."""
+    planes = scene.symmetry_planes
+    if not isinstance(planes, tuple) or any(not (isinstance(p, tuple) and len(p) == 2 and p[0] in (0, 1, 2)
+                                                 and np.isfinite(p[1])) for p in planes):
+        raise SceneError(f"symmetry_planes: expected ((axis 0, 1 or 2, position m), ...), got {planes!r}")
+    if len({axis for axis, _ in planes}) != len(planes):
+        raise SceneError(f"symmetry_planes: one plane per axis at most, got {planes!r}")
+
+
 def _check_environment(env):
     """Scalars finite numbers (surface_level NaN for none), unit 'up' and current direction, waves or None."""
     gravity, rho, speed = (_scalar(getattr(env, k), f"environment: {k}") for k in ("gravity", "water_density",
@@ -335,6 +345,7 @@ def validate(scene: Scene, dynamic: bool = False) -> None:
     _check_positive(nodes.volume, "displaced volume", lambda i: f"node {i}", strict=False)
     env = scene.environment
     _check_environment(env)
+    _check_symmetry_planes(scene)
     depth, factor = np.asarray(env.profile_depth, dtype=float), np.asarray(env.profile_factor, dtype=float)
     if depth.shape != factor.shape or depth.ndim != 1:
         raise SceneError(f"environment: profile_depth and profile_factor must be 1-D of one length, got "

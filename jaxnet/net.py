@@ -192,6 +192,7 @@ class Net:
         self._seams: list[tuple[Side, Side]] = []
         self._cable_joints: list[tuple[str, str, float, float | None]] = []   # (cable a, cable b, angle rad, EI)
         self._fixed: list[tuple[object, tuple[bool, bool, bool]]] = []
+        self._symmetry_planes: list[tuple[int, float, bool]] = []   # (axis, position m, hold its nodes)
         self._attached: list[tuple[object, float, float, np.ndarray, float, float]] = []
         self._bodies: list[tuple[object, np.ndarray, np.ndarray]] = []   # (where, sizes m, Cd), in call order
         self._limits: list[tuple[object, np.ndarray, np.ndarray]] = []   # (where, limits m, senses), in call order
@@ -334,6 +335,21 @@ class Net:
         if bad:
             raise SceneError(f"fix: unknown axes {sorted(bad)} (use x, y, z)")
         self._fixed.append((where, tuple(a in axes for a in "xyz")))
+
+    def symmetry_plane(self, axis, at=0.0, hold=True):
+        """Declare the net the modelled part of a net symmetric about the plane ``axis`` = ``at`` (axis "x", "y"
+        or "z", at in m): a cod-end modelled as a quarter has two. With ``hold`` every node lying on the plane (to
+        1e-9 of the net's size) is held along ``axis``, which makes the model symmetric; the results then give the
+        whole net's figures beside the modelled part's, and the pictures and ParaView files draw the whole net
+        (:attr:`jaxnet.scene.Scene.symmetry_planes`)."""
+        if axis not in ("x", "y", "z"):
+            raise SceneError(f"symmetry_plane: axis must be 'x', 'y' or 'z', got {axis!r}")
+        if not np.isfinite(at):
+            raise SceneError(f"symmetry_plane: 'at' must be a finite position (m), got {at!r}")
+        index = "xyz".index(axis)
+        if any(a == index for a, _, _ in self._symmetry_planes):
+            raise SceneError(f"symmetry_plane: the net already has a symmetry plane across {axis}")
+        self._symmetry_planes.append((index, float(at), bool(hold)))
 
     def attach(self, where, mass=0.0, volume=0.0, force=(0.0, 0.0, 0.0), drag_area=0.0, size=0.0):
         """Attach a lumped mass (kg) displacing ``volume`` (m³), an external force (N) and/or a drag area
@@ -515,6 +531,10 @@ class Net:
         lookup = lambda ref: np.unique(ids[self._nodes_of(ref, meshes, cable_nodes, builder)])  # noqa: E731
         for ref, axes in self._fixed:
             fixed[lookup(ref)] |= np.array(axes)
+        extent = max(float(np.ptp(position, axis=0).max()), 1.0) if n else 1.0
+        for axis, at, hold in self._symmetry_planes:
+            if hold:
+                fixed[np.abs(position[:, axis] - at) <= 1e-9 * extent, axis] = True
         for ref, m, v, f, a, h in self._attached:
             nodes = lookup(ref)
             mass[nodes] += m / nodes.size
@@ -550,6 +570,7 @@ class Net:
             environment=environment,
             panel_names=tuple(self._panels),
             cable_names=tuple(self._cables) + tuple(f"{p.name} twines" for p in self._twine_panels()),
+            symmetry_planes=tuple((axis, at) for axis, at, _ in self._symmetry_planes),
         )
         from jaxnet.checks import validate
 

@@ -324,7 +324,14 @@ FLOATING = ("netting", "hexagonal", "bars", "nodes")
 
 
 class Scene(eqx.Module):
-    """One net problem. ``netting`` or ``bars`` may be None; names are for messages and reports."""
+    """One net problem. ``netting`` or ``bars`` may be None; names are for messages and reports.
+
+    symmetry_planes: the mirror planes of a model that is part of a symmetric net (a cod-end's quarter, a trawl's
+      half): ((axis, position m), ...), axis 0, 1 or 2 (x, y, z), the plane x_axis = position; () for a whole
+      net. What the results say of the whole net (the mirrored copies) and what the pictures and ParaView files
+      draw of it; the nodes on a plane are held across it by the scene's fixity (:meth:`jaxnet.net.Net.
+      symmetry_plane` holds them), which is what makes the model symmetric.
+    """
 
     nodes: Nodes
     netting: Netting | None = None
@@ -338,6 +345,7 @@ class Scene(eqx.Module):
     panel_catches: PanelCatches | None = None
     panel_names: tuple = eqx.field(static=True, default=())
     cable_names: tuple = eqx.field(static=True, default=())
+    symmetry_planes: tuple = eqx.field(static=True, default=())
 
     @property
     def n_nodes(self):
@@ -363,6 +371,36 @@ def bottom_axis(env):
     if abs(abs(up[axis]) - 1.0) > 1e-12:
         return None
     return axis, int(np.sign(up[axis]))
+
+
+def mirror_copies(scene) -> int:
+    """How many copies of the modelled part make the whole net: 2 per symmetry plane."""
+    return 2 ** len(scene.symmetry_planes)
+
+
+def mirrored(scene, points):
+    """``points`` (N, 3) (m) and their images in the symmetry planes, copy after copy: (copies, N, 3); the first
+    copy is the modelled part itself. Vectors (forces, velocities) mirror with :func:`mirror_signs`."""
+    points = np.asarray(points, dtype=float)
+    out = [points]
+    for axis, at in scene.symmetry_planes:
+        images = [p.copy() for p in out]
+        for image in images:
+            image[..., axis] = 2.0 * at - image[..., axis]
+        out = out + images
+    return np.stack(out)
+
+
+def mirror_signs(scene) -> np.ndarray:
+    """(copies, 3) the signs of a vector's components in each copy of :func:`mirrored` (-1 along the normal of
+    each plane it is mirrored in)."""
+    signs = [np.ones(3)]
+    for axis, _ in scene.symmetry_planes:
+        images = [s.copy() for s in signs]
+        for image in images:
+            image[axis] = -image[axis]
+        signs = signs + images
+    return np.stack(signs)
 
 
 def has_free_surface(scene) -> bool:

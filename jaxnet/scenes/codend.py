@@ -43,8 +43,8 @@ def codend(meshes_around: int = 100, meshes_along: int = 50, l0: float = 0.06, s
                (length, 0.0, radius, m, m)]
     p = net.panel("cod-end", corners, twine, step)
     net.fix(p.side(0))              # the front, sewn to the trawl
-    net.fix(p.side(3), axes="y")    # on the symmetry plane y = 0
-    net.fix(p.side(1), axes="z")    # on the symmetry plane z = 0
+    net.symmetry_plane("y", 0.0)    # side 3 lies on it, held along y
+    net.symmetry_plane("z", 0.0)    # side 1 lies on it, held along z
     # the cod line gathers the rear border onto the axis: a short rope, as in FEMNET's c2
     net.cable("cod line", along=p.side(2), rope=Rope(ea=5e4, diameter=0.01, density=1025.0), length=0.01)
     net.catch(catch_m3, drag_coefficient=catch_cd, symmetry=4.0, center=(0.0, 0.0, 0.0))

@@ -626,6 +626,8 @@ def read_don(path, femnet_laws=True, refine=1.0):
     position = np.asarray(scene.nodes.position)
     node_type = retyped(case, position, node_type)
     planes = symmetry_planes(case, position, node_type)
+    for axis, at in sorted(planes.items()):
+        net.symmetry_plane("xyz"[axis], at, hold=False)  # its nodes are held by their node types below
     held = np.zeros(3, bool)
     for i, t in enumerate(node_type):
         nt = case.types[t]
