@@ -11,9 +11,17 @@ giving a :class:`Case`; solve it (:func:`solve_static`, :func:`simulate`) into a
 and writers).
 """
 
+from importlib import metadata as _metadata
+
 import jax
 
 jax.config.update("jax_enable_x64", True)
+
+try:
+    #: the installed package's version (``pyproject.toml``), as ``jaxnet --version`` and result.json give it
+    __version__ = _metadata.version("jaxnet")
+except _metadata.PackageNotFoundError:  # run from a source tree that was not installed
+    __version__ = "0+unknown"
 
 from jaxnet import scenes  # noqa: E402
 from jaxnet.case import Case, TimeSettings  # noqa: E402
