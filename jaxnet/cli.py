@@ -64,15 +64,24 @@ def _case(args, dynamic):
     if args.refine is not None and (args.scene is None or not str(args.scene).endswith(".don") or args.mesh):
         raise SceneError("--refine (a mesh finer than the file's) goes with a FEMNET case CASE.don meshed by jaxnet "
                          "(not with --mesh)")
+    settings = getattr(args, "set", None) or []
+    if settings and args.scene is not None:
+        raise SceneError("--set changes a built-in scene's arguments (--scene NAME); a scene file or a FEMNET case "
+                         "is changed by editing it (jaxnet export --scene NAME FILE writes a built-in to a file)")
     if args.scene is None:
         if dynamic:
             name = args.builtin if args.builtin in DYNAMIC else DYNAMIC_DEFAULT
             make, description = DYNAMIC[name]
-            return make(), f"built-in dynamic scene '{name}': {description}"
-        if args.builtin not in BUILT_IN:
-            raise SceneError(f"the built-in scene '{args.builtin}' is a dynamic one: run it with --dynamic")
-        make, description = BUILT_IN[args.builtin]
-        return make(), f"built-in scene '{args.builtin}': {description}"
+        else:
+            if args.builtin not in BUILT_IN:
+                raise SceneError(f"the built-in scene '{args.builtin}' is a dynamic one: run it with --dynamic")
+            name = args.builtin
+            make, description = BUILT_IN[name]
+        changes = built_in_arguments(make, name, settings)
+        said = "; " + ", ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in changes.items()) \
+            if changes else ""
+        kind = "built-in dynamic scene" if dynamic else "built-in scene"
+        return make(**changes), f"{kind} '{name}': {description}{said}"
     if args.start is not None and args.mesh is None:
         raise SceneError("--start (FEMNET's node positions, a .sta) goes with --mesh: they are numbered on its mesh")
     if str(args.scene).endswith(".don"):
@@ -87,6 +96,34 @@ def _case(args, dynamic):
     return case, case.label
 
 
+
+
+def built_in_arguments(make, name, settings):
+    """The keyword arguments ``--set KEY=VALUE ...`` give the function ``make`` of the built-in scene ``name``:
+    each KEY one of its number or integer parameters (its defaults say which), VALUE read as that type. Raises
+    SceneError naming an unknown key (with the known ones) or a value of the wrong kind, before anything is built."""
+    import inspect
+
+    from jaxnet.scene import SceneError
+
+    parameters = {p.name: p for p in inspect.signature(make).parameters.values()
+                  if isinstance(p.default, (int, float)) and not isinstance(p.default, bool)}
+    out = {}
+    for item in settings:
+        key, sep, text = item.partition("=")
+        key = key.strip()
+        if not sep or not key:
+            raise SceneError(f"--set {item!r}: expected KEY=VALUE, e.g. --set current=0.8")
+        if key not in parameters:
+            raise SceneError(f"--set {key}: the built-in scene '{name}' has no such number; it has: "
+                             f"{', '.join(f'{k} (default {p.default!r})' for k, p in parameters.items())}")
+        kind = type(parameters[key].default)
+        try:
+            value = kind(text) if kind is float else int(text)
+        except ValueError:
+            raise SceneError(f"--set {key}={text}: expected {'an integer' if kind is int else 'a number'}") from None
+        out[key] = value
+    return out
 
 
 def _overrides(args):
@@ -243,7 +280,13 @@ def argument_parser() -> argparse.ArgumentParser:
     from jaxnet.scenes import BUILT_IN, DEFAULT, DYNAMIC
     from jaxnet.solve.options import Implicit
 
-    parser = argparse.ArgumentParser(prog="jaxnet", description="Static equilibrium of nets (Priour's netting element) on JAX.")
+    import jaxnet
+
+    parser = argparse.ArgumentParser(
+        prog="jaxnet", description="Fishing nets and aquaculture netting in a current and in waves: static "
+        "equilibrium and motion in time (D. Priour's triangular netting element, FEMNET's model) on JAX. "
+        "Reads jaxnet scene files and FEMNET cases (.don).")
+    parser.add_argument("--version", action="version", version=f"jaxnet {jaxnet.__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     listing = "; ".join(f"{name}: {text}" for name, (_, text) in BUILT_IN.items())
     run = sub.add_parser("run", help="solve a scene (a built-in scene if no file is given)",
@@ -256,6 +299,9 @@ def argument_parser() -> argparse.ArgumentParser:
                                                   "says (nodes grow about as its square; for mesh convergence)")
     run.add_argument("--scene", dest="builtin", choices=sorted(set(BUILT_IN) | set(DYNAMIC)), default=DEFAULT,
                      help=f"built-in scene to solve when no file is given (default: {DEFAULT})")
+    run.add_argument("--set", action="append", metavar="KEY=VALUE",
+                     help="change a number of the built-in scene (repeatable), e.g. --set current=0.8 --set step=0.3; "
+                          "an unknown KEY lists the scene's")
     run.add_argument("--out", default="jaxnet-out", help="output directory (default: jaxnet-out)")
     run.add_argument("--tol", type=float, help="convergence threshold on the largest nodal force (N)")
     run.add_argument("--max-iter", type=int, dest="max_iter", help="maximum Newton iterations")

@@ -153,6 +153,29 @@ class CableRef:
         return CableNodes(self.name)
 
 
+def describe_reference(ref) -> str:
+    """A node reference in words, for messages: "corner 7 of panel 'wall'", "side 2 of panel 'wall'", "the end 1
+    of cable 'rope'", "the point (1, 0, -2)", ..."""
+    if isinstance(ref, Corner):
+        return f"corner {ref.index} of panel '{ref.panel}'"
+    if isinstance(ref, Side):
+        return f"side {ref.index} of panel '{ref.panel}'"
+    if isinstance(ref, Nearest):
+        return f"the node of panel '{ref.panel}' nearest {tuple(float(v) for v in ref.point)}"
+    if isinstance(ref, PanelRef):
+        return f"panel '{ref.name}'"
+    if isinstance(ref, CableEnd):
+        return f"end {ref.end} of cable '{ref.cable}'"
+    if isinstance(ref, CableNodes):
+        return f"cable '{ref.cable}'"
+    if isinstance(ref, CableRef):
+        return f"cable '{ref.name}'"
+    try:
+        return f"the point {tuple(float(v) for v in ref)}"
+    except (TypeError, ValueError):
+        return repr(ref)
+
+
 @dataclasses.dataclass
 class _Panel:
     name: str
@@ -740,15 +763,17 @@ class Net:
             i = offset + m.corner_nodes[ref.index]
             return i, builder.xyz[i]
         if isinstance(ref, (CableEnd, CableNodes, Side, PanelRef, CableRef)):
-            raise SceneError(f"{what}: a cable end may be a panel corner or a point (x, y, z), got {ref!r}")
+            raise SceneError(f"{what}: a cable end may be a panel corner or a point (x, y, z), got "
+                             f"{describe_reference(ref)}")
         xyz = np.asarray(ref, dtype=float)
         if xyz.shape != (3,) or not np.all(np.isfinite(xyz)):
-            raise SceneError(f"{what}: expected a panel corner or a finite point (x, y, z), got {ref!r}")
+            raise SceneError(f"{what}: expected a panel corner or a finite point (x, y, z), got "
+                             f"{describe_reference(ref)}")
         return None, xyz
 
     def _nodes_of(self, ref, meshes, cable_nodes, builder):
         """Builder indices of the nodes a fixing/attachment reference designates."""
-        what = f"reference {ref!r}"
+        what = f"reference {describe_reference(ref)}"
         if isinstance(ref, Corner):
             return np.array([self._point(builder, meshes, ref, what)[0]])
         if isinstance(ref, Side):

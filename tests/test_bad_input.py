@@ -153,3 +153,17 @@ def test_unknown_keys_in_scene_file(tmp_path):
     path.write_text(json.dumps(doc))
     with pytest.raises(jn.SceneError, match=r"scene: unknown key\(s\) \['currents'\]"):
         scene_file.read(path)
+
+
+def test_a_reference_is_named_in_words():
+    """A reference that designates no node is named as the user wrote it (corner 7 of panel 'wall'), not as a
+    Python object."""
+    from jaxnet.net import Corner
+
+    net = Net()
+    net.panel("wall", [(0, 0, 0, 0, 0), (1, 0, 0, 5, -5), (1, 0, 1, 10, 0), (0, 0, 1, 5, 5)],
+              Twine(l0=0.1, ea=100.0, diameter=1e-3), 0.25)
+    net.fix(Corner("wall", 7))
+    with pytest.raises(jn.SceneError, match=r"^reference corner 7 of panel 'wall': panel 'wall' has no corner 7 "
+                                         r"\(it has 4\)$"):
+        net.build()

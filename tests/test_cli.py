@@ -7,6 +7,7 @@ import sys
 
 import meshio
 import numpy as np
+import pytest
 
 from jaxnet import cli
 
@@ -288,3 +289,30 @@ def test_a_run_starts_from_femnets_stored_equilibrium(tmp_path, capsys):
     assert cli.main(["run", str(don), "--mesh", str(mdg), "--start", str(short), "--quiet", "--no-cache",
                      "--out", str(out)]) == 2
     assert f"{short}:41: expected node 41's number and x y z" in capsys.readouterr().err
+
+
+def test_version_and_built_in_numbers_set_on_the_command_line(tmp_path, capsys):
+    """``--version`` says the installed version; ``--set KEY=VALUE`` changes a built-in scene's numbers (the scene
+    is the builder's with them), and names an unknown key with the ones it has, or a value of the wrong kind."""
+    import jaxnet
+    from jaxnet.scenes import hanging_panel
+
+    with pytest.raises(SystemExit) as stop:
+        cli.main(["--version"])
+    assert stop.value.code == 0 and capsys.readouterr().out.strip() == f"jaxnet {jaxnet.__version__}"
+    out = tmp_path / "small"
+    assert cli.main(["run", "--scene", "hanging", "--set", "meshes=8", "--set", "step=0.05", "--out", str(out),
+                     "--quiet", "--no-cache"]) == 0
+    assert "meshes=8, step=0.05" in capsys.readouterr().out
+    result = json.loads((out / "result.json").read_text())
+    expected = hanging_panel(meshes=8, step=0.05).scene
+    assert result["n_nodes"] == expected.n_nodes != hanging_panel().scene.n_nodes
+    assert cli.main(["run", "--scene", "hanging", "--set", "mesh=8", "--out", str(out), "--no-cache"]) == 2
+    err = capsys.readouterr().err
+    assert "--set mesh: the built-in scene 'hanging' has no such number; it has: meshes (default 40)" in err
+    assert cli.main(["run", "--scene", "hanging", "--set", "meshes=eight", "--out", str(out), "--no-cache"]) == 2
+    assert "--set meshes=eight: expected an integer" in capsys.readouterr().err
+    path = tmp_path / "panel.json"
+    path.write_text("{}")
+    assert cli.main(["run", str(path), "--set", "step=1", "--out", str(out), "--no-cache"]) == 2
+    assert "--set changes a built-in scene's arguments" in capsys.readouterr().err

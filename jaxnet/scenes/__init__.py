@@ -15,9 +15,14 @@ BUILT_IN = {
 DEFAULT = "cage"
 
 
-def _cage_waves():
-    # meshed coarsely (339 unknowns): the size of FEMNET's dynamic cage benchmark (351 unknowns)
-    return cage_in_waves(step=1.6)
+def _cage_waves(wave_height: float = 2.0, wave_period: float = 6.0, water_depth: float = 50.0, current: float = 0.2,
+                end_time: float = 12.0, time_step: float = 0.01, record_every: float = 0.1, radius: float = 5.0,
+                depth: float = 5.0, step: float = 1.6):
+    """:func:`cage_in_waves` meshed coarsely by default (339 unknowns: the size of FEMNET's dynamic cage benchmark,
+    351 unknowns); its numbers are those ``jaxnet run --dynamic --set`` may change."""
+    return cage_in_waves(wave_height=wave_height, wave_period=wave_period, water_depth=water_depth, current=current,
+                         end_time=end_time, time_step=time_step, record_every=record_every, radius=radius, depth=depth,
+                         step=step)
 
 
 #: scenes that run in time (``jaxnet run --dynamic --scene NAME``; their Case has time settings): name ->

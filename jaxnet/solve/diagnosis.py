@@ -159,4 +159,13 @@ def hints(scene, eq):
             f"{np.sqrt(2.0 * strain):.2g} rad stretches it more than its tension, so where the net must still turn "
             f"it the iteration crawls; give it more iterations, or, where its stretch does not matter (a short "
             f"link), a lower EA (jaxnet.solve.diagnosis explains)")
+    if not out:
+        out.append(GENERAL_HINT)
     return out
+
+
+#: what to try when a failed solve shows nothing more particular (docs/troubleshooting.md says more)
+GENERAL_HINT = ("to try: more iterations (max_iter, --max-iter), a smaller largest step (Newton max_step) for a net "
+                "that must turn far from its drawn shape, a start nearer the answer (x0=, e.g. the equilibrium of a "
+                "slower current), the autodiff stiffness (--stiffness autodiff) to rule out the closed form; and check "
+                "what holds the net where the residual stays (docs/troubleshooting.md)")
