@@ -246,3 +246,18 @@ def test_every_notebook_has_a_test():
     tested = {"hand_vs_autodiff.ipynb", "design_panel_cuts.ipynb", "quickstart.ipynb", "fish_cage_in_current.ipynb",
               "codend_with_catch.ipynb", "dynamics_in_waves.ipynb"}
     assert {p.name for p in NOTEBOOKS.glob("*.ipynb")} == tested
+
+
+@pytest.mark.parametrize("path", sorted(NOTEBOOKS.glob("*.ipynb")), ids=lambda p: p.name)
+def test_saved_notebooks_show_the_full_size_and_a_3d_view(path):
+    """What GitHub and Jupyter show is a full-size run (``notebooks/execute.py`` records the size it ran), every code
+    cell with its outputs where it prints or draws, and at least one 3D view to turn (plotly's HTML)."""
+    notebook = json.loads(path.read_text())
+    assert notebook["metadata"].get("jaxnet", {}).get("size") == "full"
+    code = [c for c in notebook["cells"] if c["cell_type"] == "code"]
+    assert all(c["execution_count"] is not None for c in code)
+    views = [o for c in code for o in c["outputs"] if "text/html" in o.get("data", {})
+             and "plotly" in "".join(o["data"]["text/html"])]
+    assert views and all("application/vnd.plotly.v1+json" in o["data"] for o in views)
+    pictures = sum("image/png" in o.get("data", {}) for c in code for o in c["outputs"])
+    assert pictures >= 1

@@ -8,6 +8,7 @@ import importlib
 import importlib.util
 import pathlib
 import re
+import pytest
 
 import jaxnet
 
@@ -34,8 +35,44 @@ def test_every_public_name_resolves():
                                                                                        femnet.read_don)
 
 
+DOCS = sorted((README.parent / "docs").glob("*.md"))
+
+
+def _python_blocks(path):
+    return re.findall(r"```python\n(.*?)```", path.read_text(), flags=re.S)
+
+
 def _readme_code():
-    return "\n".join(re.findall(r"```python\n(.*?)```", README.read_text(), flags=re.S))
+    return "\n".join(_python_blocks(README))
+
+
+@pytest.mark.parametrize("path", DOCS, ids=lambda p: p.name)
+def test_what_the_docs_import_exists(path):
+    """The Python of every page of docs/ parses, and what it imports from jaxnet exists."""
+    for block in _python_blocks(path):
+        for node in ast.walk(ast.parse(block)):
+            if isinstance(node, ast.ImportFrom) and node.module.startswith("jaxnet"):
+                module = importlib.import_module(node.module)
+                for alias in node.names:
+                    assert hasattr(module, alias.name) or importlib.util.find_spec(f"{node.module}.{alias.name}"), \
+                        f"{path.name}: from {node.module} import {alias.name}"
+
+
+def test_the_readmes_example_runs_and_balances(tmp_path, monkeypatch, capsys):
+    """The README's first example, run as it is written: the wall converges, and the reaction of its fixings
+    balances the forces of the groups it prints (N)."""
+    import numpy as np
+
+    monkeypatch.chdir(tmp_path)
+    namespace = {}
+    exec(_python_blocks(README)[0], namespace)
+    eq, scene = namespace["eq"], namespace["scene"]
+    assert eq.converged
+    forces = namespace["figures"].summary(scene, eq)["forces_N"]
+    total = np.asarray(eq.reaction(scene)).sum(axis=0) + np.sum([np.asarray(f) for f in forces.values()], axis=0)
+    assert np.abs(total).max() < 1e-6 * np.abs(np.asarray(forces["weight_and_buoyancy_N"])).max()
+    assert forces["drag_netting_N"][0] > 0  # the current pushes the wall downstream
+    assert (tmp_path / "wall.png").exists() and (tmp_path / "wall.vtu").exists()
 
 
 def test_what_the_readme_imports_exists():
