@@ -493,6 +493,71 @@ class Net:
         the net): the result reports the volume it holds. See :class:`jaxnet.scene.Enclosure`."""
         self._enclosure = dict(center=_point(center, "enclose: center"), axis=_unit(axis, "enclose: axis"))
 
+    def description(self) -> dict:
+        """What was described, as plain data (copies, in call order), for writers of the description
+        (:func:`jaxnet.io.scene_file.to_dict`) and readers of it that must not reach into the net.
+
+        Values are the API's own: references (:class:`Corner`, :class:`Side`, :class:`Nearest`,
+        :class:`PanelRef`, :class:`CableEnd`, :class:`CableNodes`, :class:`CableRef`, or an (x, y, z) point as
+        given), materials (:class:`Twine`, :class:`HexTwine`, :class:`Rope`,
+        :class:`~jaxnet.mesh.twines.NumericalTwines`), the :class:`Environment` as given (its current direction
+        not normalised); numbers are floats (m, kg, N, rad), points and vectors (3,) arrays. Keys:
+
+        * ``environment``; ``merge_tolerance`` (m);
+        * ``panels``: {name, corners (C, 5) x y z U V, twine, step (m, None where unused), twines
+          (NumericalTwines or None), lattice ((NU, NV) or None)};
+        * ``cables``: {name, start, end, rope, n_bars, length (m), along} (None where not given);
+        * ``seams``: (side, side) pairs; ``cable_joints``: {cables (a, b), neutral_angle, stiffness (None: the
+          ropes')};
+        * ``fixed``: {at, axes ("xyz", "z", ...)}; ``symmetry_planes``: {axis ("x", "y" or "z"), at, hold};
+        * ``attached``: {at, mass, volume, force, drag_area, size}, every :meth:`attach` call, sinkers' and
+          floats' included; ``sinkers``: {attached (index in ``attached``), mass, density}; ``floats``:
+          {attached, buoyancy_N, gravity, water_density, mass} (g and rho of the environment at the call, from
+          which the float's volume was worked out);
+        * ``bodies``: {at, length, drag_coefficient}; ``limits``: {at, value (0 on axes without a sense), sense};
+        * ``catch``: {volume, drag_coefficient, symmetry, center, axis (None: the current's), density} or None;
+        * ``panel_catches``: {volume, panels, center, drag_coefficient, symmetry, axis}: the last three are
+          shared by all of them (the last :meth:`panel_catch` call's), repeated in each;
+        * ``enclosure``: {center, axis} or None.
+        """
+        def copy(value):
+            return None if value is None else np.array(value, dtype=float)
+
+        def ref(where):
+            return copy(where) if isinstance(where, (list, tuple, np.ndarray)) else where
+
+        options = self._panel_catch_options or (None, None, None)
+        return {
+            "environment": self.environment,
+            "merge_tolerance": float(self.merge_tolerance),
+            "panels": [dict(name=p.name, corners=copy(p.corners), twine=p.twine,
+                            step=float(p.step) if np.isfinite(p.step) else None, twines=p.twines,
+                            lattice=None if p.lattice is None else tuple(p.lattice)) for p in self._panels.values()],
+            "cables": [dict(name=c.name, start=ref(c.start), end=ref(c.end), rope=c.rope, n_bars=c.n_bars,
+                            length=c.length, along=c.along) for c in self._cables.values()],
+            "seams": [tuple(pair) for pair in self._seams],
+            "cable_joints": [dict(cables=(a, b), neutral_angle=angle, stiffness=ei)
+                             for a, b, angle, ei in self._cable_joints],
+            "fixed": [dict(at=ref(where), axes="".join(a for a, on in zip("xyz", axes) if on))
+                      for where, axes in self._fixed],
+            "symmetry_planes": [dict(axis="xyz"[axis], at=at, hold=hold) for axis, at, hold in self._symmetry_planes],
+            "attached": [dict(at=ref(where), mass=m, volume=v, force=copy(f), drag_area=a, size=h)
+                         for where, m, v, f, a, h in self._attached],
+            "sinkers": [dict(attached=k, mass=m, density=rho) for k, m, rho in self._sinkers],
+            "floats": [dict(attached=k, buoyancy_N=b, gravity=g, water_density=rho, mass=m)
+                       for k, b, g, rho, m in self._floats],
+            "bodies": [dict(at=ref(where), length=copy(length), drag_coefficient=copy(cd))
+                       for where, length, cd in self._bodies],
+            "limits": [dict(at=ref(where), value=copy(value), sense=np.array(sense))
+                       for where, value, sense in self._limits],
+            "catch": None if self._catch is None else {k: copy(v) if k in ("center", "axis") else v
+                                                       for k, v in self._catch.items()},
+            "panel_catches": [dict(volume=volume, panels=tuple(names), center=copy(center),
+                                   drag_coefficient=options[0], symmetry=options[1], axis=copy(options[2]))
+                              for volume, names, center in self._panel_catches],
+            "enclosure": None if self._enclosure is None else {k: copy(v) for k, v in self._enclosure.items()},
+        }
+
     # -- building ---------------------------------------------------------------------------------
 
     def build(self) -> Scene:
