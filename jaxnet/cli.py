@@ -1,4 +1,6 @@
-"""Command line: ``jaxnet run [SCENE] [--scene NAME] [--mesh CASE.mdg] [--out DIR]``.
+"""Command line: ``jaxnet run [SCENE] [--scene NAME [--set KEY=VALUE ...]] [--mesh CASE.mdg] [--out DIR]``,
+``jaxnet export --scene NAME [--set ...] FILE`` (a built-in scene written as a scene file to edit), ``jaxnet show
+DIR`` (a run's pictures drawn again without solving), ``jaxnet --version``.
 
 With no SCENE, solves a built-in scene (``--scene``, default ``cage``: a fish cage in a current; see
 ``jaxnet run --help`` for the list). SCENE may be a jaxnet scene file (.json, .toml) or a FEMNET case
@@ -9,14 +11,17 @@ section with FEMNET's summary figures (drag on netting, cables and catch, total 
 thickness and diameter). A FEMNET case uses FEMNET's own
 laws where they differ from the book's (``docs/errata.md``), so that it gives FEMNET's answers;
 ``--jaxnet-laws`` solves it with jaxnet's.
-Writes DIR/result.json (figures, see README), DIR/net.vtu (ParaView) and DIR/net.png, prints one line
-per Newton iteration and a short summary. Exit status 0 on convergence, 1 on a failed solve, 2 on bad input.
+Writes DIR/result.json (the figures, ``docs/result.md``), DIR/net.vtu (ParaView: tensions, displacement, nodal
+forces by group, reactions; DIR/net_whole.vtu beside it for a model with symmetry planes), DIR/net.png (the
+pictures) and DIR/command.json (the command, for ``jaxnet show``), prints one line per Newton iteration and a
+short summary. ``--set`` changes a built-in scene's numbers (its function's keyword arguments). Exit status 0
+on convergence, 1 on a failed solve (its last state still written, net.vtu with its residual), 2 on bad input.
 
 ``--dynamic`` runs the scene in time instead (:mod:`jaxnet.solve.dynamics`, the book's implicit scheme):
 from its static equilibrium (computed first), to ``--end`` seconds with steps of ``--dt`` seconds, a record
 every ``--record`` seconds written to DIR as it goes (series.json + raw/ arrays, series.npz at the end,
 series.pvd + net_NNNNN.vtu for ParaView, checkpoint.npz; ``--resume`` continues a stopped run from its last
-record), with a progress bar. A FEMNET case takes its own time settings, towing tables, winches and numerics
+record; run.png at the end: the reactions and largest tensions against time), with a progress bar. A FEMNET case takes its own time settings, towing tables, winches and numerics
 (its threshold, iterations and displacement limit, for the static start and for every time step); ``--tol``,
 ``--max-iter`` and ``--stiffness`` apply to both as in a static run. The built-in ``cage_waves`` (the default with ``--dynamic``) is
 the cage in regular waves, its collar heaving.
@@ -153,6 +158,8 @@ def time_stepping(case, args):
 
 
 def _run(args):
+    import dataclasses
+
     if not args.no_cache:
         _use_compilation_cache(args.cache)
     if args.dynamic:
@@ -173,31 +180,52 @@ def _run(args):
         print(f"  left out of this static run (FEMNET's dynamics only): {', '.join(case.info['dynamic_only'])}")
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    _record_command(out, args)
     failed = None
     try:
         eq = solve(case, verbose=not args.quiet, **_overrides(args))
     except SolveError as err:
         failed, eq = err, err.equilibrium
-    result = figures.summary(scene, eq)
+    # what the solve ran with: the case's options with the command line's (solve() above took the same)
+    used = dataclasses.replace(case.solver, verbose=not args.quiet, **_overrides(args))
+    result = figures.summary(scene, eq, case=case, source=None if args.scene is None else str(args.scene), solver=used)
     if "symmetry_axes" in case.info:  # a FEMNET case: its own figures, and what the reader decided
         result["femnet"] = femnet.femnet_figures(scene, eq, case.info["symmetry_axes"], case.info.get("fixity"))
         result["femnet"]["printed"] = femnet.text_output_figures(scene, eq, case.info)
         result["femnet_case"] = case.info
     (out / "result.json").write_text(json.dumps(result, indent=2))
-    vtk.write_vtu(out / "net.vtu", scene, eq.x)
-    plot.save_png(out / "net.png", scene, eq.x, title=label)
-    r = result["reaction_N"]
+    # a failed solve's file holds its residual, where the net is out of balance
+    written = [out / "result.json", *vtk.write_vtu(out / "net.vtu", scene, eq.x,
+                                                  residual=None if failed is None else eq.force)]
+    plot.save_png(out / "net.png", scene, eq.x, title=label, catch_front=result.get("catch", {}).get("front_m"))
+    written.append(out / "net.png")
+
+    def shown(value):  # -0.0 + 0.0 is 0.0: no "-0" printed
+        return f"{value + 0.0:.4g}"
+
+    def vector(values):
+        return "[" + ", ".join(shown(v) for v in values) + "] N"
+
+    whole = result["whole_net"]
     print(f"  {'converged' if result['converged'] else 'NOT converged: ' + result['reason']} in {result['iterations']} "
           f"iterations, residual {result['residual_N']:.3g} N")
     if eq.timing is not None:
         print(f"  wall {eq.timing.wall_s:.2f} s (compile {eq.timing.compile_s:.2f} s; JAX on {jax.default_backend()}, "
               f"tangents factorised by {linalg.solver_choice()})")
-    print(f"  reaction at fixed nodes [{r[0]:.4g}, {r[1]:.4g}, {r[2]:.4g}] N, max twine tension "
-          f"{result['max_twine_tension_N']:.4g} N, max bar tension {result['max_bar_tension_N']:.4g} N")
+    part = f" (the model: {result['modelled_part']})" if whole["copies"] > 1 else ""
+    print(f"  reaction at fixed nodes {vector(result['reaction_N'])}, load {vector(result['load_N'])}{part}")
+    if whole["copies"] > 1:
+        catch = f", catch drag {shown(result['catch']['drag_whole_net_N'])} N" if "catch" in result else ""
+        print(f"  whole net ({whole['copies']} mirrored copies): reaction {vector(whole['reaction_N'])}, load "
+              f"{vector(whole['load_N'])}{catch}")
+    tensions = ([f"max twine tension {shown(result['max_twine_tension_N'])} N"] if result["n_triangles"] else []) + (
+        [f"max bar tension {shown(result['max_bar_tension_N'])} N"] if result["n_bars"] else [])
+    if tensions:
+        print("  " + ", ".join(tensions))
     for figure in result.get("femnet", {}).get("printed", []):   # FEMNET's text outputs, as it prints them
         if figure["value"] is not None:
             print(f"  {figure['comment']}: {figure['value']:.6g} {figure['unit']}")
-    print(f"  wrote {out / 'result.json'}, {out / 'net.vtu'}, {out / 'net.png'}")
+    print(f"  wrote {', '.join(str(p) for p in written)}")
     if failed is not None:
         print(f"jaxnet: {failed}", file=sys.stderr)
         return 1
@@ -237,6 +265,7 @@ def _run_dynamic(args):
     scene = case.scene
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    _record_command(out, args)
     print(f"jaxnet: {label}")
     print(f"  {scene.n_nodes} nodes, {scene.n_elements} elements, {scene.n_dof} unknowns; dynamics to "
           f"{end_time:g} s, step {implicit.time_step:g} s")
@@ -271,7 +300,10 @@ def _run_dynamic(args):
     print(f"  {run.steps} steps, {run.mean_iterations:.2f} Newton iterations per step, {int(run.state.retries)} "
           f"retried; wall {run.timing.wall_s:.2f} s (first interval with compilation {run.timing.compile_s:.2f} s; "
           f"{run.loop} loop)")
-    print(f"  wrote {out / 'series.npz'}, {out / 'series.pvd'}")
+    from jaxnet.io import plot
+
+    plot.save_run_png(out / "run.png", scene, run.times, run.positions, run.figures, title=label)
+    print(f"  wrote {out / 'series.npz'}, {out / 'series.pvd'}, {out / 'run.png'}")
     return 0
 
 
@@ -324,11 +356,111 @@ def argument_parser() -> argparse.ArgumentParser:
                      "by every run, cheaper per step), or auto (default: compiled for a run of many steps)")
     run.add_argument("--record", type=float, help="with --dynamic: time between records (s), default every step")
     run.add_argument("--resume", action="store_true", help="with --dynamic: continue the run in --out from its last record")
+    export = sub.add_parser("export", help="write a built-in scene as a scene file to edit",
+                            description="Write a built-in scene (its numbers changed by --set) as a scene file "
+                                        "(.toml or .json) to edit and run with jaxnet run FILE.")
+    export.add_argument("path", help="the scene file to write (.toml or .json)")
+    export.add_argument("--scene", dest="builtin", choices=sorted(set(BUILT_IN) | set(DYNAMIC)), default=DEFAULT,
+                        help=f"the built-in scene (default: {DEFAULT})")
+    export.add_argument("--set", action="append", metavar="KEY=VALUE",
+                        help="change a number of the built-in scene first (repeatable), as jaxnet run --set")
+    show = sub.add_parser("show", help="redraw the pictures of a run without solving",
+                          description="Draw the pictures of a run again from the files it wrote in DIR "
+                                      "(result.json and net.vtu of a static run, the records of a run in time).")
+    show.add_argument("directory", help="the run's output directory (jaxnet run --out DIR)")
     default_cache = pathlib.Path(os.environ.get("XDG_CACHE_HOME") or pathlib.Path.home() / ".cache") / "jaxnet"
     run.add_argument("--cache", default=str(default_cache),
                      help=f"directory of compiled programs kept between runs (default: {default_cache})")
     run.add_argument("--no-cache", action="store_true", dest="no_cache", help="compile everything afresh, keep nothing")
     return parser
+
+
+def _export(args):
+    """``jaxnet export --scene NAME [--set KEY=VALUE ...] FILE``: a built-in scene (its numbers changed by ``--set``)
+    written as a scene file (.toml or .json) to edit and run (:func:`jaxnet.io.scene_file.write`)."""
+    from jaxnet.io import scene_file
+    from jaxnet.scene import SceneError
+    from jaxnet.scenes import BUILT_IN, DYNAMIC
+
+    scenes = {**BUILT_IN, **DYNAMIC}
+    if args.builtin not in scenes:
+        raise SceneError(f"export: no built-in scene '{args.builtin}' (there are: {', '.join(scenes)})")
+    make, description = scenes[args.builtin]
+    case = make(**built_in_arguments(make, args.builtin, args.set or []))
+    path = scene_file.write(args.path, case)
+    print(f"jaxnet: wrote the built-in scene '{args.builtin}' ({description}) to {path}; run it with: "
+          f"jaxnet run {path}")
+    if case.time is not None:
+        print("  its time settings (end, steps, records, prescribed motions) are not in the file: give them to "
+              "jaxnet run --dynamic (--end, --dt, --record)")
+    return 0
+
+
+#: the file in a run's directory that says what ran: the command line and where it ran from (``jaxnet show``)
+COMMAND = "command.json"
+
+
+def _record_command(out, args):
+    """Write DIR/command.json: the run's command line and working directory, from which ``jaxnet show`` rebuilds
+    the net to draw it again (a file's name is read relative to that directory)."""
+    import jaxnet
+
+    (out / COMMAND).write_text(json.dumps({"argv": args.argv, "cwd": os.getcwd(),
+                                           "jaxnet_version": jaxnet.__version__}, indent=1))
+
+
+def _show(args):
+    """``jaxnet show DIR``: the pictures of a run in DIR drawn again, without solving: the net rebuilt from the
+    command that ran (DIR/command.json: its scene file, FEMNET case or built-in scene, read again), the positions
+    and tensions from what the run wrote (net.vtu and result.json; a run in time's records)."""
+    import numpy as np
+
+    from jaxnet.io import plot, timeseries
+    from jaxnet.scene import SceneError
+
+    directory = pathlib.Path(args.directory)
+    recorded = directory / COMMAND
+    if not recorded.exists():
+        raise SceneError(f"show: {directory} holds no {COMMAND}: it is not the output directory of a jaxnet run "
+                         f"(jaxnet run --out DIR), or of one older than the command")
+    command = json.loads(recorded.read_text())
+    ran = argument_parser().parse_args(command["argv"])
+    ran.argv = command["argv"]
+    for name in ("scene", "mesh", "start"):  # files named relative to where the run was started
+        value = getattr(ran, name, None)
+        if value is not None and not pathlib.Path(value).is_absolute():
+            setattr(ran, name, str(pathlib.Path(command["cwd"]) / value))
+    case, label = _case(ran, dynamic=ran.dynamic)
+    scene = case.scene
+    written = []
+    if ran.dynamic:
+        series = timeseries.read_series(directory)
+        figures_ = {k: v for k, v in series.items() if k not in ("time", "step", "position", "velocity")}
+        path = directory / "run.png"
+        plot.save_run_png(path, scene, series["time"], series["position"], figures_, title=label)
+        written.append(path)
+    else:
+        import meshio
+
+        mesh = meshio.read(directory / "net.vtu")
+        x = np.asarray(mesh.points, dtype=float)
+        if x.shape != (scene.n_nodes, 3):
+            raise SceneError(f"show: {directory / 'net.vtu'} holds {x.shape[0]} nodes but {label} has "
+                             f"{scene.n_nodes}: the scene changed since the run")
+        cells = {k: np.concatenate(v) for k, v in mesh.cell_data.items()}
+        triangles = 0 if scene.netting is None else scene.netting.vertices.shape[0]
+        tensions = {}
+        if triangles and "twine_tension_U_N" in cells:
+            tensions["twine_tension"] = np.stack([cells["twine_tension_U_N"][:triangles],
+                                                  cells["twine_tension_V_N"][:triangles]], axis=1)
+        if scene.bars is not None and "bar_tension_N" in cells:
+            tensions["bar_tension"] = cells["bar_tension_N"][-scene.bars.ends.shape[0]:]
+        result = json.loads((directory / "result.json").read_text()) if (directory / "result.json").exists() else {}
+        path = directory / "net.png"
+        plot.save_png(path, scene, x, title=label, catch_front=result.get("catch", {}).get("front_m"), **tensions)
+        written.append(path)
+    print(f"jaxnet: drew {', '.join(str(p) for p in written)} from the run in {directory} ({label})")
+    return 0
 
 
 def main(argv=None):
@@ -338,7 +470,7 @@ def main(argv=None):
     args.argv = list(sys.argv[1:] if argv is None else argv)  # what a stopped run's hint repeats
 
     try:
-        return _run(args)
+        return {"run": _run, "export": _export, "show": _show}[args.command](args)
     except SceneError as err:
         print(f"jaxnet: bad input: {err}", file=sys.stderr)
         return 2

@@ -1,17 +1,21 @@
-"""Figures computed from an equilibrium: twine and bar tensions, reactions, loads, summary.
+"""Figures computed from an equilibrium: twine and bar tensions, mesh opening angles, nodal forces by group,
+reactions, loads, the catch report, and result.json's summary.
 
 These are what a gear technologist reads off a solve; the writers in :mod:`jaxnet.io` only format them.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import datetime
+
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxnet import assemble, catch as catch_lib, model as model_lib
+from jaxnet import assemble, catch as catch_lib, geometry, model as model_lib, scene as scene_lib
 from jaxnet.solve import programs, statics
-from jaxnet.terms import cable, pressure, tension, term as term_lib
+from jaxnet.terms import cable, hexagonal as hexagonal_lib, pressure, tension, term as term_lib
 
 
 # The figures are computed by compiled programs, each for a scene shape, kept by :mod:`jaxnet.solve.programs`
@@ -81,14 +85,13 @@ def _catch(x, vertices, axis, volume, symmetry, sign, pressure_, center, up):
 _catch_jit = programs.jit(_catch)
 
 
-def force_breakdown(scene, x):
+def force_breakdown(scene, x, by_term=None):
     """result.json's force groups (the terms' declared groups, :func:`jaxnet.terms.term.groups`): total drag
-    on netting, cables, nodes, catch, weight, ... (N), every group, zero where none of its terms is active.
-    Only the terms of the groups are computed (the internal ones, which sum to zero, are not asked for)."""
-    groups = term_lib.groups()
-    by_term = forces_by_term(scene, x, names={t for terms in groups.values() for t in terms})
-    return {group: np.sum([by_term[t] for t in terms if t in by_term] or [np.zeros(3)], axis=0)
-            for group, terms in groups.items()}
+    on netting, cables, nodes, catch, weight, ... (N), every group, zero where none of its terms is active: the
+    nodal forces of :func:`nodal_forces_by_group` summed over the nodes. They are computed by the one program of
+    every term's nodal forces that the ParaView file's forces come from (``by_term``: those forces at x when
+    already computed), so a run compiles one, not two."""
+    return {group: f.sum(axis=0) for group, f in nodal_forces_by_group(scene, x, by_term).items()}
 
 
 def _catch_fields(x, vertices, axis, volume, symmetry, sign, pressure_, center, up):
@@ -144,19 +147,198 @@ def enclosed_volume(scene, x):
     return float(catch_lib.enclosed_volume(np.asarray(x), scene.netting.vertices, front, e.axis, sign=scene.netting.outward))
 
 
-def summary(scene, eq):
-    """The figures of ``result.json`` (see the README for their meaning and units); the solve's wall and
-    compile times where the equilibrium holds them (``eq.timing``)."""
-    reaction = eq.reaction(scene)
-    tw = twine_tensions(scene, eq.x)
-    bt = bar_tensions(scene, eq.x)
+# -- result.json (docs/result.md: its schema) ---------------------------------------------------------------
+
+
+def _json(value):
+    """``value`` as JSON's plain values: arrays and tuples as lists, numpy and JAX scalars as Python numbers,
+    dataclasses as dicts; NaN and infinities as null, as JSON has neither (a NaN surface level: no free surface;
+    an infinite depth: deep water; an infinite step limit: none); -0.0 as 0.0 (a held coordinate with no force
+    on it is no "-0")."""
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return {f.name: _json(getattr(value, f.name)) for f in dataclasses.fields(value)}
+    if isinstance(value, dict):
+        return {str(k): _json(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json(v) for v in value]
+    if value is None or isinstance(value, (bool, str)):
+        return value
+    array = np.asarray(value)
+    if array.ndim:
+        return [_json(v) for v in array]
+    if np.issubdtype(array.dtype, np.bool_):
+        return bool(array)
+    if np.issubdtype(array.dtype, np.integer):
+        return int(array)
+    number = float(array)
+    return number + 0.0 if np.isfinite(number) else None  # -0.0 + 0.0 is 0.0
+
+
+def _waves_inputs(waves):
+    """The waves of the environment, by their type and main numbers (m, s, rad), or None for still water.
+    Regular waves (:class:`jaxnet.waves.Airy` and its Stokes orders) by height, period, direction, depth, phase
+    and ramp; an irregular sea (:class:`jaxnet.waves.Irregular`) by its number of components, its significant
+    height 4 √m0 (m0 = Σ a_i²/2, the variance of the elevation), its peak period and the energy-weighted mean
+    of its components' headings, not component by component (hundreds of them)."""
+    if waves is None:
+        return None
+    kind = type(waves).__name__
+    if hasattr(waves, "height"):
+        return {"type": kind, "height_m": _json(waves.height), "period_s": _json(waves.period),
+                "direction": _json(waves.direction), "depth_m": _json(waves.depth), "phase_rad": _json(waves.phase),
+                "ramp_s": _json(waves.ramp)}
+    if hasattr(waves, "amplitude"):
+        a = np.asarray(waves.amplitude, dtype=float)
+        heading = (a[:, None] ** 2 * np.asarray(waves.direction, dtype=float)).sum(axis=0)
+        norm = np.linalg.norm(heading)
+        return {"type": kind, "components": int(a.size),
+                "significant_height_m": float(4.0 * np.sqrt(0.5 * (a**2).sum())),
+                "peak_period_s": _json(waves.peak_period),
+                "mean_direction": _json(heading / norm if norm > 0 else heading),
+                "depth_m": _json(waves.depth), "stretching": waves.stretching, "ramp_s": _json(waves.ramp)}
+    return {"type": kind}
+
+
+def _sea_bed_levels(scene):
+    """The distinct heights (m) of the floors the nodes' limits put along ``up`` (the sea bed: FEMNET's node types
+    may give several), sorted; empty where no node has one."""
+    nodes, axis = scene.nodes, scene_lib.bottom_axis(scene.environment)
+    if nodes.limit is None or nodes.limit_sense is None or axis is None:
+        return []
+    axis, floor = axis
+    on_floor = np.asarray(nodes.limit_sense)[:, axis] == floor
+    return sorted(set(np.asarray(nodes.limit, dtype=float)[on_floor, axis].tolist()))
+
+
+def _environment_inputs(scene):
+    """result.json's ``inputs.environment``: the surroundings' numbers (:class:`jaxnet.scene.Environment`)."""
+    env = scene.environment
+    return {
+        "gravity_m_s2": _json(env.gravity),
+        "water_density_kg_m3": _json(env.water_density),
+        "up": _json(env.up),
+        "current": {"speed_m_s": _json(env.current_speed), "direction": _json(env.current_direction),
+                    "profile_depth_m": _json(env.profile_depth), "profile_factor": _json(env.profile_factor)},
+        "surface_level_m": _json(env.surface_level),
+        "floating": list(env.floating),
+        "sea_bed": {"levels_m": _sea_bed_levels(scene), "stiffness_N_m": _json(env.bottom_stiffness),
+                    "band_m": _json(env.bottom_band), "friction": _json(env.bottom_friction),
+                    "moving": bool(env.bottom_moving)},
+        "waves": _waves_inputs(env.waves),
+        "time_s": _json(env.time),
+        "added_mass_coefficient": _json(env.added_mass_coefficient),
+    }
+
+
+def _catch_inputs(scene):
+    """result.json's ``inputs.catch`` (:class:`jaxnet.scene.Catch`) and ``inputs.panel_catches``
+    (:class:`jaxnet.scene.PanelCatches`), each None where the scene has none."""
+    c, pc = scene.catch, scene.panel_catches
+    catch = None if c is None else {
+        "volume_whole_net_m3": _json(c.volume), "drag_coefficient": _json(c.drag_coefficient),
+        "symmetry": _json(c.symmetry), "axis": _json(c.axis), "center_m": _json(c.center),
+        "density_kg_m3": _json(c.density)}
+    panels = None
+    if pc is not None:
+        names = scene.panel_names or tuple(f"panel {k}" for k in range(len(pc.panel_catch)))
+        holder = np.asarray(pc.panel_catch)
+        panels = {"catches": [{"volume_whole_net_m3": _json(v),
+                               "panels": [names[j] for j in np.flatnonzero(holder == k)]}
+                              for k, v in enumerate(np.asarray(pc.volume))],
+                  "drag_coefficient": _json(pc.drag_coefficient), "symmetry": _json(pc.symmetry),
+                  "axis": _json(pc.axis)}
+    return catch, panels
+
+
+def _inputs(scene, case, source, solver):
+    """result.json's ``inputs``: what was solved, and how (summary's arguments)."""
+    catch, panels = _catch_inputs(scene)
+    solver = solver if solver is not None else None if case is None else case.solver
+    return {
+        "source": None if source is None else str(source),
+        "label": None if case is None else case.label,
+        "environment": _environment_inputs(scene),
+        "catch": catch,
+        "panel_catches": panels,
+        "symmetry_planes": [{"axis": "xyz"[axis], "position_m": float(at)} for axis, at in scene.symmetry_planes],
+        "solver": None if solver is None else _json(solver),
+    }
+
+
+#: the modelled part of a net, by its number of copies in the whole net
+_PARTS = {1: "the whole net", 2: "a half", 4: "a quarter", 8: "an eighth"}
+
+
+def _modelled_part(scene):
+    """What the model is of the whole net, in words: "the whole net", or "a quarter of the net (2 symmetry planes:
+    y = 0 m, z = 0 m)"."""
+    copies = scene_lib.mirror_copies(scene)
+    if copies == 1:
+        return _PARTS[1]
+    planes = ", ".join(f"{'xyz'[axis]} = {at:g} m" for axis, at in scene.symmetry_planes)
+    n = len(scene.symmetry_planes)
+    return f"{_PARTS.get(copies, f'1/{copies}')} of the net ({n} symmetry plane{'s' if n > 1 else ''}: {planes})"
+
+
+def _whole(signs, force):
+    """The whole net's total of a force (3,) (N) of the modelled part: its mirror images summed (``signs``:
+    :func:`jaxnet.scene.mirror_signs`); along a plane's normal the images cancel."""
+    return (signs * np.asarray(force, dtype=float)).sum(axis=0)
+
+
+def _catch_parts(report, copies):
+    """A catch report (:func:`catch_report`'s, of the whole net) as result.json gives it: volume and drag of the
+    modelled part and of the whole net (``copies``: the catch's ``symmetry``), the front, thickness and largest
+    diameter, which are the same for both."""
+    return {
+        "front_m": report["front_m"],
+        "holds_the_volume": report["holds_the_volume"],
+        "copies": _json(copies),
+        "volume_m3": report["volume_m3"] / copies,
+        "volume_whole_net_m3": report["volume_m3"],
+        "drag_N": report["drag_N"] / copies,
+        "drag_whole_net_N": report["drag_N"],
+        "thickness_m": report["thickness_m"],
+        "diameter_m": report["diameter_m"],
+    }
+
+
+def summary(scene, eq, *, case=None, source=None, solver=None):
+    """The figures of ``result.json`` (``docs/result.md``: every key, its unit, the balance they obey).
+
+    scene, eq: the scene solved and its :class:`~jaxnet.solve.results.Equilibrium`. case: the
+    :class:`~jaxnet.case.Case` it came from, for its label (and solver options where ``solver`` is not given);
+    source: the file read (a path), None for a built-in scene or a scene made in Python; solver: the
+    :class:`~jaxnet.solve.options.Newton` options the solve ran with (the case's with the command line's changes).
+    Recorded under ``inputs`` with the scene's environment, catches and symmetry planes, so that a result says
+    what it is a result of.
+
+    The force figures (``reaction_N``, ``load_N``, ``forces_N``) are of the modelled part; ``whole_net`` holds
+    them for the whole net (the mirrored copies of a model with symmetry planes: ``copies`` 1 for a whole net).
+    ``load_N`` is the total of the groups that are not the water's (weight and buoyancy, external forces, the sea
+    bed, a catch's weight) at the equilibrium, so that ``reaction_N + load_N + the hydrodynamic groups = 0`` to
+    the residual, with a free surface too (where weight is an energy of the positions, not a constant load).
+    Plain JSON values throughout: a non-finite number (a failed solve's NaN residual) is null.
+    """
+    import jaxnet  # its version (a module-level import would be circular: jaxnet imports the readers)
+
+    x = np.asarray(eq.x, dtype=float)
+    reaction = eq.reaction(scene).sum(axis=0)
+    tw = twine_tensions(scene, x)
+    bt = bar_tensions(scene, x)
     hist = np.asarray(eq.history)
+    forces = force_breakdown(scene, x)
+    loads = term_lib.groups(lambda group, term: not group.hydrodynamic)
+    load = np.sum([forces[g] for g in loads] or [np.zeros(3)], axis=0)
+    worst = int(eq.worst_node)
     out = {
+        "jaxnet_version": jaxnet.__version__,
+        "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         "converged": bool(eq.converged),
         "reason": eq.reason,
         "iterations": int(eq.iterations),
         "residual_N": float(eq.residual_N),
-        "worst_node": int(eq.worst_node),
+        "worst_node": {"node": worst, "position_m": x[worst].tolist()},
         "residual_history_N": [float(r) for r in hist[np.isfinite(hist)]],
         "n_nodes": scene.n_nodes,
         "n_elements": scene.n_elements,
@@ -164,23 +346,112 @@ def summary(scene, eq):
         "n_bars": 0 if scene.bars is None else int(scene.bars.ends.shape[0]),
         "n_dof": scene.n_dof,
         "terms": [t.name for t in model_lib.active_terms(scene)],
-        "reaction_N": reaction.sum(axis=0).tolist(),
-        "load_N": total_load(scene).tolist(),
+        "modelled_part": _modelled_part(scene),
+        "reaction_N": reaction.tolist(),
+        "load_N": load.tolist(),
         "max_twine_tension_N": float(tw.max()) if tw.size else 0.0,
         "max_bar_tension_N": float(bt.max()) if bt.size else 0.0,
-        "bounding_box_m": [np.asarray(eq.x).min(axis=0).tolist(), np.asarray(eq.x).max(axis=0).tolist()],
-        "forces_N": {k: v.tolist() for k, v in force_breakdown(scene, eq.x).items()},
+        "bounding_box_m": [x.min(axis=0).tolist(), x.max(axis=0).tolist()],
+        "forces_N": {k: np.asarray(v).tolist() for k, v in forces.items()},
     }
-    volume = enclosed_volume(scene, eq.x)
+    signs = scene_lib.mirror_signs(scene)
+    images = scene_lib.mirrored(scene, x).reshape(-1, 3)
+    whole = {
+        "copies": scene_lib.mirror_copies(scene),
+        "reaction_N": _whole(signs, reaction).tolist(),
+        "load_N": _whole(signs, load).tolist(),
+        "forces_N": {k: _whole(signs, v).tolist() for k, v in forces.items()},
+        "bounding_box_m": [images.min(axis=0).tolist(), images.max(axis=0).tolist()],
+    }
+    volume = enclosed_volume(scene, x)
     if volume is not None:
         out["enclosed_volume_m3"] = volume
-    report = catch_report(scene, eq.x)
+        whole["enclosed_volume_m3"] = whole["copies"] * volume
+    out["whole_net"] = whole
+    report = catch_report(scene, x)
     if report is not None:
-        out["catch"] = report
-    panels = panel_catch_report(scene, eq.x)
+        out["catch"] = _catch_parts(report, float(scene.catch.symmetry))
+    panels = panel_catch_report(scene, x)
     if panels is not None:
-        out["panel_catches"] = panels
+        copies = float(scene.panel_catches.symmetry)
+        out["panel_catches"] = [{"panels": p["panels"], **_catch_parts(p, copies)} for p in panels]
+    out["inputs"] = _inputs(scene, case, source, solver)
     if eq.timing is not None:
         out["wall_s"] = float(eq.timing.wall_s)
         out["compile_s"] = float(eq.timing.compile_s)
-    return out
+    return _json(out)  # a failed solve's NaN as null: result.json stays JSON
+
+
+# -- per node and per triangle: what the ParaView files draw (:mod:`jaxnet.io.vtk`) ----------------------------
+
+
+def nodal_forces_by_term(scene, x):
+    """Per active term (:func:`jaxnet.model.active_terms`), the (N, 3) nodal forces (N) it exerts on the net at
+    positions x (N, 3): :func:`jaxnet.assemble.term_forces`, by the program :func:`forces_by_term` runs for all
+    the terms (one compilation serves both). Their sum is the out-of-balance force on every node."""
+    model = model_lib.active_terms(scene)
+    args = (np.asarray(x, dtype=float), scene)
+    per_term = programs.obtain("term_forces", _term_forces, args, {"model": model})(*args)
+    return {name: np.asarray(f) for name, f in per_term.items()}
+
+
+def nodal_forces_by_group(scene, x, by_term=None):
+    """Every result group (:func:`jaxnet.terms.term.groups`: ``drag_netting_N``, ``catch_N``,
+    ``weight_and_buoyancy_N``, ``bottom_N``...) -> (N, 3) the force (N) its active terms exert on each node at
+    positions x (N, 3), zero where none of its terms is active; summed over the nodes, :func:`force_breakdown`.
+    ``by_term``: :func:`nodal_forces_by_term` at x when already computed. The internal terms (twine tension,
+    bending...), in no group, are left out: they move forces between nodes and sum to zero over the net."""
+    by_term = nodal_forces_by_term(scene, x) if by_term is None else by_term
+    zero = np.zeros((scene.n_nodes, 3))
+    return {group: np.sum([by_term[t] for t in terms if t in by_term] or [zero], axis=0)
+            for group, terms in term_lib.groups().items()}
+
+
+def nodal_reactions(scene, x, by_term=None):
+    """(N, 3) the reactions (N) at the held coordinates at positions x (N, 3), zero on the free ones: minus the
+    out-of-balance force there (the sum of every active term's nodal force), as
+    :meth:`jaxnet.solve.results.Equilibrium.reaction` takes them from a solve's own force. ``by_term``:
+    :func:`nodal_forces_by_term` at x when already computed."""
+    by_term = nodal_forces_by_term(scene, x) if by_term is None else by_term
+    force = np.sum([*by_term.values(), np.zeros((scene.n_nodes, 3))], axis=0)
+    return np.where(np.asarray(scene.nodes.fixed, dtype=bool), -force, 0.0)
+
+
+def _opening_angles(x, vertices, uv):
+    def angle(xe, uve):
+        U, V, _ = geometry.twine_vectors(xe, uve)
+        return 2.0 * geometry.half_opening_angle(U, V)
+
+    return jax.vmap(angle)(x[vertices], uv)
+
+
+_opening_angles_jit = programs.jit(_opening_angles)
+
+
+def mesh_opening_angles(scene, x):
+    """(E,) the opening angle (rad) of the meshes of every diamond netting triangle at positions x (N, 3): the
+    angle between its U and V twine vectors (:func:`jaxnet.geometry.twine_vectors`), twice the half angle of the
+    mesh opening term (eq. 4.211); pi/2 for square meshes, 0 for closed ones."""
+    net = scene.netting
+    if net is None:
+        return np.zeros(0)
+    args = (np.asarray(x, dtype=float), net.vertices, net.uv)
+    return np.asarray(programs.obtain("mesh_opening_angles", _opening_angles_jit, args)(*args))
+
+
+def _hexagonal_tensions(x, vertices, uv, l0, ea_traction, ea_compression):
+    return jax.vmap(hexagonal_lib.hexagonal_tensions)(x[vertices], uv, l0, ea_traction, ea_compression)
+
+
+_hexagonal_tensions_jit = programs.jit(_hexagonal_tensions)
+
+
+def hexagonal_twine_tensions(scene, x):
+    """(E, 3) tensions (N) of the three twine families (l, m, n) of every hexagonal netting triangle at positions
+    x (N, 3), at the equilibrium of its knots (eqs 4.85-4.87)."""
+    hexagonal = scene.hexagonal
+    if hexagonal is None:
+        return np.zeros((0, 3))
+    args = (np.asarray(x, dtype=float), hexagonal.vertices, hexagonal.uv, hexagonal.l0, hexagonal.ea_traction,
+            hexagonal.ea_compression)
+    return np.asarray(programs.obtain("hexagonal_twine_tensions", _hexagonal_tensions_jit, args)(*args))

@@ -100,8 +100,9 @@ def test_compiled_programs_are_kept_on_disk_and_reused(tmp_path):
                 {p.name: p.stat().st_mtime_ns for p in programs.iterdir()}, set(p.name for p in cache.iterdir()))
 
     first, kept, entries = run("a")
-    assert sorted(name.split("-")[0] for name in kept) == ["bar_tensions", "evaluate", "loads", "scatter", "springs",
-                                                           "tangent", "term_forces", "twine_tensions"]
+    assert sorted(name.split("-")[0] for name in kept) == ["bar_tensions", "evaluate", "loads", "mesh_opening_angles",
+                                                           "scatter", "springs", "tangent", "term_forces",
+                                                           "twine_tensions"]
     second, kept_after, entries_after = run("b")
     assert kept_after == kept and entries_after == entries  # loaded: nothing compiled, nothing written
     assert second["iterations"] == first["iterations"]
@@ -157,7 +158,7 @@ def test_dynamic_run_of_a_net_at_rest_stays_at_rest_and_resumes(tmp_path):
     np.testing.assert_allclose(series["time"], [0.0, 0.05, 0.1, 0.15, 0.2], atol=1e-12)
     assert np.abs(series["position"] - series["position"][:1]).max() < 1e-6
     np.testing.assert_allclose(series["reaction_total_N"], np.tile([0.0, 0.0, 2.0], (5, 1)), atol=5e-3)
-    assert (out / "series.pvd").exists() and (out / "series.npz").exists()
+    assert (out / "series.pvd").exists() and (out / "series.npz").exists() and (out / "run.png").exists()
 
 
 def _dynamic_don(tmp_path):
@@ -316,3 +317,56 @@ def test_version_and_built_in_numbers_set_on_the_command_line(tmp_path, capsys):
     path.write_text("{}")
     assert cli.main(["run", str(path), "--set", "step=1", "--out", str(out), "--no-cache"]) == 2
     assert "--set changes a built-in scene's arguments" in capsys.readouterr().err
+
+
+def test_export_writes_a_built_in_scene_that_runs_as_a_file(tmp_path, capsys):
+    """``jaxnet export --scene NAME [--set ...] FILE`` writes the built-in, its numbers changed, as a scene file;
+    ``jaxnet run FILE`` then solves the same net as ``jaxnet run --scene NAME --set ...``."""
+    path = tmp_path / "panel.toml"
+    assert cli.main(["export", "--scene", "hanging", "--set", "meshes=8", "--set", "step=0.05", str(path)]) == 0
+    assert f"run it with: jaxnet run {path}" in capsys.readouterr().out
+    runs = {}
+    for name, argv in (("file", [str(path)]), ("built-in", ["--scene", "hanging", "--set", "meshes=8",
+                                                            "--set", "step=0.05"])):
+        out = tmp_path / name
+        assert cli.main(["run", *argv, "--out", str(out), "--quiet", "--no-cache"]) == 0
+        runs[name] = json.loads((out / "result.json").read_text())
+    assert runs["file"]["n_nodes"] == runs["built-in"]["n_nodes"]
+    np.testing.assert_allclose(runs["file"]["reaction_N"], runs["built-in"]["reaction_N"], rtol=1e-9, atol=1e-12)
+    assert cli.main(["export", "--scene", "hanging", "--set", "mesh=8", str(tmp_path / "x.toml")]) == 2
+    assert "has no such number" in capsys.readouterr().err and not (tmp_path / "x.toml").exists()
+
+
+def test_show_redraws_the_pictures_of_a_run_without_solving(tmp_path, capsys, monkeypatch):
+    """``jaxnet show DIR`` draws net.png (a static run) or run.png (a run in time) again from what the run wrote and
+    the command it recorded (DIR/command.json), the net read again from its source: no solve (the solvers are
+    made to fail here), and a directory that is no run's is named."""
+    from jaxnet.io import plot
+    from jaxnet.solve import statics
+
+    static, dynamic = tmp_path / "static", tmp_path / "dynamic"
+    built_in = ["--scene", "hanging", "--set", "meshes=8", "--set", "step=0.05"]
+    assert cli.main(["run", *built_in, "--out", str(static), "--quiet", "--no-cache"]) == 0
+    path = tmp_path / "scene.json"
+    path.write_text(json.dumps(wall_scene()))
+    monkeypatch.chdir(tmp_path)  # the file named relative to where the run started
+    assert cli.main(["run", "scene.json", "--dynamic", "--dt", "0.01", "--end", "0.03", "--out", str(dynamic),
+                     "--quiet", "--no-cache"]) == 0
+    (static / "net.png").unlink()
+    (dynamic / "run.png").unlink()
+    drawn = {}
+    monkeypatch.setattr(plot, "save_png", lambda p, scene, x, **kw: drawn.update(png=(p, scene, x, kw)))
+    monkeypatch.setattr(plot, "save_run_png", lambda p, scene, t, x, f, **kw: drawn.update(run=(p, t, x, f)))
+    monkeypatch.setattr(statics, "solve", lambda *a, **k: pytest.fail("show must not solve"))
+    monkeypatch.chdir(pathlib.Path("/"))
+    assert cli.main(["show", str(static)]) == 0
+    p, scene, x, kw = drawn["png"]
+    result = json.loads((static / "result.json").read_text())
+    assert p == static / "net.png" and scene.n_nodes == result["n_nodes"]
+    np.testing.assert_allclose(np.asarray(kw["twine_tension"]).max(), result["max_twine_tension_N"], rtol=1e-12)
+    assert cli.main(["show", str(dynamic)]) == 0
+    p, t, positions, figures_ = drawn["run"]
+    np.testing.assert_allclose(t, [0.0, 0.01, 0.02, 0.03], atol=1e-12)
+    assert positions.shape[0] == 4 and "reaction_total_N" in figures_
+    assert cli.main(["show", str(tmp_path)]) == 2
+    assert "holds no command.json: it is not the output directory of a jaxnet run" in capsys.readouterr().err

@@ -218,7 +218,8 @@ def test_a_solve_with_a_catch_compiles_its_evaluation_and_tangent_once(caplog):
     compiled = [r.getMessage().split(" with ")[0] for r in caplog.records if r.getMessage().startswith("Compiling")]
     assert sorted(compiled) == [f"Compiling jit({name})" for name in (
         "_bar_tensions", "_catch", "_netting_tensions", "term_forces")]
-    assert summary["catch"]["holds_the_volume"] and summary["catch"]["volume_m3"] == pytest.approx(0.01, rel=1e-9)
+    catch_report = summary["catch"]
+    assert catch_report["holds_the_volume"] and catch_report["volume_whole_net_m3"] == pytest.approx(0.01, rel=1e-9)
 
 
 def test_stiffness_continuation_softens_the_net_not_its_weight_and_buoyancy():

@@ -296,7 +296,7 @@ def test_equilibrium_derivative_in_the_catch_volume():
 
 def test_result_reports_each_panel_catch():
     """result.json's ``panel_catches``: at the solved equilibrium of two cod-ends holding 0.01 and 0.03 m³, each entry
-    names its panel and holds its volume, and each catch's drag (p × its front's section, the whole net's) is the
+    names its panel and holds its volume, and each catch's whole-net drag (p × its front's section) is the
     axial force of its pressure on its own cod-end (the netting with the front and the symmetry planes closes the
     catch), four times the modelled quarter's."""
     from jaxnet import figures
@@ -308,7 +308,8 @@ def test_result_reports_each_panel_catch():
     holder = np.asarray(scene.panel_catches.panel_catch)[np.asarray(scene.netting.panel)]
     force = term_force(scene, np.asarray(eq.x), "panel_catch_pressure")
     for k, (r, volume) in enumerate(zip(report, (0.01, 0.03))):
-        assert r["holds_the_volume"] and r["volume_m3"] == pytest.approx(volume, rel=1e-8)
+        assert r["holds_the_volume"] and r["volume_whole_net_m3"] == pytest.approx(volume, rel=1e-8)
         nodes = np.unique(np.asarray(scene.netting.vertices)[holder == k])
-        assert r["drag_N"] == pytest.approx(4.0 * force[nodes, 0].sum(), rel=1e-6)
-    assert report[1]["drag_N"] > report[0]["drag_N"] > 0.0
+        assert r["drag_whole_net_N"] == pytest.approx(4.0 * force[nodes, 0].sum(), rel=1e-6)
+        assert r["drag_N"] == pytest.approx(force[nodes, 0].sum(), rel=1e-6)  # the modelled quarter's
+    assert report[1]["drag_whole_net_N"] > report[0]["drag_whole_net_N"] > 0.0

@@ -17,7 +17,8 @@ Layout of ``out_dir``::
                          float64 (int64 for ``step`` and for integer figures). Figure ``f`` is in
                          ``raw/figure.f.bin``.
     checkpoint.npz       the last record and the solver's arrays. Replaced atomically.
-    net_NNNNN.vtu        (``vtk=True``) the net at record NNNNN, with the velocity as point data.
+    net_NNNNN.vtu        (``vtk=True``) the net at record NNNNN (:func:`write_vtu_state`): displacement, velocity
+                         and reactions as point data, tensions and mesh opening angles as cell data.
     series.pvd           (``vtk=True``) ParaView collection of the .vtu files with their times.
     series.npz           written by ``close()``: time (R,), step (R,), position (R, N, 3), velocity (R, N, 3)
                          and every figure (R, ...), as :func:`read_series` returns them.
@@ -64,7 +65,6 @@ import pathlib
 import re
 import xml.sax.saxutils
 
-import meshio
 import numpy as np
 
 from jaxnet.io import vtk
@@ -196,27 +196,48 @@ def _figure_array(name, value):
 # --------------------------------------------------------------------------------------------------
 
 
-def write_vtu_state(path, scene, position, velocity=None, fsync=False):
+def write_vtu_state(path, scene, position, velocity=None, fsync=False, point_data=None):
     """Write the net at ``position`` (N, 3) m to ``path`` (.vtu) as :func:`jaxnet.io.vtk.write_vtu` does
-    (tensions as cell data), plus the point data ``velocity_m_s`` (N, 3) m/s when ``velocity`` is given.
+    (displacement from the drawn shape, what holds each node, tensions, mesh opening angles, panel and cable
+    ids, the names and mirror planes in field data), plus the point data ``velocity_m_s`` (N, 3) m/s when
+    ``velocity`` is given and ``point_data`` (name -> (N, ...) array).
+
+    Not the nodal forces by group nor the reactions of a static balance: at an instant of a run the net's
+    inertia joins the balance, and evaluating every term at every record would make each record cost a
+    solve's figures (a run's own reactions come as ``point_data``: :func:`record_point_data`). Nor the whole
+    net of a model with symmetry planes: each record would be written ``1 + copies`` times over; the file
+    states the planes (field data ``symmetry_planes``), which ParaView's Reflect filter takes.
 
     The file is written under a temporary name and renamed into place, so that ParaView, which may be
-    reading the series while the run goes, never opens half a file. The velocity is added by reading back
-    what ``write_vtu`` wrote, so this stays whatever ``vtk.py`` writes, with one field more.
+    reading the series while the run goes, never opens half a file.
     """
     path = pathlib.Path(path)
-    tmp = path.with_name(path.stem + _PARTIAL + ".vtu")  # meshio picks the format from the extension
-    vtk.write_vtu(tmp, scene, np.asarray(position))
+    tmp = path.with_name(path.stem + _PARTIAL + ".vtu")
+    extra = dict(point_data or {})
     if velocity is not None:
-        mesh = meshio.read(tmp)
-        mesh.point_data["velocity_m_s"] = np.asarray(velocity, dtype=float)
-        meshio.write(str(tmp), mesh)
+        extra["velocity_m_s"] = np.asarray(velocity, dtype=float)
+    vtk.write_vtu(tmp, scene, np.asarray(position), forces=False, point_data=extra, write_whole=False)
     if fsync:
         with open(tmp, "rb+") as f:
             os.fsync(f.fileno())
     os.replace(tmp, path)
     if fsync:
         _sync_dir(path.parent)
+
+
+def record_point_data(scene, record, run):
+    """The point data of a record's .vtu besides its velocity: ``reaction_N`` (N, 3) in N, the record's figure
+    ``reaction_N`` (one row per node of ``run["reaction_nodes"]``, as :func:`jaxnet.solve.dynamics.simulate`
+    records them) put on its nodes, zero on the others; nothing when the record or the run lacks them."""
+    reaction, rows = record.figures.get("reaction_N"), (run or {}).get("reaction_nodes")
+    if reaction is None or rows is None:
+        return {}
+    reaction, rows = np.asarray(reaction, dtype=float), np.asarray(rows, dtype=np.int64)
+    if reaction.shape != (len(rows), 3):
+        return {}
+    out = np.zeros((scene.n_nodes, 3))
+    out[rows] = reaction
+    return {"reaction_N": out}
 
 
 def _vtu_name(k):
@@ -480,7 +501,8 @@ class SeriesWriter:
                 os.fsync(f.fileno())
 
     def _write_vtu(self, record, k):
-        write_vtu_state(self.out_dir / _vtu_name(k), self.scene, record.position, record.velocity, self.fsync)
+        write_vtu_state(self.out_dir / _vtu_name(k), self.scene, record.position, record.velocity, self.fsync,
+                        record_point_data(self.scene, record, self.run))
 
     def _commit(self, record, k):
         """Count record k in: the index, then the ParaView collection."""
