@@ -57,6 +57,8 @@ def _result_data(value):
     data = {"text/plain": _lines(repr(value))}
     to_json = getattr(value, "to_plotly_json", None)
     if to_json is not None:
+        # a plotly figure's repr is its whole data: a line says what it is instead
+        data["text/plain"] = [f"<plotly Figure with {len(value.data)} traces>"]
         data["text/html"] = _lines(value.to_html(include_plotlyjs="cdn", full_html=False))
         data["application/vnd.plotly.v1+json"] = json.loads(value.to_json())
     elif hasattr(value, "_repr_html_"):

@@ -3,6 +3,7 @@
 the writers draw and the whole-net figures use."""
 
 import importlib
+import pathlib
 
 import numpy as np
 import pytest
@@ -12,7 +13,7 @@ from jaxnet.net import Net, Twine
 from jaxnet.scene import SceneError, mirror_copies, mirror_signs, mirrored
 
 codend = importlib.import_module("jaxnet.scenes.codend")
-CORPUS = "/work/shared/femnet-corpus"
+CORPUS = pathlib.Path(__file__).resolve().parent / "data" / "femnet-corpus"  # FEMNET's cases, their licence there
 
 
 def half_panel(**plane):
@@ -71,7 +72,7 @@ def test_the_cod_end_and_femnet_quarter_models_declare_their_planes():
     assert codend.codend(meshes_around=8, meshes_along=4).scene.symmetry_planes == ((1, 0.0), (2, 0.0))
     from jaxnet.io import femnet
 
-    case = femnet.read_don(f"{CORPUS}/14tarp/c2.don")
+    case = femnet.read_don(CORPUS / "14tarp" / "c2.don")
     assert case.scene.symmetry_planes == ((1, 0.0), (2, -10.0)) and case.info["symmetry_axes"] == ["y", "z"]
     # every node FEMNET holds by a symmetry plane lies on it
     x = np.asarray(case.scene.nodes.position)
