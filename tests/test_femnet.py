@@ -633,3 +633,23 @@ def test_towing_speed_tables_become_prescribed_motions(tmp_path):
     path.write_text(text.replace("input speed_type_node2  1 3", "input speed_type_node2  2 3"))
     with pytest.raises(SceneError, match=rf"a1b.don:{line}: 'input speed_type_node2': the nodes of type 2 are towed"):
         femnet.read_don(path)
+
+
+def test_the_docs_command_table_names_every_input_command_of_the_grammar():
+    """docs/femnet.md's table of `input` commands says what jaxnet does with each: it names every command the
+    reader knows, and no other."""
+    import re
+
+    from jaxnet.io.femnet import grammar
+
+    text = (pathlib.Path(__file__).resolve().parents[1] / "docs" / "femnet.md").read_text()
+    section = text.split("## The `.don` file's `input` commands", 1)[1].split("\n## ", 1)[0]
+    rows = [line.split("|")[1] for line in section.splitlines() if line.startswith("| `")]
+    named = set()
+    for cell in rows:
+        for name in re.findall(r"`([^`]+)`", cell):
+            if "{" in name:  # add_{x,y,z}_{ele,pan}
+                named |= {f"add_{a}_{p}" for a in "xyz" for p in ("ele", "pan")}
+            else:
+                named.add(name)
+    assert named == set(grammar.INPUTS)
