@@ -623,7 +623,7 @@ def _catalogue():
         BadInput("wrong type: a word for a list", sfile, "fix = 'top'", _scene_file(_set(("fix",), "top")), E,
                  r"fix\[0\]: expected a table/object, got str"),
         BadInput("missing required key", sfile, "panels[0] without twine", _scene_file(_drop(("panels", 0, "twine"))),
-                 E, r"panels\[0\]: missing key\(s\) \['twine'\]"),
+                 E, r"panels\[0\]: give its material as twine \(diamond meshes\) or hex_twine \(hexagonal\)"),
         BadInput("missing material key", sfile, "twines.pa without ea", _scene_file(_drop(("twines", "pa", "ea"))), E,
                  r"twines\.pa: missing key\(s\) \['ea'\]"),
         BadInput("unknown material name", sfile, "panels[0].twine = 'pb'",
