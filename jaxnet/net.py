@@ -47,7 +47,7 @@ from jaxnet.mesh.joining import NodeJoiner
 from jaxnet.mesh.panel import lattice_divisions, mesh_panel
 from jaxnet.mesh.polygon import PanelError, side_divisions
 from jaxnet.mesh.twines import NumericalTwines, mesh_twines, numerical_twine_rope
-from jaxnet.scene import Bars, CableJoints, Environment, Netting, Nodes, Scene, SceneError
+from jaxnet.scene import Bars, CableJoints, Environment, Netting, Nodes, Scene, SceneError, on_symmetry_planes
 
 
 @dataclasses.dataclass(frozen=True)
@@ -619,10 +619,7 @@ class Net:
         lookup = lambda ref: np.unique(ids[self._nodes_of(ref, meshes, cable_nodes, builder)])  # noqa: E731
         for ref, axes in self._fixed:
             fixed[lookup(ref)] |= np.array(axes)
-        extent = max(float(np.ptp(position, axis=0).max()), 1.0) if n else 1.0
-        for axis, at, hold in self._symmetry_planes:
-            if hold:
-                fixed[np.abs(position[:, axis] - at) <= 1e-9 * extent, axis] = True
+        fixed |= on_symmetry_planes(position, [(axis, at) for axis, at, hold in self._symmetry_planes if hold])
         for ref, m, v, f, a, h in self._attached:
             nodes = lookup(ref)
             mass[nodes] += m / nodes.size

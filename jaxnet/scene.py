@@ -373,6 +373,23 @@ def bottom_axis(env):
     return axis, int(np.sign(up[axis]))
 
 
+#: a node lies on a symmetry plane when it is within this fraction of the net's size (1 m at least) of it
+PLANE_TOLERANCE = 1e-9
+
+
+def on_symmetry_planes(position, planes) -> np.ndarray:
+    """(N, 3) bool: True at (node, axis) where the node at ``position`` (N, 3) (m) lies on the plane across that
+    axis among ``planes`` ((axis, position m), ...: :attr:`Scene.symmetry_planes`), to :data:`PLANE_TOLERANCE`
+    of the net's extent. What :meth:`jaxnet.net.Net.symmetry_plane` holds, and what the writers tell apart from
+    a fixing."""
+    position = np.asarray(position, dtype=float)
+    extent = max(float(np.ptp(position, axis=0).max()), 1.0) if len(position) else 1.0
+    on = np.zeros(position.shape, dtype=bool)
+    for axis, at in planes:
+        on[:, axis] |= np.abs(position[:, axis] - at) <= PLANE_TOLERANCE * extent
+    return on
+
+
 def mirror_copies(scene) -> int:
     """How many copies of the modelled part make the whole net: 2 per symmetry plane."""
     return 2 ** len(scene.symmetry_planes)

@@ -51,15 +51,11 @@ _FRONT_COLOUR = "magenta"
 
 def held_nodes(scene) -> np.ndarray:
     """(N,) bool: the nodes drawn as fixed, those held along some axis other than the normal of a symmetry plane
-    they lie on (to 1e-9 of the net's size, the tolerance of :meth:`jaxnet.net.Net.symmetry_plane`). A node held
-    only across its plane is free in the whole net: the hold is what makes the modelled part symmetric."""
-    fixed = np.asarray(scene.nodes.fixed, dtype=bool).copy()
-    x = np.asarray(scene.nodes.position, dtype=float)
-    size = float(np.ptp(x, axis=0).max()) if x.size else 0.0
-    for axis, at in scene.symmetry_planes:
-        on_plane = np.abs(x[:, axis] - at) <= 1e-9 * max(size, 1.0)
-        fixed[on_plane, axis] = False
-    return fixed.any(axis=1)
+    they lie on (:func:`jaxnet.scene.on_symmetry_planes`, the test of :meth:`jaxnet.net.Net.symmetry_plane`). A
+    node held only across its plane is free in the whole net: the hold is what makes the modelled part
+    symmetric."""
+    fixed = np.asarray(scene.nodes.fixed, dtype=bool)
+    return (fixed & ~scene_lib.on_symmetry_planes(scene.nodes.position, scene.symmetry_planes)).any(axis=1)
 
 
 def view_directions(scene):

@@ -105,14 +105,10 @@ def write_vtu(path, scene, x, residual=None, *, forces=True, point_data=None, wr
 
 def node_types(scene) -> np.ndarray:
     """(N,) int32 :data:`NODE_TYPES` code of every node: 0 free, 1 held along some axis, 2 held only along the
-    normals of symmetry planes it lies on (to 1e-9 of the net's size, the tolerance by which
+    normals of symmetry planes it lies on (:func:`jaxnet.scene.on_symmetry_planes`, by which
     :meth:`jaxnet.net.Net.symmetry_plane` holds them) at its start position."""
     fixed = np.asarray(scene.nodes.fixed, dtype=bool)
-    start = np.asarray(scene.nodes.position, dtype=float)
-    extent = max(float(np.ptp(start, axis=0).max()), 1.0) if len(start) else 1.0
-    across = np.zeros_like(fixed)
-    for axis, at in scene.symmetry_planes:
-        across[:, axis] |= np.abs(start[:, axis] - at) <= 1e-9 * extent
+    across = scene_lib.on_symmetry_planes(scene.nodes.position, scene.symmetry_planes)
     held = fixed.any(axis=1)
     only_across = held & ~(fixed & ~across).any(axis=1)
     return np.where(only_across, 2, np.where(held, 1, 0)).astype(np.int32)
