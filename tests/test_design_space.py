@@ -331,11 +331,30 @@ def test_rounded_design(rig_space):
     corners = np.asarray(rig_space.initial()["cut"]["trap"])
     noisy = corners + np.random.default_rng(1).uniform(-0.2, 0.2, corners.shape)
     theta, report = rig_space.rounded({"cut": {"trap": noisy}, "mesh_side": {"trap": 0.06}})
-    np.testing.assert_allclose(np.asarray(theta["cut"]["trap"]) - noisy[0], corners - corners[0], atol=1e-12)
+    # each corner's change from the reference rounds to whole meshes: less than half a mesh is none
+    np.testing.assert_allclose(np.asarray(theta["cut"]["trap"]), corners, atol=1e-12)
     assert float(theta["mesh_side"]["trap"]) == 0.06
     assert [(s.meshes, s.rate) for s in report["trap"]] == [(6, "AT"), (4, "3N2B"), (4, "AT"), (4, "3N2B")]
     text = rig_space.describe(theta)
     assert "side 1: 4 meshes, 3N2B" in text and "mesh_side['trap'] = 0.06 m" in text
+
+
+def test_rounding_keeps_a_cut_drawn_on_half_meshes():
+    """FEMNET's files put corners on half meshes: rounding the change from the drawn cut keeps the drawing, and
+    moves a corner by whole meshes (or whole twines) from it."""
+    drawn = np.asarray(cut.mesh_to_twine(np.array([[0.0, 0.0], [58.5, 0.0], [69.0, 54.0], [0.0, 58.5]])))
+    same, _ = cut.round_cut(drawn + 0.3, name="wing", reference=drawn)
+    np.testing.assert_array_equal(same, drawn + np.rint(np.asarray(cut.twine_to_mesh(np.full(2, 0.3)))))
+    change = np.array([[0.0, 0.0], [1.3, -0.2], [0.0, 2.6], [-0.4, 0.45]])  # (u, v) meshes
+    moved, sides = cut.round_cut(drawn + np.asarray(cut.mesh_to_twine(change)), name="wing", reference=drawn)
+    np.testing.assert_allclose(np.asarray(cut.twine_to_mesh(moved - drawn)), [[0, 0], [1, 0], [0, 3], [0, 0]],
+                               atol=1e-12)
+    assert sides[0].meshes == 59.5  # 58.5 meshes drawn along side 0, one more
+    by_twine, _ = cut.round_cut(drawn + np.array([[0.2, 0.0], [1.6, -0.2], [0.0, 0.0], [0.0, 0.0]]), name="wing",
+                                reference=drawn, step="twine")
+    np.testing.assert_allclose(by_twine - drawn, [[0, 0], [2, 0], [0, 0], [0, 0]], atol=1e-12)
+    with pytest.raises(ValueError, match="step must be one of"):
+        cut.round_cut(drawn, name="wing", step="knot")
 
 
 # -- bad designs ------------------------------------------------------------------------------------------------

@@ -126,6 +126,21 @@ def test_gradient_of_a_figure_by_the_adjoint():
     assert g[list(FIELDS).index("twine EA")] < 0
 
 
+
+def test_second_derivative_by_forward_over_adjoint_matches_differences_of_the_gradient():
+    """The derivative of the adjoint gradient along a design direction (a Hessian-vector product: forward mode
+    over reverse) against fourth-order differences of the gradient itself. Its one term that the first
+    derivative lacks is the change of K with the design (``custom_linear_solve`` differentiates its matvec,
+    the assembled tangent's sparse product), so a matvec that is not K's exact derivative shows here."""
+    gradient = deflection_gradient()
+    theta = np.zeros(len(FIELDS))
+    direction = np.linspace(1.0, -0.5, len(FIELDS))
+    hvp = np.asarray(jax.jvp(gradient, (theta,), (direction,))[1])
+    fd = central_differences(lambda t: gradient(theta + t[0] * direction), np.zeros(1))[:, 0]
+    scale = np.abs(fd).max()
+    assert scale > 1e-8
+    np.testing.assert_allclose(hvp, fd, rtol=0, atol=1e-5 * scale)
+
 def test_vmap_of_gradients_over_designs_equals_the_loop():
     gradient = deflection_gradient()
     batch = np.array([np.zeros(len(FIELDS)), np.full(len(FIELDS), 0.01), np.linspace(-0.02, 0.02, len(FIELDS))])

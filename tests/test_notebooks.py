@@ -74,10 +74,16 @@ def test_design_panel_cuts(monkeypatch):
     assert best["volume"] > 1.04 * ref["volume"]
     counted = float(sum(ns["space"].twine_length(best["theta"]).values()))
     assert best["twine"] == pytest.approx(counted, rel=1e-12)
-    # whole meshes: every side of every panel whole steps (integer du, dv from corner 0)
-    for sides in best["report"].values():
-        for side in sides:
-            assert side.du == round(side.du) and side.dv == round(side.dv)
+    # whole meshes: every corner of every panel moved from the reference cut by whole meshes (integer du, dv);
+    # the walls, drawn on whole meshes from corner 0, have whole sides
+    from jaxnet.design import cut
+
+    reference = ns["space"].initial()["cut"]
+    for panel, corners in best["theta"]["cut"].items():
+        moved = np.asarray(cut.twine_to_mesh(np.asarray(corners) - np.asarray(reference[panel])))
+        np.testing.assert_allclose(moved, np.rint(moved), rtol=0, atol=1e-9)
+    for side in best["report"][walls[0]]:
+        assert side.whole and side.du == round(side.du) and side.dv == round(side.dv)
     # all walls alike; tapered: the top kept, a narrower foot, the same cut on both sides: k = (top - foot)/2
     # meshes off each side over `depth` meshes is (depth - k) points and 2k bars
     cuts = [tuple(str(s) for s in best["report"][w]) for w in walls]
@@ -89,6 +95,36 @@ def test_design_panel_cuts(monkeypatch):
     assert right.steps == {"N": best["depth"] - k, "T": 0, "B": 2 * k} and right.meshes == best["depth"]
     # the bottom slices' rim has the foot's meshes (they are sewn together)
     assert all(best["report"][b][2].meshes == best["foot"] for b in ns["bottoms"])
+
+
+def test_design_trawl(monkeypatch):
+    """The trawl study on FEMNET's b1 (small: two Adam steps): its figures are what they say, the optimiser's
+    history starts at the drawn trawl's figure, and the design written as .don and re-meshed by jaxnet gives the
+    design space's figures within the re-meshing's difference."""
+    ns = run_notebook("design_trawl.ipynb", monkeypatch)
+    before, after, trimmed, checked = ns["before"], ns["after"], ns["trimmed_figures"], ns["checked"]
+    assert after["twine"] == pytest.approx(trimmed["twine"], rel=1e-12)  # trimming ropes leaves the netting
+    # drag per swept width: the whole trawl's drag over twice the door's distance to the plane y = 0
+    x = np.asarray(ns["reference"].x)
+    assert before["spread"] == pytest.approx(2 * abs(x[ns["door"], 1]), rel=1e-14)
+    assert before["per_width"] == pytest.approx(before["drag"] / before["spread"], rel=1e-14)
+    # FEMNET's printed half door spread of b1 (26.28 m) within 2 % (measured 26.63 m)
+    assert before["spread"] / 2 == pytest.approx(26.28, rel=0.02)
+    # the penalised objective starts at the drawn figure: every constraint holds there (its own values)
+    assert ns["result"].history[0]["objective"] == pytest.approx(before["per_width"], rel=1e-12)
+    assert ns["result"].history[0]["violation"] <= 1e-9
+    assert ns["trim"].value <= ns["trim"].history[0]["objective"] + 1e-12
+    # the rounded cut moved every corner by whole meshes from the drawn one
+    from jaxnet.design import cut
+
+    drawn = ns["space"].initial()["cut"]
+    for panel, corners in ns["rounded"]["cut"].items():
+        moved = np.asarray(cut.twine_to_mesh(np.asarray(corners) - np.asarray(drawn[panel])))
+        np.testing.assert_allclose(moved, np.rint(moved), rtol=0, atol=1e-9)
+    # re-read from its .don and re-meshed: within 2 % of the design space's figures (the frozen mesh)
+    for key in ("per_width", "drag", "spread", "height"):
+        assert checked[key] == pytest.approx(trimmed[key], rel=0.02), key
+    assert checked["twine"] == pytest.approx(trimmed["twine"], rel=1e-9)  # the same cut: the same twine
 
 
 def test_quickstart(monkeypatch):
@@ -244,7 +280,7 @@ def test_dynamics_in_waves(monkeypatch):
 
 def test_every_notebook_has_a_test():
     tested = {"hand_vs_autodiff.ipynb", "design_panel_cuts.ipynb", "quickstart.ipynb", "fish_cage_in_current.ipynb",
-              "codend_with_catch.ipynb", "dynamics_in_waves.ipynb"}
+              "codend_with_catch.ipynb", "dynamics_in_waves.ipynb", "design_trawl.ipynb"}
     assert {p.name for p in NOTEBOOKS.glob("*.ipynb")} == tested
 
 

@@ -9,4 +9,10 @@
   material) and constraints, composable.
 - :mod:`jaxnet.design.optimize`: optax optimisation of a design, through the differentiable equilibrium
   (:mod:`jaxnet.solve.implicit`).
+- :mod:`jaxnet.design.reduced`: design vectors, maps from a few numbers (symmetries, tapers, a panel's size)
+  to θ, which ``optimize`` optimises through.
+- :mod:`jaxnet.design.report`: designs and optimisation results printed as short tables of cuts and values.
+- :mod:`jaxnet.design.sweep`: sweeps of many designs on the worker processes of a Dask cluster, local or remote,
+  rows written as they arrive.
+- :mod:`jaxnet.design.batch`: batches of designs in one program on one process's devices (vmap, shard_map).
 """

@@ -52,7 +52,7 @@ import jax.numpy as jnp
 import numpy as np
 
 __all__ = ["mesh_to_twine", "twine_to_mesh", "trapezoid", "side_meshes", "stretched_length", "panel_meshes",
-           "side_steps", "cutting_rate", "SideCut", "round_cut", "describe_sides"]
+           "side_steps", "cutting_rate", "SideCut", "ROUNDING_STEPS", "round_cut", "describe_sides"]
 
 # a twine count this close to an integer is that integer (rounded cuts come back through float arithmetic)
 _WHOLE = 1e-6
@@ -158,7 +158,9 @@ class SideCut:
 
     side: index k (from corner k to corner k + 1, cyclic); du, dv: extent in meshes across (T-direction)
     and along (N-direction); meshes: meshes along the side, max(|du|, |dv|); steps: {"N", "T", "B"} counts;
-    rate: cutting rate ("AN", "1N2B", ...).
+    rate: cutting rate ("AN", "1N2B", ...). whole: whether the side is whole twines; a side drawn on fractions
+    of a twine (FEMNET's files allow it) has its exact extents and meshes, and the steps and rate of the nearest
+    whole side, its rate written "≈1N2B".
     """
 
     side: int
@@ -167,6 +169,7 @@ class SideCut:
     meshes: float
     steps: dict
     rate: str
+    whole: bool = True
 
     def __str__(self):
         steps = " ".join(f"{n}{k}" for k, n in self.steps.items() if n)
@@ -174,41 +177,71 @@ class SideCut:
 
 
 def describe_sides(corners_uv) -> tuple:
-    """(C,) :class:`SideCut` of a panel whose corners (C, 2) (U, V) lie on whole meshes (or twines)."""
+    """(C,) :class:`SideCut` of a panel of corners (C, 2) (U, V): whole meshes or twines give exact steps and
+    rates; a side on fractions of a twine is described by the nearest whole side (``SideCut.whole`` False)."""
     uv = np.asarray(corners_uv, dtype=float)
     out = []
     for k in range(len(uv)):
         dU, dV = uv[(k + 1) % len(uv)] - uv[k]
-        steps = side_steps(dU, dV)
-        out.append(SideCut(side=k, du=0.5 * round(dU - dV), dv=0.5 * round(dU + dV),
-                           meshes=0.5 * (abs(round(dU)) + abs(round(dV))), steps=steps, rate=cutting_rate(dU, dV)))
+        whole = abs(dU - round(dU)) <= _WHOLE and abs(dV - round(dV)) <= _WHOLE
+        if whole:
+            dU, dV = float(round(dU)), float(round(dV))
+        near = (round(dU), round(dV))
+        if near == (0, 0):
+            steps, rate = {"N": 0, "T": 0, "B": 0}, "-"
+        else:
+            steps, rate = side_steps(*near), cutting_rate(*near)
+        out.append(SideCut(side=k, du=0.5 * (dU - dV), dv=0.5 * (dU + dV), meshes=0.5 * (abs(dU) + abs(dV)),
+                           steps=steps, rate=rate if whole else "≈" + rate, whole=bool(whole)))
     return tuple(out)
 
 
-def round_cut(corners_uv, name="panel"):
-    """Corners (C, 2) (U, V) moved to whole meshes from corner 0, and the rounded sides.
+#: the units a cut is rounded to (:func:`round_cut`): whole meshes (N and T steps, and B steps in pairs), or
+#: whole twines (any N, T and B steps: a corner may end half a mesh off, a bar cut)
+ROUNDING_STEPS = ("mesh", "twine")
 
-    Corner 0 stays where it is (only differences of twine coordinates mean anything) and every other
-    corner's mesh coordinates (u, v) relative to it are rounded to the nearest integers, so every side is
-    whole N, T and B steps and each corner moves by at most half a mesh along u and along v; a cut already
-    on whole meshes is returned unchanged. Returns
-    (corners (C, 2) numpy float, tuple of :class:`SideCut`). Raises ValueError naming the panel and the
-    corner or side when the corners are not finite or the rounded polygon is degenerate (two corners on one
-    mesh, zero area, crossing sides): a panel too small or too distorted to round.
+
+def round_cut(corners_uv, name="panel", reference=None, step="mesh"):
+    """Corners (C, 2) (U, V) moved to whole meshes (or twines) and the rounded sides.
+
+    Without ``reference``, corner 0 stays where it is (only differences of twine coordinates mean anything)
+    and every other corner's offset from it is rounded: to whole meshes (integer mesh coordinates (u, v),
+    ``step="mesh"``: each corner moves by at most half a mesh along u and along v) or to whole twines (integer
+    (U, V), ``step="twine"``: at most half a twine along each), so every side is whole N, T and B steps.
+    With ``reference`` (C, 2), the cut as it was drawn (a FEMNET ``.don`` file's corners, which may sit on half
+    meshes), what is rounded is each corner's change from it: a design that adds or removes whole meshes (or
+    twines) of the drawn panel, and the reference itself comes back unchanged whatever its own fractions.
+    A cut already whole is returned unchanged. Returns (corners (C, 2) numpy float, tuple of :class:`SideCut`).
+    Raises ValueError naming the panel and the corner or side when the corners are not finite or the rounded
+    polygon is degenerate (two corners on one mesh, zero area, crossing sides): a panel too small or too
+    distorted to round.
     """
     from jaxnet.mesh.polygon import PanelError, check_polygon
 
+    if step not in ROUNDING_STEPS:
+        raise ValueError(f"panel {name!r}: step must be one of {ROUNDING_STEPS}, got {step!r}")
     uv = np.asarray(corners_uv, dtype=float)
     if uv.ndim != 2 or uv.shape[1] != 2:
         raise ValueError(f"panel {name!r}: corners must have shape (C, 2) (U, V), got {uv.shape}")
     bad = np.argwhere(~np.isfinite(uv))
     if bad.size:
         raise ValueError(f"panel {name!r}: corner {int(bad[0][0])} has a non-finite twine coordinate")
-    mesh = np.rint(np.asarray(twine_to_mesh(uv - uv[0])))  # whole meshes from corner 0
-    rounded = uv[0] + np.asarray(mesh_to_twine(mesh))
+    if reference is None:
+        origin = np.broadcast_to(uv[0], uv.shape)
+    else:
+        origin = np.asarray(reference, dtype=float)
+        if origin.shape != uv.shape:
+            raise ValueError(f"panel {name!r}: reference corners have shape {origin.shape}, the cut {uv.shape}")
+    if step == "mesh":
+        whole = np.rint(np.asarray(twine_to_mesh(uv - origin)))  # whole meshes from the origin
+        rounded = origin + np.asarray(mesh_to_twine(whole))
+    else:
+        whole = np.rint(uv - origin)
+        rounded = origin + whole
     try:
         check_polygon(rounded, name)
     except PanelError as err:
-        raise ValueError(f"{err} (after rounding the cut to whole meshes: corners at {mesh.tolist()} meshes (u, v) "
-                         "from corner 0)") from err
+        raise ValueError(f"{err} (after rounding the cut to whole {step}es: corners moved by {whole.tolist()} "
+                         f"{'meshes (u, v)' if step == 'mesh' else 'twines (U, V)'} from "
+                         f"{'corner 0' if reference is None else 'the reference'})") from err
     return rounded, describe_sides(rounded)

@@ -17,6 +17,8 @@ own physics by construction.
 
 Figures (factories return the Modules; units in each docstring):
   * :func:`drag` (N), :func:`volume` (m³), :func:`opening` (m²), :func:`shape_distance` (m or m²),
+    :func:`height` (m: a headline over the ground or the footrope), :func:`spread` (m: door or wing-end
+    spread, the swept width), :func:`ratio` (drag per swept width, N/m),
     :func:`max_tension` (N, a smooth upper bound of the largest tension), :func:`twine_length` (m),
     :func:`material` (kg, or a cost), :func:`netting_area` (m²);
 
@@ -38,6 +40,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxnet import assemble, catch as catch_lib, geometry, model as model_lib
+from jaxnet.scene import mirror_copies
 from jaxnet.terms import cable, hexagonal, tension, term as term_lib
 
 #: element families that carry tensions (and material): diamond netting, hexagonal netting, cable bars
@@ -143,8 +146,10 @@ class Drag(Figure):
 
     direction: jax.Array | None
     terms: tuple = eqx.field(static=True)
+    whole_net: bool = eqx.field(static=True, default=False)
 
     def __call__(self, o: Outcome):
+        copies = mirror_copies(o.scene) if self.whole_net else 1
         chosen = tuple(t for t in o.model if t.name in self.terms)
         if any(dict(t.options).get("moving") for t in chosen):
             raise ValueError("drag: the model is a dynamic one (active_terms(scene, dynamic=True)); drag is a figure "
@@ -153,10 +158,10 @@ class Drag(Figure):
             return jnp.zeros((), o.x.dtype)
         total = jnp.sum(assemble.forces(o.x, o.scene, chosen), axis=0)
         d = o.scene.environment.current_direction if self.direction is None else self.direction
-        return jnp.dot(total, _unit(jnp.asarray(d, o.x.dtype)))
+        return copies * jnp.dot(total, _unit(jnp.asarray(d, o.x.dtype)))
 
 
-def drag(direction=None, terms=None) -> Drag:
+def drag(direction=None, terms=None, whole_net=False) -> Drag:
     """Hydrodynamic drag (N): the sum over all nodes of the forces of the drag terms, along ``direction``.
 
     direction: (3,) any non-zero length; None: the scene's current direction (the towing resistance of a
@@ -164,7 +169,9 @@ def drag(direction=None, terms=None) -> Drag:
     terms: names of the force terms counted (default :func:`jaxnet.terms.term.hydrodynamic_terms`: twine, bar
       and node drag and the catch's pressure; ``("netting_drag",)`` for the netting alone); terms absent from the model
       count zero. The force of the modelled part (a quarter model gives a quarter of the cod-end's drag),
-      which is what the model's reactions balance.
+      which is what the model's reactions balance; with ``whole_net``, that of the whole net, the part's times
+      its mirror copies (:func:`jaxnet.scene.mirror_copies`: 2 for a half trawl; ``direction`` should then lie in
+      the symmetry planes, as the current of a symmetric model does, for the copies' drags to add up).
     Differentiated through everything the forces depend on, the catch front's position included (implicit
     function theorem, :func:`jaxnet.catch.catch_front`). Smooth, except with a catch: C¹ where the front
     sweeps a node, a kink where an edge lies in the front plane (:mod:`jaxnet.terms.pressure`) and where the
@@ -175,7 +182,8 @@ def drag(direction=None, terms=None) -> Drag:
     unknown = [t for t in terms if t not in force_terms]
     if unknown or not terms:
         raise ValueError(f"drag: terms must be force terms among {sorted(force_terms)}, got {unknown or terms!r}")
-    return Drag(None if direction is None else jnp.asarray(_vector(direction, "drag: direction", unit=True)), terms)
+    return Drag(None if direction is None else jnp.asarray(_vector(direction, "drag: direction", unit=True)), terms,
+                bool(whole_net))
 
 
 # -- shape -----------------------------------------------------------------------------------------
@@ -305,6 +313,104 @@ def shape_distance(target, nodes=None, weights=None, squared=False) -> ShapeDist
                              f"not all zero")
         w = jnp.asarray(w)
     return ShapeDistance(jnp.asarray(target), idx, w, bool(squared))
+
+
+# -- the gear's geometry: heights, spreads, ratios -------------------------------------------------------------
+
+#: axis names of the figures' ``axis`` arguments
+AXES = {"x": 0, "y": 1, "z": 2, 0: 0, 1: 1, 2: 2}
+
+
+def _axis(axis, what):
+    if axis not in AXES or isinstance(axis, bool):
+        raise ValueError(f"{what}: axis must be one of 'x', 'y', 'z' (or 0, 1, 2), got {axis!r}")
+    return AXES[axis]
+
+
+class Height(Figure):
+    """A node's coordinate along an axis above a reference (m); see :func:`height`."""
+
+    node: int = eqx.field(static=True)
+    axis: int = eqx.field(static=True)
+    above: int | None = eqx.field(static=True)
+    level: float | None
+
+    def __call__(self, o: Outcome):
+        node = int(_nodes_of((self.node,) + (() if self.above is None else (self.above,)), o.x, "height: node")[0])
+        if self.above is not None:
+            return o.x[node, self.axis] - o.x[self.above, self.axis]
+        if self.level is not None:
+            return o.x[node, self.axis] - self.level
+        nodes = o.scene.nodes
+        sense = None if nodes.limit_sense is None else int(np.asarray(nodes.limit_sense)[node, self.axis])
+        if sense != 1:
+            raise ValueError(f"height: node {node} has no sea bed under it along axis {'xyz'[self.axis]} (no floor "
+                             "among its limits, Nodes.limit_sense): give above= a node or level= a height")
+        return o.x[node, self.axis] - nodes.limit[node, self.axis]
+
+
+def height(node, axis="z", above=None, level=None) -> Height:
+    """Height (m) of ``node`` along ``axis`` above a reference: another node ``above`` (a headline above the
+    footrope: the vertical opening of a trawl's mouth), a ``level`` (m), or, with neither, the sea bed under the
+    node (its floor limit along the axis, FEMNET's "Limits" of its node type: the headline height of a bottom
+    trawl over the ground). Linear in the positions: smooth."""
+    node = _node_indices([node], "height: node", 1)[0]
+    above = None if above is None else _node_indices([above], "height: above", 1)[0]
+    if above is not None and level is not None:
+        raise ValueError("height: give above (a node) or level (m), not both")
+    level = None if level is None else finite_number(level, "height: level")
+    return Height(node, _axis(axis, "height"), above, level)
+
+
+class Spread(Figure):
+    """Distance across an axis between a node and its mirror image, or another node (m); see :func:`spread`."""
+
+    node: int = eqx.field(static=True)
+    axis: int = eqx.field(static=True)
+    other: int | None = eqx.field(static=True)
+
+    def __call__(self, o: Outcome):
+        nodes = (self.node,) + (() if self.other is None else (self.other,))
+        _nodes_of(nodes, o.x, "spread: node")
+        if self.other is not None:
+            return jnp.abs(o.x[self.node, self.axis] - o.x[self.other, self.axis])
+        planes = [at for axis, at in o.scene.symmetry_planes if axis == self.axis]
+        if not planes:
+            raise ValueError(f"spread: the scene has no symmetry plane across {'xyz'[self.axis]} "
+                             f"(planes: {o.scene.symmetry_planes}); give other= the opposite node")
+        return 2.0 * jnp.abs(o.x[self.node, self.axis] - planes[0])
+
+
+def spread(node, axis="y", other=None) -> Spread:
+    """Spread (m) of a net across ``axis``: the distance along it between ``node`` and its image in the scene's
+    symmetry plane across that axis (:attr:`jaxnet.scene.Scene.symmetry_planes`), i.e. twice the node's distance
+    to the plane: the door spread of a half trawl from a door's node, its wing-end spread from a wing end;
+    or, with ``other``, between the two nodes (a whole net's two doors). The swept width of a trawl is its door
+    spread. Smooth except where the node crosses the plane (|.|: a kink)."""
+    node = _node_indices([node], "spread: node", 1)[0]
+    other = None if other is None else _node_indices([other], "spread: other", 1)[0]
+    return Spread(node, _axis(axis, "spread"), other)
+
+
+class Ratio(Figure):
+    """numerator / denominator of two figures; see :func:`ratio`."""
+
+    numerator: Figure
+    denominator: Figure
+
+    def __call__(self, o: Outcome):
+        den = self.denominator(o)
+        return self.numerator(o) / jnp.where(den != 0.0, den, jnp.nan)
+
+
+def ratio(numerator, denominator) -> Ratio:
+    """A figure divided by another, in their units' ratio: the drag per swept width of a trawl (N/m),
+    ``ratio(drag(whole_net=True), spread(door))``, or per mouth area (N/m²) with :func:`opening`. NaN where
+    the denominator is 0 (the optimiser then rejects the step, as for a failed equilibrium)."""
+    for name, f in (("numerator", numerator), ("denominator", denominator)):
+        if not callable(f):
+            raise ValueError(f"ratio: the {name} is not a figure (a callable of an Outcome): {f!r}")
+    return Ratio(numerator, denominator)
 
 
 # -- tensions ------------------------------------------------------------------------------------

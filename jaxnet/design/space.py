@@ -593,15 +593,20 @@ class DesignSpace:
         return {p: 4.0 * jnp.asarray(full["mesh_side"][p], float) * cut_lib.panel_meshes(full["cut"][p])
                 for p in self.panels}
 
-    def rounded(self, theta):
-        """(θ with every cut rounded to whole meshes, report): :func:`cut.round_cut` on each panel (corner 0
-        stays, the other corners move to whole meshes from it); report: {panel: tuple of
-        :class:`cut.SideCut`}. θ is completed with the reference values, checked, and returned whole."""
+    def rounded(self, theta, step="mesh"):
+        """(θ with every cut rounded to whole meshes, report): :func:`cut.round_cut` on each panel, ``step``
+        "mesh" (whole meshes) or "twine" (whole twines: bar cuts too). Each corner's *change from the
+        reference cut* is rounded: the reference comes back as it is, even where it was drawn on fractions of a
+        mesh (FEMNET's files often put corners on half meshes), and a design differs from it by whole meshes (or
+        twines); a reference on whole meshes from corner 0, as the built-in nets', gives the same as rounding from
+        corner 0. report: {panel: tuple of :class:`cut.SideCut`}. θ is completed with the reference values,
+        checked, and returned whole."""
         full = self.complete(theta)
         out = {family: dict(entries) for family, entries in full.items()}
         report = {}
         for p in self.panels:
-            corners, sides = cut_lib.round_cut(np.asarray(full["cut"][p], dtype=float), name=p)
+            corners, sides = cut_lib.round_cut(np.asarray(full["cut"][p], dtype=float), name=p,
+                                               reference=self._corners[p], step=step)
             out["cut"][p] = jnp.asarray(corners)
             report[p] = sides
         self.check(out)

@@ -128,15 +128,23 @@ def _root(model, solver, params, rest, pattern, x0, step):
 def _tangent_solver(x_free, scene, structure, stiffness, step=None):
     """The solves with K = -∂F/∂x at ``x_free`` for ``custom_linear_solve``: (matvec, solve, transpose_solve).
 
-    matvec is the exact Jacobian-vector product J v = -∂F/∂x v (``jax.jvp``, so it transposes); the solves
-    use K's sparse factorisation (one, kept on the host for all of them) and, where K is not exactly J
-    (a catch), refine against J."""
+    matvec is the exact Jacobian-vector product J v = -∂F/∂x v: where the assembled K is exact, the product
+    with its sparse entries (differentiable in the design: a second derivative differentiates K); with a
+    catch, ``jax.jvp`` of the residual. ``custom_linear_solve`` traces matvec and its transpose whether or not
+    the solves use them, and the residual's JVP and its transpose are a program as large as the residual's
+    (``validation/design_cost.py``), where the sparse product is a gather and a segment sum. The solves use
+    K's sparse factorisation (one, kept on the host for all of them) and, where K is not exactly J (a
+    catch), refine against J."""
     pattern = structure.pattern
-    data = jax.lax.stop_gradient(
-        kernel.tangent(x_free, None, 1.0, scene, pattern, structure.model, stiffness, step))
+    stiffness_entries = kernel.tangent(x_free, None, 1.0, scene, pattern, structure.model, stiffness, step)
+    data = jax.lax.stop_gradient(stiffness_entries)
 
-    def matvec(v):
-        return -jax.jvp(lambda x: residual(x, scene, structure, step), (x_free,), (v,))[1]
+    if structure.exact_tangent:
+        def matvec(v):
+            return linalg.matvec(stiffness_entries, pattern.rows, pattern.indices, v)
+    else:
+        def matvec(v):
+            return -jax.jvp(lambda x: residual(x, scene, structure, step), (x_free,), (v,))[1]
 
     def direct(b, transpose):
         x, ok = linalg.solve(data, b, pattern.indptr, pattern.indices, transpose=transpose, reuse=True)

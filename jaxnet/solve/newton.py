@@ -111,10 +111,27 @@ def next_damping(mu, accepted, trials, e, m_new, predicted, ratio, solver: Newto
     return xp.clip(mu_next, solver.min_damping, solver.max_damping)
 
 
-def status(it, res, e, solver: Newton, xp):
-    """The stop reason after ``it`` iterations with largest residual ``res`` (N) and merit ``e`` (J)."""
+#: the roundoff of a force, in units of eps x its row of |K| |x| (:func:`roundoff_floor`)
+ROUNDOFF_FACTOR = 4.0
+
+
+def roundoff_floor(data, rows, indices, x):
+    """(n,) the smallest out-of-balance force (N) float64 resolves on each free coordinate: ``ROUNDOFF_FACTOR``
+    eps Σ_j |K_ij| |x_j|, K the tangent (CSR ``data`` on ``rows``, column ``indices``, N/m) and x the free
+    coordinates (m). The forces on a coordinate are sums of stiffnesses times coordinates, each known to eps
+    |x_j|: a rope of EA 27 MN in short bars 280 m from the origin (a trawl's warp) puts the floor of its nodes near
+    1e-5 N, above the differentiable solve's 1e-8 N, and there Newton's iterates wander at the floor and never meet
+    the tolerance. :func:`status` compares each node's residual with the larger of the two."""
+    return ROUNDOFF_FACTOR * jnp.finfo(x.dtype).eps * linalg.matvec(jnp.abs(data), rows, indices, jnp.abs(x))
+
+
+def status(it, res, e, solver: Newton, xp, excess=None):
+    """The stop reason after ``it`` iterations with largest residual ``res`` (N) and merit ``e`` (J).
+    ``excess``: with a roundoff floor (:func:`roundoff_floor`), the largest excess of a node's residual over
+    max(tol, its floor) (N): converged when it is <= 0, whatever ``res`` is."""
     finite = xp.isfinite(res) & xp.isfinite(e)
-    return xp.where(~finite, NON_FINITE, xp.where(res <= solver.tol, CONVERGED,
+    converged = res <= solver.tol if excess is None else excess <= 0.0
+    return xp.where(~finite, NON_FINITE, xp.where(converged, CONVERGED,
                                                   xp.where(it >= solver.max_iter, MAX_ITERATIONS, RUNNING)))
 
 
@@ -185,9 +202,10 @@ def newton_loop(x0, scene, pattern, model, solver: Newton, step=None):
     free = pattern.free
     springs = kernel.springs(scene, pattern, model)
 
-    def status_of(it, f, e):
-        res = jnp.max(kernel.nodal_norm(f, pattern, n_nodes))
-        return res, status(it, res, e, solver, jnp)
+    def status_of(it, f, e, floor):
+        nodal_f = kernel.nodal_norm(f, pattern, n_nodes)
+        excess = jnp.max(nodal_f - jnp.maximum(solver.tol, kernel.nodal_norm(floor, pattern, n_nodes)))
+        return jnp.max(nodal_f), status(it, jnp.max(nodal_f), e, solver, jnp, excess)
 
     def solve(entries, rhs):
         return linalg.solve(entries, rhs, pattern.indptr, pattern.indices)
@@ -205,7 +223,7 @@ def newton_loop(x0, scene, pattern, model, solver: Newton, step=None):
         work = jnp.sum((load + f_nc) * X)
         dx, slope, predicted, usable, roundoff, res_now = direction(f, data, springs, mu, e, work, solver, solve,
                                                                     matvec, nodal, jnp)
-        return dx, slope, predicted, usable, e, roundoff, res_now
+        return dx, slope, predicted, usable, e, roundoff, res_now, roundoff_floor(data, pattern.rows, pattern.indices, x)
 
     zero_free = jnp.zeros_like(x0)
     zero = jnp.zeros_like(load)
@@ -217,7 +235,7 @@ def newton_loop(x0, scene, pattern, model, solver: Newton, step=None):
         x=x0, f=zero_free, force=zero, e_stored=f64, f_nc=zero, s=s0, mu=jnp.asarray(solver.damping),
         it=jnp.asarray(0), st=jnp.asarray(RUNNING), hist=jnp.full(solver.max_iter + 1, jnp.nan),
         dx=zero_free, slope=f64, predicted=f64, usable=jnp.asarray(False), e=f64, roundoff=f64, res_now=f64,
-        k=jnp.asarray(0), alpha=jnp.asarray(1.0), started=jnp.asarray(False))
+        floor=zero_free, k=jnp.asarray(0), alpha=jnp.asarray(1.0), started=jnp.asarray(False))
 
     def cond(c):
         return c["st"] == RUNNING
@@ -239,7 +257,7 @@ def newton_loop(x0, scene, pattern, model, solver: Newton, step=None):
         e_stored, f_nc = keep(e_try, c["e_stored"]), keep(nc_try, c["f_nc"])
         s = jax.tree.map(keep, s_try, c["s"])
         it = jnp.where(started & ends, c["it"] + 1, c["it"])
-        res, st = status_of(it, f, jnp.where(started, jnp.where(done, m_try, c["e"]), e_try))
+        res, st = status_of(it, f, jnp.where(started, jnp.where(done, m_try, c["e"]), e_try), c["floor"])
         mu = next_damping(c["mu"], done, trials, c["e"], m_try, c["predicted"],
                           res / jnp.maximum(c["hist"][c["it"]], 1e-300), solver, jnp)
         mu = jnp.where(started & ends, mu, c["mu"])
@@ -254,13 +272,13 @@ def newton_loop(x0, scene, pattern, model, solver: Newton, step=None):
             return new_direction_at(x, f, e_stored, f_nc, s, mu)
 
         def same_direction(_):
-            return c["dx"], c["slope"], c["predicted"], usable, c["e"], c["roundoff"], c["res_now"]
+            return c["dx"], c["slope"], c["predicted"], usable, c["e"], c["roundoff"], c["res_now"], c["floor"]
 
-        dx, slope, predicted, usable_next, e, roundoff, res_now = jax.lax.cond(
+        dx, slope, predicted, usable_next, e, roundoff, res_now, floor = jax.lax.cond(
             ends & (st == RUNNING), new_direction, same_direction, None)
         return dict(x=x, f=f, force=force, e_stored=e_stored, f_nc=f_nc, s=s, mu=mu, it=it, st=st, hist=hist,
                     dx=dx, slope=slope, predicted=predicted, usable=usable_next, e=e, roundoff=roundoff,
-                    res_now=res_now, k=jnp.where(ends, 0, trials), alpha=alpha, started=jnp.asarray(True))
+                    res_now=res_now, floor=floor, k=jnp.where(ends, 0, trials), alpha=alpha, started=jnp.asarray(True))
 
     c = jax.lax.while_loop(cond, body, carry0)
     X = assemble.positions(c["x"], scene, pattern)

@@ -9,6 +9,9 @@ the ``.mdg`` mesh; its solver the ``.sta`` equilibrium. Two readers:
   nodes in the same order, same triangles, same bars) with the ``.don``'s materials and node types, so
   that the physics of the two programs can be compared without mesh differences.
 
+and one writer: :func:`write_design` writes a design of a ``.don`` case (its cuts, twines and rope lengths,
+:mod:`jaxnet.design.space`) back as a ``.don`` file, a copy of the source with the design's numbers.
+
 Conventions established from the files (see ``tests/test_femnet.py``):
 
 * **Twine coordinates.** A ``.don`` corner's (U, V), and the (U, V) of a triangle corner in the
@@ -196,12 +199,13 @@ from jaxnet.io.femnet.mapping import GRAVITY, WATER_DENSITY, read_don, released_
 from jaxnet.io.femnet.mdg import read_mdg
 from jaxnet.io.femnet.parse import parse_don
 from jaxnet.io.femnet.reader import MAX_COORDINATE, MAX_MESHES, Value
-from jaxnet.io.femnet.results import (femnet_figures, printed_figure, read_sta, read_sta_summary, sta_positions,
+from jaxnet.io.femnet.results import (femnet_figures, global_node, printed_figure, read_sta, read_sta_summary, sta_positions,
                                       started_from_sta,
                                       text_output_figures)
+from jaxnet.io.femnet.writer import write_design
 
 __all__ = ["GRAVITY", "MAX_BARS", "MAX_COORDINATE", "MAX_MESHES", "MAX_PANEL_NODES", "MERGE_TOLERANCE", "WATER_DENSITY",
-           "DonFile", "Value", "femnet_figures", "parse_don", "printed_figure", "read_don", "read_mdg", "read_sta",
+           "DonFile", "Value", "femnet_figures", "global_node", "parse_don", "printed_figure", "read_don", "read_mdg", "read_sta",
            "released_gauge",
            "read_sta_summary", "sta_positions", "started_from_sta", "text_output_figures",
-           "twine_coordinates"]
+           "twine_coordinates", "write_design"]

@@ -103,6 +103,16 @@ def read_sta(path, n_nodes, n_bars, n_triangles):
 TEXT_OUTPUT_UNITS = {"distances": "m", "forces": "N", "tensions": "N", "sliding_tensions": "N", "positions": "m"}
 
 
+def global_node(case, k) -> int:
+    """The scene node of FEMNET's global node ``k`` (1-based, as its text outputs and its ``.sta`` name nodes: the
+    joined points) of a case read by :func:`~.mapping.read_don`: e.g. the door of a ``Position`` output
+    "half doors distance ... no global: 56". Raises ValueError naming k and the range."""
+    nodes = case.info.get("global_nodes", [])
+    if isinstance(k, bool) or int(k) != k or not 1 <= k <= len(nodes):
+        raise ValueError(f"global node {k!r}: the case has global nodes 1 to {len(nodes)}")
+    return int(nodes[int(k) - 1])
+
+
 def text_output_figures(scene, eq, info):
     """FEMNET's text outputs of a case (its ``Distances``, ``Forces``, ``Tensions``, ``Positions`` lists: the
     figures it prints after its solve, with their comments), computed by jaxnet at the equilibrium ``eq``:
