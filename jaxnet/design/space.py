@@ -496,14 +496,26 @@ class DesignSpace:
         return jnp.stack([jnp.asarray(t[family][p], float) if p in t[family] else jnp.asarray(reference[k], float)
                           for k, p in enumerate(self.panels)]) if self.panels else jnp.zeros(0)
 
+    def _side_ends(self):
+        """Each mounted side's first and last corner in the panels' corners put end to end (``self.panels``'
+        order), and its panel's slot: the gathers of :meth:`_side_stretched`."""
+        first, count = {}, 0
+        for p in self.panels:
+            first[p], count = count, count + len(self._corners[p])
+        start = [first[p] + k for p, k in self._mounted_sides]
+        end = [first[p] + (k + 1) % len(self._corners[p]) for p, k in self._mounted_sides]
+        slot = [self.panels.index(p) for p, _ in self._mounted_sides]
+        return tuple(np.asarray(a, dtype=np.int64) for a in (start, end, slot))
+
     def _side_stretched(self, t):
-        """(S,) stretched length (m) of each mounted side: (|dU| + |dV|) l0."""
-        out = []
-        for panel, k in self._mounted_sides:
-            corners = jnp.asarray(t["cut"][panel], float)
-            d = corners[(k + 1) % corners.shape[0]] - corners[k]
-            out.append(cut_lib.stretched_length(d, jnp.asarray(t["mesh_side"][panel], float)))
-        return jnp.stack(out) if out else jnp.zeros(0)
+        """(S,) stretched length (m) of each mounted side: (|dU| + |dV|) l0, one gather for all of them (a loop
+        over the sides would trace, and differentiate, one small program per side)."""
+        if not self._mounted_sides:
+            return jnp.zeros(0)
+        start, end, slot = self._side_ends()
+        corners = jnp.concatenate([jnp.asarray(t["cut"][p], float) for p in self.panels])
+        l0 = jnp.stack([jnp.asarray(t["mesh_side"][p], float) for p in self.panels])
+        return cut_lib.stretched_length(corners[end] - corners[start], l0[slot])
 
     def _scene(self, t):
         """The scene of a complete θ (no checks): the reference with the moved arrays put in."""
