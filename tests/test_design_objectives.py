@@ -115,6 +115,34 @@ def test_cod_end_drag_with_catch_balances_the_reactions(cod_end):
     np.testing.assert_allclose(total, water_force_by_balance(scene, eq, scene.environment.current_direction), rtol=1e-9)
 
 
+def test_catch_diameter_is_femnets_figure_and_its_gradient(cod_end):
+    """The catch diameter against result.json's (figures.catch_report, another program) and against its
+    definition: twice the largest distance from the axis, across it, of the netting nodes behind the front."""
+    scene, eq, o = cod_end
+    value = float(evaluate(ob.catch_diameter(), o))
+    report = figures.catch_report(scene, np.asarray(eq.x))
+    assert value == pytest.approx(report["diameter_m"], rel=1e-12)
+    x = np.asarray(eq.x)
+    c = scene.catch
+    axis = np.asarray(c.axis) / np.linalg.norm(c.axis)
+    netting = np.unique(np.asarray(scene.netting.vertices))
+    behind = netting[x[netting] @ axis >= report["front_m"]]
+    e1 = np.cross([0.0, 0.0, 1.0], axis)  # FEMNET's transverse axes: horizontal, then axis ^ horizontal
+    e1 /= np.linalg.norm(e1)
+    across = np.abs((x[behind] - np.asarray(c.center)) @ np.stack([e1, np.cross(axis, e1)]).T)
+    assert value == pytest.approx(2.0 * across.max(), rel=1e-9)
+    assert value > 0.0
+    # a maximum over nodes (a ring of them ties on this symmetric cod-end): its gradient is the farthest node's,
+    # 2 along its transverse direction, of unit length times 2
+    g = np.asarray(gradient(o, ob.catch_diameter()).x)
+    moved_nodes = np.flatnonzero(np.linalg.norm(g, axis=1) > 0)
+    assert len(moved_nodes) == 1 and moved_nodes[0] in behind
+    assert np.linalg.norm(g[moved_nodes[0]]) == pytest.approx(2.0, rel=1e-12)
+    assert abs(float(g[moved_nodes[0]] @ axis)) < 1e-12
+    with pytest.raises(ValueError, match="catch_diameter: the scene has no catch"):
+        evaluate(ob.catch_diameter(), ob.outcome(fish_cage(step=2.0).scene.nodes.position, fish_cage(step=2.0).scene))
+
+
 def test_drag_gradients_in_positions_and_twine_diameter(panel):
     scene, _, o = panel
     figure = ob.drag(direction=scene.environment.current_direction)

@@ -18,7 +18,7 @@ own physics by construction.
 Figures (factories return the Modules; units in each docstring):
   * :func:`drag` (N), :func:`volume` (m³), :func:`opening` (m²), :func:`shape_distance` (m or m²),
     :func:`height` (m: a headline over the ground or the footrope), :func:`spread` (m: door or wing-end
-    spread, the swept width), :func:`ratio` (drag per swept width, N/m),
+    spread, the swept width), :func:`ratio` (drag per swept width, N/m), :func:`catch_diameter` (m),
     :func:`max_tension` (N, a smooth upper bound of the largest tension), :func:`twine_length` (m),
     :func:`material` (kg, or a cost), :func:`netting_area` (m²);
 
@@ -313,6 +313,30 @@ def shape_distance(target, nodes=None, weights=None, squared=False) -> ShapeDist
                              f"not all zero")
         w = jnp.asarray(w)
     return ShapeDistance(jnp.asarray(target), idx, w, bool(squared))
+
+
+class CatchDiameter(Figure):
+    """The catch's largest diameter (m); see :func:`catch_diameter`."""
+
+    def __call__(self, o: Outcome):
+        scene = o.scene
+        c = scene.catch
+        if c is None or scene.netting is None:
+            raise ValueError("catch_diameter: the scene has no catch (Net.catch)")
+        state = catch_lib.catch_state(o.x, scene)
+        summary = catch_lib.catch_summary(o.x, scene.netting.vertices, c.axis, state["front"], symmetry=c.symmetry,
+                                          sign=scene.netting.outward, center=c.center,
+                                          up=scene.environment.up)
+        return summary.diameter
+
+
+def catch_diameter() -> CatchDiameter:
+    """The catch's largest diameter (m): twice the largest distance from the cod-end's axis, along either
+    transverse direction, of the netting nodes on or behind the catch front (FEMNET's "maximal catch
+    diameter", :func:`jaxnet.catch.catch_summary`; result.json's ``catch.diameter_m``). The front moves with
+    the net (:func:`jaxnet.catch.catch_front`, differentiated through). A maximum over nodes: its gradient is
+    that of the node farthest out, with a kink where two are."""
+    return CatchDiameter()
 
 
 # -- the gear's geometry: heights, spreads, ratios -------------------------------------------------------------
