@@ -119,9 +119,10 @@ def roundoff_floor(data, rows, indices, x):
     """(n,) the smallest out-of-balance force (N) float64 resolves on each free coordinate: ``ROUNDOFF_FACTOR``
     eps Σ_j |K_ij| |x_j|, K the tangent (CSR ``data`` on ``rows``, column ``indices``, N/m) and x the free
     coordinates (m). The forces on a coordinate are sums of stiffnesses times coordinates, each known to eps
-    |x_j|: a rope of EA 27 MN in short bars 280 m from the origin (a trawl's warp) puts the floor of its nodes near
-    1e-5 N, above the differentiable solve's 1e-8 N, and there Newton's iterates wander at the floor and never meet
-    the tolerance. :func:`status` compares each node's residual with the larger of the two."""
+    |x_j|: ropes of EA 27 MN in short bars 280 m from the origin (a trawl's warp and bridles) put the floor of
+    their nodes between 1e-6 and 1e-4 N, above the differentiable solve's 1e-8 N, and there Newton's iterates
+    wander at the floor and never meet the tolerance. :func:`status` compares each node's residual with the larger
+    of the two."""
     return ROUNDOFF_FACTOR * jnp.finfo(x.dtype).eps * linalg.matvec(jnp.abs(data), rows, indices, jnp.abs(x))
 
 
