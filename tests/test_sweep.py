@@ -27,7 +27,7 @@ from jaxnet.design import objectives
 from jaxnet.design import sweep as sw
 from jaxnet.design.space import DesignSpace
 from jaxnet.scenes.panel import hanging_panel
-from jaxnet.solve import implicit
+from jaxnet.solve import adjoint_statics, statics
 from jaxnet.solve.options import DIFFERENTIABLE
 
 from distributed import get_task_stream
@@ -73,14 +73,15 @@ def client():
 def single_process(space):
     """{design: (figures, iterations)} of the good designs, solved in this process from the reference
     equilibrium."""
-    structure = implicit.structure_of(space.reference)
-    start = implicit.solve(space.reference, SOLVER, structure).x
+    adjoint = adjoint_statics.Adjoint(space.reference, SOLVER)
+    start = adjoint.solve(space.reference, statics.solve(space.reference).x).x
     out = {}
     for name, theta in designs(space).items():
         if name in GOOD:
             scene = space.scene(theta)
-            eq = implicit.equilibrium(scene, structure, x0=start, solver=SOLVER)
-            outcome = objectives.Outcome(eq.x, scene, structure.model)
+            eq = adjoint.solve(scene, start)
+            assert int(eq.status) == statics.CONVERGED
+            outcome = objectives.Outcome(eq.x, scene, adjoint.model)
             out[name] = ({k: float(f(outcome)) for k, f in FIGURES.items()}, int(eq.iterations))
     return out
 
@@ -109,7 +110,7 @@ def test_sweep_on_two_workers(client, space, tmp_path):
     failed = {row["design"]: row for row in table.failed}
     assert sorted(failed) == [DIVERGING, INVALID]
     assert "mesh_side['netting']" in failed[INVALID]["reason"] and "must be > 0" in failed[INVALID]["reason"]
-    assert failed[DIVERGING]["reason"].startswith("ImplicitError: maximum number of iterations")
+    assert failed[DIVERGING]["reason"].startswith("SolveError: maximum number of iterations")
     assert failed[DIVERGING]["iterations"] == SOLVER.max_iter
     assert all(failed[d]["tension"] is None for d in failed)
     # (c) one row a design in the file, as returned (its θ entries included)

@@ -86,96 +86,164 @@ def _instructions(compiled):
     return sum(1 for line in compiled.as_text().splitlines() if " = " in line)
 
 
-def worker(scene_name, objective, families, mode, implicit_path):
-    """One figure in this process: compile ``mode`` ("forward" or "gradient") and time its runs; a JSON line."""
-    import jax
+def _design(space, families):
+    """θ₁: every cut 1 % larger (and with all families every twine diameter and EA 2 % up)."""
     import numpy as np
 
-    from jaxnet.design import objectives, space as space_lib
-    from jaxnet.solve import statics
-
-    implicit = _implicit(implicit_path)
-    space = space_lib.DesignSpace(_net(scene_name))
-    structure = implicit.structure_of(space.reference)
     theta0 = space.initial()
     theta1 = dict(theta0, cut={k: 1.01 * np.asarray(v) for k, v in theta0["cut"].items()})
     if families == "all":
-        theta1 = dict(theta1, twine_diameter={k: 1.02 * v for k, v in theta0["twine_diameter"].items()},
-                      ea={k: 1.02 * v for k, v in theta0["ea"].items()})
-    else:
-        theta1 = {"cut": theta1["cut"]}
-    x_reference = np.asarray(statics.solve(space.reference).x)
-    x_warm = np.asarray(statics.solve(space.scene(theta1)).x)
+        return dict(theta1, twine_diameter={k: 1.02 * v for k, v in theta0["twine_diameter"].items()},
+                    ea={k: 1.02 * v for k, v in theta0["ea"].items()})
+    return {"cut": theta1["cut"]}
+
+
+def prepare(scene_name, families, path):
+    """The starts (the reference's and θ₁'s equilibria by the static solver) into ``path`` (.npz), in a process
+    of their own without a cache directory: the workers then start with nothing compiled."""
+    import numpy as np
+
+    from jaxnet.design import space as space_lib
+    from jaxnet.solve import statics
+
+    space = space_lib.DesignSpace(_net(scene_name))
+    np.savez(path, perturbed=np.asarray(statics.solve(space.reference).x),
+             warm=np.asarray(statics.solve(space.scene(_design(space, families))).x))
+
+
+def worker(scene_name, objective, families, mode, implicit_path, starts):
+    """One figure in this process: compile ``mode`` (PATH-forward or PATH-gradient, PATH "jax" or "host") and
+    time its runs; a JSON line."""
+    import jax
+    import numpy as np
+
+    from jaxnet.design import gradient, objectives, space as space_lib
+
+    path, mode = mode.split("-")
+    space = space_lib.DesignSpace(_net(scene_name))
+    theta1 = _design(space, families)
+    starts = dict(np.load(starts))
     figure = {"volume": objectives.volume(), "drag": objectives.drag()}[objective]
-
-    def solve(theta, start):
-        scene = space.scene(theta)
-        eq = implicit.equilibrium(scene, structure, x0=start)
-        return figure(objectives.Outcome(eq.x, scene, structure.model)), eq.iterations
-
-    function = jax.jit(solve) if mode == "forward" else jax.jit(jax.value_and_grad(solve, has_aux=True))
-    t = time.perf_counter()
-    compiled = function.trace(theta1, x_warm).lower().compile()
-    compile_s = time.perf_counter() - t
-    out = {"compile_s": compile_s, "instructions": _instructions(compiled),
-           "nodes": int(space.reference.n_nodes),
+    out = {"nodes": int(space.reference.n_nodes),
            "parameters": int(sum(np.size(leaf) for leaf in jax.tree.leaves(theta1)))}
-    for start_name, start in (("warm", x_warm), ("perturbed", x_reference)):
-        result = jax.block_until_ready(compiled(theta1, start))
-        iterations = result[1] if mode == "forward" else result[0][1]
+    if path == "jax":
+        implicit = _implicit(implicit_path)
+        structure = implicit.structure_of(space.reference)
+
+        def solve(theta, start):
+            scene = space.scene(theta)
+            eq = implicit.equilibrium(scene, structure, x0=start)
+            return figure(objectives.Outcome(eq.x, scene, structure.model)), eq.iterations
+
+        function = jax.jit(solve) if mode == "forward" else jax.jit(jax.value_and_grad(solve, has_aux=True))
+        t = time.perf_counter()
+        compiled = function.trace(theta1, starts["warm"]).lower().compile()
+        out.update(compile_s=time.perf_counter() - t, instructions=_instructions(compiled))
+
+        def run(start):
+            result = jax.block_until_ready(compiled(theta1, start))
+            return int(result[1] if mode == "forward" else result[0][1])
+    else:
+        sensitivity = gradient.Sensitivity(space, figure)
+        call = sensitivity.value if mode == "forward" else sensitivity.value_and_grad
+
+        def run(start):
+            evaluation = call(theta1, start)
+            jax.block_until_ready(evaluation.grad)
+            return evaluation.iterations
+
+        # the first call compiles every program (or loads it) and runs once: its compilation is the first call
+        # less a run from the same start
+        t = time.perf_counter()
+        run(starts["warm"])
+        out.update(first_s=time.perf_counter() - t, instructions=None)
+    for start_name in ("warm", "perturbed"):
+        iterations = run(starts[start_name])
         times = []
         for _ in range(REPEATS):
             t = time.perf_counter()
-            jax.block_until_ready(compiled(theta1, start))
+            run(starts[start_name])
             times.append(time.perf_counter() - t)
-        out[start_name] = {"run_ms": 1e3 * statistics.median(times), "iterations": int(iterations)}
+        out[start_name] = {"run_ms": 1e3 * statistics.median(times), "iterations": iterations}
+    if path == "host":
+        out["compile_s"] = out.pop("first_s") - out["warm"]["run_ms"] / 1e3
     print("RESULT " + json.dumps(out), flush=True)
 
 
-def _run_worker(case, mode, cache, implicit_path):
+def _run(command, env):
+    done = subprocess.run(command, env=env, capture_output=True, text=True, check=False)
+    if done.returncode != 0:
+        raise RuntimeError(f"worker {command} failed:\n{done.stderr[-3000:]}")
+    return done.stdout
+
+
+def _run_worker(case, mode, cache, implicit_path, starts):
     _, scene_name, objective, families = case
     env = dict(os.environ, JAX_COMPILATION_CACHE_DIR=str(cache), JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS="0",
                JAX_PERSISTENT_CACHE_MIN_ENTRY_SIZE_BYTES="0")
-    command = [sys.executable, __file__, "--worker", scene_name, objective, families, mode]
+    command = [sys.executable, __file__, "--worker", scene_name, objective, families, mode, str(starts)]
     if implicit_path:
         command += ["--implicit", implicit_path]
-    done = subprocess.run(command, env=env, capture_output=True, text=True, check=False)
-    for line in done.stdout.splitlines():
+    for line in _run(command, env).splitlines():
         if line.startswith("RESULT "):
             return json.loads(line[len("RESULT "):])
-    raise RuntimeError(f"worker {command} failed:\n{done.stderr[-3000:]}")
+    raise RuntimeError(f"worker {command} printed no result")
 
 
-def main(quick=False, implicit_path=None):
+def main(quick=False, implicit_path=None, paths=("host", "jax")):
     cases = QUICK if quick else CASES
-    print("| scene | objective | θ | nodes | parameters | warm: forward, gradient (ms), ratio (Newton it.) "
-          "| perturbed: forward, gradient (ms), ratio (Newton it.) | compile forward, gradient (s), ratio "
-          "| HLO instructions forward, gradient | 2nd process: compile forward, gradient (s) |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
-    with tempfile.TemporaryDirectory(prefix="jaxnet-design-cost-") as cache:
+    without_cache = {k: v for k, v in os.environ.items() if k != "JAX_COMPILATION_CACHE_DIR"}
+    with tempfile.TemporaryDirectory(prefix="jaxnet-design-cost-") as work:
+        work = pathlib.Path(work)
+        starts = {}
         for case in cases:
-            cache_of_case = pathlib.Path(cache) / f"{case[1]}-{case[2]}-{case[3]}"
-            first = {mode: _run_worker(case, mode, cache_of_case, implicit_path) for mode in ("forward", "gradient")}
-            second = {mode: _run_worker(case, mode, cache_of_case, implicit_path) for mode in ("forward", "gradient")}
-            f, g = first["forward"], first["gradient"]
-            runs = []
-            for start in ("warm", "perturbed"):
-                a, b = f[start], g[start]
-                runs.append(f"{a['run_ms']:.1f}, {b['run_ms']:.1f}, {b['run_ms'] / a['run_ms']:.2f}x "
-                            f"({a['iterations']})")
-            print(f"| {case[0]} | {case[2]} | {case[3]} | {f['nodes']} | {f['parameters']} | {runs[0]} | {runs[1]} | "
-                  f"{f['compile_s']:.1f}, {g['compile_s']:.1f}, {g['compile_s'] / f['compile_s']:.2f}x | "
-                  f"{f['instructions']}, {g['instructions']} | "
-                  f"{second['forward']['compile_s']:.1f}, {second['gradient']['compile_s']:.1f} |", flush=True)
+            key = (case[1], case[3])
+            if key not in starts:
+                starts[key] = work / f"starts-{case[1]}-{case[3]}.npz"
+                _run([sys.executable, __file__, "--prepare", case[1], case[3], str(starts[key])], without_cache)
+        for path in paths:
+            print(f"\n{PATHS[path]}\n")
+            print("| scene | objective | θ | nodes | parameters | warm: forward, gradient (ms), ratio (Newton it.) "
+                  "| perturbed: forward, gradient (ms), ratio (Newton it.) | compile forward, gradient (s), ratio "
+                  "| HLO instructions forward, gradient | 2nd process: compile forward, gradient (s) |")
+            print("|---|---|---|---|---|---|---|---|---|---|")
+            for case in cases:
+                cache = work / f"cache-{path}-{case[1]}-{case[2]}-{case[3]}"
+                start = starts[(case[1], case[3])]
+                modes = (f"{path}-forward", f"{path}-gradient")
+                first = {m: _run_worker(case, m, cache, implicit_path, start) for m in modes}
+                second = {m: _run_worker(case, m, cache, implicit_path, start) for m in modes}
+                f, g = first[modes[0]], first[modes[1]]
+                runs = []
+                for name in ("warm", "perturbed"):
+                    a, b = f[name], g[name]
+                    runs.append(f"{a['run_ms']:.1f}, {b['run_ms']:.1f}, {b['run_ms'] / a['run_ms']:.2f}x "
+                                f"({a['iterations']})")
+                hlo = "-" if f["instructions"] is None else f"{f['instructions']}, {g['instructions']}"
+                print(f"| {case[0]} | {case[2]} | {case[3]} | {f['nodes']} | {f['parameters']} | {runs[0]} | "
+                      f"{runs[1]} | {f['compile_s']:.1f}, {g['compile_s']:.1f}, "
+                      f"{g['compile_s'] / f['compile_s']:.2f}x | {hlo} | "
+                      f"{second[modes[0]]['compile_s']:.1f}, {second[modes[1]]['compile_s']:.1f} |", flush=True)
+
+
+#: the two ways to a design gradient, as the tables are titled
+PATHS = {"host": "Host-driven adjoint (jaxnet.design.gradient: what optimize calls)",
+         "jax": "jax.value_and_grad through jaxnet.solve.implicit.equilibrium (one jitted program)"}
 
 
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="the cage at step 1.6 m and the trawl's cuts only")
+    parser.add_argument("--path", choices=("host", "jax", "both"), default="both",
+                        help="which gradient to time (default both)")
     parser.add_argument("--implicit", help="a file holding another version of jaxnet/solve/implicit.py to time")
-    parser.add_argument("--worker", nargs=4, metavar=("SCENE", "OBJECTIVE", "FAMILIES", "MODE"), help=argparse.SUPPRESS)
+    parser.add_argument("--worker", nargs=5, metavar=("SCENE", "OBJECTIVE", "FAMILIES", "MODE", "STARTS"),
+                        help=argparse.SUPPRESS)
+    parser.add_argument("--prepare", nargs=3, metavar=("SCENE", "FAMILIES", "STARTS"), help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.worker:
-        worker(*args.worker, args.implicit)
+        worker(*args.worker[:4], args.implicit, args.worker[4])
+    elif args.prepare:
+        prepare(*args.prepare)
     else:
-        main(args.quick, args.implicit)
+        main(args.quick, args.implicit, ("host", "jax") if args.path == "both" else (args.path,))

@@ -7,8 +7,10 @@
   of fixed topology.
 - :mod:`jaxnet.design.objectives`: figures of an equilibrium (drag, volume, opening, shape, tension,
   material) and constraints, composable.
+- :mod:`jaxnet.design.gradient`: an objective's value and gradient in θ at equilibrium by the host-driven
+  adjoint (:mod:`jaxnet.solve.adjoint_statics`), its programs kept between processes.
 - :mod:`jaxnet.design.optimize`: optax optimisation of a design, through the differentiable equilibrium
-  (:mod:`jaxnet.solve.implicit`).
+  (:mod:`jaxnet.design.gradient`; :mod:`jaxnet.solve.implicit` for an optimiser's line search).
 - :mod:`jaxnet.design.reduced`: design vectors, maps from a few numbers (symmetries, tapers, a panel's size)
   to θ, which ``optimize`` optimises through.
 - :mod:`jaxnet.design.report`: designs and optimisation results printed as short tables of cuts and values.

@@ -1,9 +1,12 @@
 """Gradient-based optimisation of a net design with optax, through the differentiable equilibrium.
 
-The loop. Each iteration solves the equilibrium of the current design θ (:func:`jaxnet.solve.implicit.equilibrium`,
-warm-started at the last one: a few Newton steps), evaluates the objective on it and its gradient by the
-adjoint (one more sparse solve), and takes an optax step. The value-and-gradient is one jitted program,
-compiled once; the design and the warm start are its arguments.
+The loop. Each iteration solves the equilibrium of the current design θ (warm-started at the last one: a few
+Newton steps), evaluates the objective on it and its gradient by the adjoint (one more sparse solve:
+:mod:`jaxnet.design.gradient`), and takes an optax step. Its compiled programs (the static solver's, the
+residual's and the objective's reverse mode, the design map's) are compiled once per design space and
+objective, and kept between processes where a compilation cache directory is set. An optimiser with a line
+search (``optax.lbfgs``) evaluates trial designs inside its own jitted update: those go through
+:func:`jaxnet.solve.implicit.equilibrium`, the same equilibrium in one traced program.
 
 What is optimised. Either θ itself (``start`` a partial θ: the families and entries to vary, every corner
 of every cut given a coordinate of its own), or a *reduced design vector* z (``design``, a map z -> partial θ,
@@ -55,12 +58,15 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
-from jaxnet.design import constraints as constraints_lib, objectives as objectives_lib, report
+from jaxnet.design import constraints as constraints_lib, gradient as gradient_lib, objectives as objectives_lib, report
 from jaxnet.design.report import Design
 from jaxnet.solve import implicit, programs, results, statics
 from jaxnet.solve.options import DIFFERENTIABLE, Newton
 
 #: stop reasons
+#: how optimize computes each step's gradient (its ``adjoint`` argument)
+ADJOINTS = ("host", "traced")
+
 CONVERGED, MAX_STEPS, SOLVE_FAILED = "gradient below tolerance", "maximum number of steps", "equilibrium failed"
 #: how the cut was rounded (:attr:`DesignResult.rounding`)
 NEAREST, INWARD = report.NEAREST, report.INWARD
@@ -122,10 +128,6 @@ def default_scale(theta):
         return jnp.where(a > 0, a, 1.0)
 
     return jax.tree_util.tree_map_with_path(unit, theta)
-
-
-def _violation(objective, outcome):
-    return objective.violation(outcome) if hasattr(objective, "violation") else jnp.asarray(0.0)
 
 
 def _numpy_design(theta) -> Design:
@@ -249,7 +251,7 @@ def _rounded_inward(space, theta, nearest):
 
 def optimize(space, objective, start, *, design: Callable | None = None, optimizer=None, steps=50, bounds=None,
              scale=None, solver: Newton | None = None, gtol=1e-6, backtracks=6, out=None, progress=True, x0=None,
-             round_cut=True) -> DesignResult:
+             round_cut=True, adjoint="host") -> DesignResult:
     """Minimise ``objective`` over the design parameters of ``space``: θ itself, or a design vector z.
 
     Args:
@@ -276,6 +278,13 @@ def optimize(space, objective, start, *, design: Callable | None = None, optimiz
       progress: a tqdm bar with the objective and the gradient norm.
       x0: (N, 3) start of the first solve; default: the static solver's equilibrium of the start design.
       round_cut: also solve and report the design rounded to whole meshes.
+      adjoint: how each step's value and gradient are computed, the same numbers either way. ``"host"``
+        (:mod:`jaxnet.design.gradient`): the static solver's Newton loop and the adjoint's pieces driven from
+        Python, compiled in less time and kept between processes (a compilation cache directory set), each
+        step some milliseconds of dispatch slower. ``"traced"``: ``jax.value_and_grad`` of one jitted program
+        around :func:`jaxnet.solve.implicit.equilibrium`, its steps faster and its compilation longer, in every
+        process (its host callbacks keep it out of any cache): for runs of hundreds of steps.
+        ``validation/design_cost.py`` times both.
     Returns:
       a :class:`DesignResult`.
     Raises:
@@ -289,6 +298,8 @@ def optimize(space, objective, start, *, design: Callable | None = None, optimiz
         raise ValueError(f"optimize: backtracks must be a whole number >= 0, got {backtracks!r}")
     if not math.isfinite(float(gtol)) or gtol < 0:
         raise ValueError(f"optimize: gtol must be a finite number >= 0, got {gtol!r}")
+    if adjoint not in ADJOINTS:
+        raise ValueError(f"optimize: adjoint must be one of {ADJOINTS}, got {adjoint!r}")
     p0 = _parameters(start)
     if design is None:
         to_theta = lambda p: p  # noqa: E731
@@ -315,30 +326,45 @@ def optimize(space, objective, start, *, design: Callable | None = None, optimiz
         return jax.tree.map(lambda a0, s, ww: a0 + s * ww, p0, scale, w)
 
     def loss(w, x_start):
+        """The objective through the traced equilibrium (jaxnet.solve.implicit), and (x, status, iterations,
+        violation)."""
         scene = space.scene(to_theta(parameters(w)))
         eq = implicit.equilibrium(scene, structure, x0=x_start, solver=solver, throw=False)
         o = objectives_lib.Outcome(eq.x, scene, model)
-        return objective(o), (eq.x, eq.status, eq.iterations, _violation(objective, o))
+        return objective(o), (eq.x, eq.status, eq.iterations, gradient_lib.violation(objective, o))
 
-    value_and_grad = programs.jit(jax.value_and_grad(loss, has_aux=True))
+    sensitivity = gradient_lib.Sensitivity(space, objective, solver)
+    # the gradient in w from the gradient in θ: the reverse mode of w -> θ (the scale, and the design map)
+    chain = programs.jit(lambda w, g: jax.vjp(lambda ww: to_theta(parameters(ww)), w)[1](g)[0])
     extra = isinstance(optimizer, optax.GradientTransformationExtraArgs)
     # an optimiser with a line search (L-BFGS) calls the value function inside its update: one compiled update,
-    # the warm start an argument (a fresh closure per step would recompile the line search every step)
+    # the warm start an argument (a fresh closure per step would recompile the line search every step); that
+    # value function is the jitted differentiable equilibrium (jaxnet.solve.implicit), the host-driven one
+    # being no JAX function
     extra_update = programs.jit(lambda g, state, w, value, x_start: optimizer.update(
         g, state, w, value=value, grad=g, value_fn=lambda ww: loss(ww, x_start)[0]))
+    traced = programs.jit(jax.value_and_grad(loss, has_aux=True))
 
     def evaluate(w, x_start):
-        (value, (x, status, iterations, violation)), g = value_and_grad(w, x_start)
-        ok = int(status) == results.CONVERGED and bool(jnp.isfinite(value))
-        return ok, float(value), g, np.asarray(x), int(iterations), float(violation)
+        if adjoint == "traced":
+            (value, (x, status, iterations, violation)), g = traced(w, x_start)
+            ok = int(status) == results.CONVERGED and bool(jnp.isfinite(value))
+            return ok, float(value), g, np.asarray(x), int(iterations), float(violation)
+        theta = to_theta(parameters(w))
+        e = sensitivity.value_and_grad(theta, x_start)
+        ok = e.converged and math.isfinite(e.value)
+        if not ok:
+            return False, e.value, None, e.x, e.iterations, e.violation
+        g_theta = jax.tree.map(lambda t, g: jnp.asarray(g, dtype=jnp.result_type(t)).reshape(jnp.shape(t)), theta,
+                               e.grad)
+        return True, e.value, chain(w, g_theta), e.x, e.iterations, e.violation
 
     def flat(tree):
         return [float(v) for leaf in jax.tree.leaves(tree) for v in np.ravel(leaf)]
 
     t_start = time.perf_counter()
-    if x0 is None:
-        first = implicit.solve(space.scene(theta_start), solver=solver, structure=structure)
-        x0 = np.asarray(first.x)
+    if x0 is None:  # the static solver's continuation from the flat net, polished by the first evaluation
+        x0 = np.asarray(statics.solve(space.scene(theta_start)).x)
     w = jax.tree.map(jnp.zeros_like, p0)
     ok, value, g, x, iterations, violation = evaluate(w, x0)
     if not ok:
@@ -403,17 +429,17 @@ def optimize(space, objective, start, *, design: Callable | None = None, optimiz
     if round_cut and "cut" in theta_start:
         def solved(rounded):
             """(objective, constraint violation, equilibrium) of a rounded design, re-solved."""
-            scene = space.scene(rounded)
-            eq = implicit.equilibrium(scene, structure, x0=x, solver=solver, throw=False)
-            if int(eq.status) != results.CONVERGED:  # the static solver's continuation, from the optimum's shape
-                first = statics.solve(scene, x0=x)
-                eq = implicit.equilibrium(scene, structure, x0=first.x, solver=solver)
-            o = objectives_lib.Outcome(eq.x, scene, model)
-            violation = float(_violation(objective, o))
+            e = sensitivity.value(rounded, x)
+            if not e.converged:  # the static solver's continuation, from the optimum's shape
+                e = sensitivity.value(rounded, statics.solve(space.scene(rounded), x0=x).x)
+            if not e.converged:
+                raise implicit.ImplicitError(f"optimize: the rounded design's equilibrium: {e.reason} after "
+                                             f"{e.iterations} iterations ({e.residual_N:.3g} N at node {e.worst_node})")
+            violation = e.violation
             if design is None:  # the bounds are on θ: the rounded θ is measured against them (on z, it has no z)
                 optimised = {family: {k: rounded[family][k] for k in entries} for family, entries in p0.items()}
                 violation += float(bounds.violation(optimised))
-            return float(objective(o)), violation, np.asarray(eq.x)
+            return e.value, violation, e.x
 
         rounded, cut_report = space.rounded(theta)
         figures, rounding = solved(rounded), NEAREST

@@ -78,6 +78,7 @@ from jaxnet.case import Case
 from jaxnet.design import cut as cut_lib
 from jaxnet.net import CableEnd, CableNodes, CableRef, Corner, HexTwine, Nearest, Net, PanelRef, Side
 from jaxnet.scene import Scene
+from jaxnet.solve import programs
 
 __all__ = ["FAMILIES", "Mounting", "DesignSpace"]
 
@@ -229,6 +230,8 @@ class DesignSpace:
         self._active = self._term_keys(scene)
         # plain jax.jit: it runs inside the caller's traced functions, where XLA refuses options
         self._moved = jax.jit(self._moved_arrays)
+        self._pullback = programs.jit(self._vjp_moved)
+        self._moved_fields = None
 
     # -- the maps, recorded once -------------------------------------------------------------------
 
@@ -411,7 +414,10 @@ class DesignSpace:
         that turns a triangle of the reference mesh over; or a design needing a model term the reference
         does not have (see the module docstring). Entries that are tracers, or the reference's own values,
         are not looked at."""
-        full = self.complete(theta)
+        self._checked(self.complete(theta))
+
+    def _checked(self, full):
+        """:meth:`check` of a complete θ; the concrete scene it built to compare the terms, or None."""
         # the reference's own values are valid (Net.build validated them): only new concrete values are checked
         concrete = {f: {k: np.asarray(v, dtype=float) for k, v in e.items()
                         if _is_concrete(v) and v is not self._initial[f][k]} for f, e in full.items()}
@@ -441,12 +447,15 @@ class DesignSpace:
             self._check_cut(name, corners)
         changed = any(concrete.values())
         if changed and all(_is_concrete(v) for v in jax.tree_util.tree_leaves(full)):
-            needed = self._term_keys(self._concrete_scene(full)) - self._active
+            scene = self._concrete_scene(full)
+            needed = self._term_keys(scene) - self._active
             if needed:
                 raise ValueError(
                     f"design parameters: this design needs model terms the reference design does not have "
                     f"({', '.join(sorted(n for n, _ in needed))}); the terms are chosen once from space.reference, so "
                     "build the net with a non-zero value of the parameter that makes them (e.g. a sinker's mass)")
+            return scene
+        return None
 
     def _concrete_scene(self, full):
         """The scene of a concrete complete θ as concrete arrays, also while a jit is tracing (when every jnp
@@ -488,8 +497,28 @@ class DesignSpace:
         jit-able and vmap-able. Concrete entries are checked first (:meth:`check`)."""
         full = self.complete(theta)
         if any(_is_concrete(v) for v in jax.tree_util.tree_leaves(full)):
-            self.check(full)
+            scene = self._checked(full)
+            if scene is not None:  # built concrete by the check (the same function): not built twice
+                return scene
         return self._scene(full)
+
+    def pullback(self, theta, cotangent) -> dict:
+        """The gradient in θ of a function of the scene, given its gradient in the scene's float arrays: the
+        vector-Jacobian product of :meth:`scene` at θ (complete or not; the result is complete).
+
+        ``cotangent``: a pytree shaped as ``eqx.partition(scene, eqx.is_inexact_array)[0]`` (the scene's float
+        arrays, e.g. :attr:`jaxnet.solve.adjoint_statics.Gradient.grad`); its arrays that θ does not move
+        (the current, the catch) are not used. One compiled program per design space (the design map's
+        reverse mode)."""
+        t = jax.tree_util.tree_map(lambda v: jnp.asarray(v, float), self.complete(theta))
+        if self._moved_fields is None:  # which arrays θ moves: traced once (the structure, not the values)
+            self._moved_fields = {name: tuple(fields) for name, fields in jax.eval_shape(self._moved_arrays, t).items()}
+        bar = {name: {field: jnp.asarray(getattr(getattr(cotangent, name), field)) for field in fields}
+               for name, fields in self._moved_fields.items()}
+        return self._pullback(t, bar)
+
+    def _vjp_moved(self, t, bar):
+        return jax.vjp(self._moved_arrays, t)[1](bar)[0]
 
     def _family_vector(self, t, family, reference):
         """(P,) values of a per-panel family in panel order (the reference where a panel is left out)."""

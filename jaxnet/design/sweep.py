@@ -20,16 +20,17 @@ on one machine or many, one design a task:
   task rather than the built net: pickling a scene and its structure to every worker would cost more than
   building them once there.
 * **each worker keeps its work** per recipe and solver (:class:`Workspace`, in a dict of the worker
-  process): the design space, the tangent's :class:`~jaxnet.solve.implicit.Structure`, the reference
+  process): the design space, its :class:`~jaxnet.solve.adjoint_statics.Adjoint` (the active terms, the
+  tangent's pattern, the solver's programs), the reference
   design's equilibrium (the start of every design's solve: each result depends on its design only, never
   on which worker solved it or in what order) and the compiled programs (the Newton loop, the scene map,
   the figures), so that only a worker's first task compiles.
 * **compiled programs across processes.** With ``cache`` (default: JAX's compilation cache directory if
   set, else the directory ``jaxnet run`` uses), each worker turns on JAX's persistent compilation cache
   there and :mod:`jaxnet.solve.programs` keeps the static solver's programs in it: a worker then loads what
-  an earlier worker or sweep compiled. JAX does not store a program holding a host callback (the
-  differentiable Newton loop's factorisations, :mod:`jaxnet.solve.implicit`), nor does
-  :mod:`jaxnet.solve.programs`, so every worker process still compiles that one (the first-task times of
+  an earlier worker or sweep compiled. Each design is solved by the static solver's host loop with the
+  differentiable solve's options (:meth:`jaxnet.solve.adjoint_statics.Adjoint.solve`), whose programs hold no
+  host callback, so nothing of a design's solve is compiled again by a later worker (the first-task times of
   ``validation/design_sweep.py``, cold and warm, show what each part costs).
 * **results as they arrive.** Each design's row (its θ entries, each figure, Newton iterations, residual,
   status, wall time, worker) is appended to ``out/sweep.jsonl`` as its task completes (one JSON object a
@@ -64,7 +65,7 @@ import numpy as np
 
 from jaxnet.design import objectives
 from jaxnet.design.space import DesignSpace
-from jaxnet.solve import implicit
+from jaxnet.solve import adjoint_statics, statics
 from jaxnet.solve.options import DIFFERENTIABLE, Newton
 from jaxnet.solve.results import CONVERGED, REASONS
 
@@ -175,12 +176,13 @@ class Recipe:
 @dataclasses.dataclass
 class Workspace:
     """What a worker process keeps for one recipe and solver, built at its first task and reused by every
-    later one: the design ``space``, the tangent's ``structure``, ``start`` (the reference design's
+    later one: the design ``space``, its ``adjoint`` (:class:`~jaxnet.solve.adjoint_statics.Adjoint`: the
+    terms, the tangent's pattern, the solver's programs), ``start`` (the reference design's
     equilibrium, (N, 3) m: every design's start) and ``setup_s``, the time it took to build (s). ``error``:
     the reason the build failed (the reference did not converge...), then given as every design's reason."""
 
     space: DesignSpace | None = None
-    structure: implicit.Structure | None = None
+    adjoint: adjoint_statics.Adjoint | None = None
     start: Any = None
     setup_s: float = 0.0
     error: str | None = None
@@ -218,10 +220,16 @@ def _workspace(recipe: Recipe, solver: Newton, cache) -> Workspace:
         made = Workspace()
         try:
             made.space = recipe.build()
-            made.structure = implicit.structure_of(made.space.reference)
-            # the reference's equilibrium, robustly from the drawing (stiffness continuation), polished by the
-            # differentiable path: compiles the Newton loop every design then reuses
-            made.start = implicit.solve(made.space.reference, solver, made.structure).x
+            made.adjoint = adjoint_statics.Adjoint(made.space.reference, solver)
+            # the reference's equilibrium, robustly from the drawing (the static solver's stiffness
+            # continuation), polished with the sweep's options: every design then starts there
+            rough = statics.solve(made.space.reference)
+            polished = made.adjoint.solve(made.space.reference, rough.x)
+            if int(polished.status) != CONVERGED:
+                raise RuntimeError(f"{REASONS.get(int(polished.status))} after {int(polished.iterations)} "
+                                   f"iterations polishing it to {solver.tol:g} N (largest residual "
+                                   f"{float(polished.residual_N):.4g} N at node {int(polished.worst_node)})")
+            made.start = polished.x
         except Exception as err:  # noqa: BLE001 -- every design of this recipe fails with this reason
             made.error = f"the reference design of {recipe.label} was not solved: {type(err).__name__}: {err}"
         made.setup_s = time.perf_counter() - start
@@ -230,9 +238,9 @@ def _workspace(recipe: Recipe, solver: Newton, cache) -> Workspace:
 
 
 @eqx.filter_jit
-def _figure_values(figures, x, scene, structure):
+def _figure_values(figures, x, scene, model):
     """{name: figure of the outcome}: one compiled program for all the figures (per figure set and net)."""
-    outcome = objectives.Outcome(x, scene, structure.model)
+    outcome = objectives.Outcome(x, scene, model)
     return {name: figure(outcome) for name, figure in figures.items()}
 
 
@@ -249,7 +257,7 @@ def _worker_name():
 def solve_design(recipe: Recipe, solver: Newton, cache, figures: dict, design, theta: dict) -> dict:
     """One design's row (what a worker runs; also callable in-process): the equilibrium of design ``theta``
     of ``recipe``'s design space from the reference equilibrium, by
-    :func:`jaxnet.solve.implicit.equilibrium` with ``solver``, and each of ``figures`` there. Never raises:
+    :meth:`jaxnet.solve.adjoint_statics.Adjoint.solve` with ``solver``, and each of ``figures`` there. Never raises:
     a design that fails is a row of status ``"failed"`` with its reason."""
     start, cpu = time.perf_counter(), time.process_time()
     row = {"design": design, **_theta_columns(theta), **{name: None for name in figures},
@@ -262,15 +270,15 @@ def solve_design(recipe: Recipe, solver: Newton, cache, figures: dict, design, t
             row["reason"] = work.error
         else:
             scene = work.space.scene(theta)  # checked first (DesignSpace.check): ValueError naming the entry
-            eq = implicit.equilibrium(scene, work.structure, x0=work.start, solver=solver, throw=False)
+            eq = work.adjoint.solve(scene, work.start)
             row["iterations"], row["residual_N"] = int(eq.iterations), float(eq.residual_N)
             status = int(eq.status)
             if status == CONVERGED:
-                values = _figure_values(figures, eq.x, scene, work.structure)
+                values = _figure_values(figures, eq.x, scene, work.adjoint.model)
                 row.update({name: float(v) for name, v in values.items()})
                 row["status"] = "done"
-            else:  # what implicit.equilibrium's ImplicitError says
-                row["reason"] = (f"ImplicitError: {REASONS.get(status, status)} after {int(eq.iterations)} "
+            else:
+                row["reason"] = (f"SolveError: {REASONS.get(status, status)} after {int(eq.iterations)} "
                                  f"iterations; largest residual {float(eq.residual_N):.4g} N at node "
                                  f"{int(eq.worst_node)} (tolerance {solver.tol:g} N)")
     except Exception as err:  # noqa: BLE001 -- a failed design is a row, the sweep goes on

@@ -292,6 +292,8 @@ def host_loop(start, scene, pattern, model, solver: Newton, pieces=None, step=No
                 data = data.copy()
                 data[diagonal] += inertia
             spent["assembly_s"] += time.perf_counter() - t
+            # what float64 resolves on each node at this iterate (newton.roundoff_floor, as the jitted loop)
+            floor = nodal(newton.ROUNDOFF_FACTOR * np.finfo(float).eps * matvec(np.abs(data), np.abs(x)))
         dx, slope, predicted, usable, roundoff, res_now = newton.direction(f, data, springs, mu, e, work, solver,
                                                                            factor_solve, matvec, nodal, np)
         trials, alpha, accepted, m_new = 0, 1.0, False, np.inf
@@ -303,8 +305,10 @@ def host_loop(start, scene, pattern, model, solver: Newton, pieces=None, step=No
             trials += 1
         if accepted:
             x, f, e_stored, force, f_nc, state = x + alpha * dx, f_try, e_try, force_try, nc_try, s_try
-        res = nodal(f).max()
-        st = int(newton.status(it + 1, res, m_new if accepted else e, solver, np))
+        nodal_now = nodal(f)
+        res = nodal_now.max()
+        st = int(newton.status(it + 1, res, m_new if accepted else e, solver, np,
+                               excess=np.max(nodal_now - np.maximum(solver.tol, floor))))
         if st == CONVERGED and stage < final:
             st = RUNNING  # a softened net's equilibrium: go on stiffening
         mu_next = float(newton.next_damping(mu, accepted, trials, e, m_new, predicted,
