@@ -42,7 +42,8 @@ def optimised(tmp_path_factory):
     return (*run(out), out)
 
 
-def run(out):
+def setup():
+    """(space, objective, start, bounds, twine, diameter) of the inverse problem."""
     space, reference, target, target_x = problem()
     twine = float(space.twine_length(reference)["netting"])
     # the material may grow by 20 % at most (the target's grows by 2/16 = 12.5 %: feasible)
@@ -51,6 +52,11 @@ def run(out):
     start = {"cut": {"netting": reference["cut"]["netting"]}, "twine_diameter": {"netting": reference["twine_diameter"]["netting"]}}
     diameter = float(reference["twine_diameter"]["netting"])
     bounds = constraints.Bounds(upper={"cut": {"netting": None}, "twine_diameter": {"netting": 1.25 * diameter}})
+    return space, objective, start, bounds, twine, diameter
+
+
+def run(out):
+    space, objective, start, bounds, twine, diameter = setup()
     result = optimize.optimize(space, objective, start, optimizer=optax.adam(0.05), steps=STEPS, bounds=bounds,
                                out=out, progress=False)
     return result, objective, twine, diameter
@@ -86,13 +92,7 @@ def test_the_traced_adjoint_takes_the_same_steps(optimised):
     host-driven adjoint compute the same objective and gradient: the first three steps' histories agree to the
     solves' accuracy, and a mistyped path is refused before anything is solved."""
     result, *_ = optimised
-    space, reference, target, target_x = problem()
-    twine = float(space.twine_length(reference)["netting"])
-    material = constraints.Constraint(objectives.twine_length(), upper=1.2 * twine)
-    objective = constraints.penalised(objectives.shape_distance(target_x), [material], weight=10.0)
-    start = {"cut": {"netting": reference["cut"]["netting"]}, "twine_diameter": {"netting": reference["twine_diameter"]["netting"]}}
-    diameter = float(reference["twine_diameter"]["netting"])
-    bounds = constraints.Bounds(upper={"cut": {"netting": None}, "twine_diameter": {"netting": 1.25 * diameter}})
+    space, objective, start, bounds, *_ = setup()
     traced = optimize.optimize(space, objective, start, optimizer=optax.adam(0.05), steps=3, bounds=bounds,
                                progress=False, round_cut=False, adjoint="traced")
     for host_row, traced_row in zip(result.history[:4], traced.history):

@@ -366,11 +366,17 @@ class Height(Figure):
         if self.level is not None:
             return o.x[node, self.axis] - self.level
         nodes = o.scene.nodes
+        message = (f"height: node {node} has no sea bed under it along axis {'xyz'[self.axis]} (no floor among its "
+                   "limits, Nodes.limit_sense): give above= a node or level= a height")
+        value = o.x[node, self.axis] - (0.0 if nodes.limit is None else nodes.limit[node, self.axis])
+        if isinstance(nodes.limit_sense, jax.core.Tracer):
+            # the scene's node types are an argument of the compiled program (jaxnet.solve.adjoint_statics):
+            # checked when it runs, before the value is used
+            return eqx.error_if(value, nodes.limit_sense[node, self.axis] != 1, message)
         sense = None if nodes.limit_sense is None else int(np.asarray(nodes.limit_sense)[node, self.axis])
         if sense != 1:
-            raise ValueError(f"height: node {node} has no sea bed under it along axis {'xyz'[self.axis]} (no floor "
-                             "among its limits, Nodes.limit_sense): give above= a node or level= a height")
-        return o.x[node, self.axis] - nodes.limit[node, self.axis]
+            raise ValueError(message)
+        return value
 
 
 def height(node, axis="z", above=None, level=None) -> Height:
