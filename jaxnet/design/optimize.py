@@ -63,10 +63,10 @@ from jaxnet.design.report import Design
 from jaxnet.solve import implicit, programs, results, statics
 from jaxnet.solve.options import DIFFERENTIABLE, Newton
 
-#: stop reasons
 #: how optimize computes each step's gradient (its ``adjoint`` argument)
 ADJOINTS = ("host", "traced")
 
+#: stop reasons
 CONVERGED, MAX_STEPS, SOLVE_FAILED = "gradient below tolerance", "maximum number of steps", "equilibrium failed"
 #: how the cut was rounded (:attr:`DesignResult.rounding`)
 NEAREST, INWARD = report.NEAREST, report.INWARD

@@ -29,7 +29,7 @@ Jacobian (a catch: its front moves with the net), λ is refined against the exac
 :mod:`jaxnet.solve.implicit` refines its solves.
 
 What it does not do: it is not a JAX transformation, so it is called from Python (a design loop,
-:func:`jaxnet.design.gradient.value_and_grad`), not inside a caller's ``jit``, ``vmap`` or ``grad``: those
+:mod:`jaxnet.design.gradient`), not inside a caller's ``jit``, ``vmap`` or ``grad``: those
 use :func:`jaxnet.solve.implicit.equilibrium`. Both give the same derivative (``tests/test_adjoint_statics.py``).
 
 Units: m, N; the gradient in units of J per unit of each array of θ.
@@ -157,7 +157,7 @@ class Adjoint:
 
     A *figure* is a callable ``figure(X, scene) -> J`` or ``-> (J, aux)`` (X the (N, 3) positions, m), a pytree
     (an equinox Module: its arrays are arguments of the compiled program, the rest its structure), written
-    in jnp: :func:`jaxnet.design.gradient` wraps a design objective into one.
+    in jnp: :mod:`jaxnet.design.gradient` wraps a design objective into one.
     """
 
     def __init__(self, reference, solver: Newton | None = None):
