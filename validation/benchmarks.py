@@ -46,8 +46,8 @@ SCRIPTS = {
     "bench_terms.py": ("The cage at several refinements and the cost of every term",
                        ["--steps", "0.8", "0.5", "--repeats", "3", "--compile-repeats", "1"], []),
     "design_gradient_cost.py": ("Design gradients: the adjoint against one forward solve", ["--quick"], []),
-    "design_cost.py": ("Design gradients on the cage and a FEMNET trawl: forward and gradient, run and compile, and "
-                       "a second process's compile", ["--quick"], []),
+    "design_cost.py": ("Design gradients on the cage and a FEMNET trawl, host-driven and traced: forward and gradient, "
+                       "run and compile, and a second process's compile", ["--quick"], []),
     "design_sweep.py": ("Design sweeps: one process against a local cluster of two workers, cold and warm",
                         ["--scene", "panel", "--designs", "8"], ["--scene", "cage", "--designs", "24"]),
     "newton_oracle.py": ("The static solver against a textbook trust-region Newton on still-water curtains",

@@ -1,17 +1,22 @@
 """What a design gradient costs against one forward solve, compiled and run, in one process and the next (issue 28).
 
-The targets: one gradient (``jax.value_and_grad`` of an objective of the equilibrium) runs in at most 2x one
-forward solve once compiled; the first gradient of a scene compiles in at most 2x the forward solve's
-compilation; compiled programs are reused across processes as the static solver's are.
+The targets: one gradient of an objective of the equilibrium runs in at most 2x one forward solve once
+compiled; the first gradient of a scene compiles in at most 2x the forward solve's compilation; compiled
+programs are reused across processes as the static solver's are. Two paths to the gradient, a table each:
+
+* ``host``: :class:`jaxnet.design.gradient.Sensitivity` (what ``optimize`` calls): the forward solve is its
+  ``value``, the gradient its ``value_and_grad``, both driven from Python over compiled programs that hold no
+  host callback. Its "compilation" is the first call less a run from the same start (every program looked up
+  or compiled, and the first call's set-up); HLO instruction counts are not given (several programs).
+* ``jax``: ``jax.jit`` of ``θ -> objective(implicit.equilibrium(scene(θ)))`` or of its ``jax.value_and_grad``,
+  compiled ahead of time (trace, lower, compile), one program each.
 
 For each scene, objective and design space θ (the panel cuts, or every family of
-:class:`jaxnet.design.space.DesignSpace`), a worker process (a fresh one for each figure, so that no program
-or trace of another figure is in memory) builds the design space, solves the reference and the design θ₁ one
+:class:`jaxnet.design.space.DesignSpace`), a first process solves the reference and the design θ₁ one
 optimisation step away (every cut 1 % larger, and with all families every twine diameter and EA 2 % up) with
-the static solver (:func:`jaxnet.solve.statics.solve`, whose programs the persistent cache keeps), then
-compiles ahead of time (trace, lower, compile: the first call's cost less its run) either the forward solve
-``θ -> objective(equilibrium(scene(θ)))`` or its ``value_and_grad``, and times runs of it at θ₁ (median of
-``REPEATS``) from two starts:
+the static solver, without a cache directory, and writes the two equilibria; then a worker process per figure
+(a fresh one each, nothing compiled in it before) builds the design space, compiles forward or gradient and
+times runs of it at θ₁ (median of ``REPEATS``) from two starts:
 
 * warm: the static solver's equilibrium of θ₁ (its tolerance 1e-3 N: one or two Newton steps to 1e-8 N);
 * perturbed: the reference's equilibrium (a few Newton iterations: an optimisation step).
@@ -19,10 +24,10 @@ compiles ahead of time (trace, lower, compile: the first call's cost less its ru
 Each worker runs twice with one JAX compilation cache directory (a new temporary one per benchmark run): the
 second process's compilation is what reuse across processes gives. Columns: nodes, design parameters;
 forward and gradient runs (ms) and their ratio, warm and perturbed (Newton iterations); forward and gradient
-compilation (s, trace + lower + XLA) and their ratio, with the compiled programs' HLO instruction counts
-(a measure of the program that does not vary with the machine's load); the second process's compilations (s).
+compilation (s) and their ratio, with the compiled programs' HLO instruction counts (a measure of the
+program that does not vary with the machine's load); the second process's compilations (s).
 
-    python validation/design_cost.py [--quick] [--implicit PATH]
+    python validation/design_cost.py [--quick] [--path host|jax|both] [--implicit PATH]
 
 ``--implicit PATH``: time another version of :mod:`jaxnet.solve.implicit` (e.g. ``git show
 HEAD:jaxnet/solve/implicit.py > /tmp/implicit_before.py``), loaded in its place: before/after a change.
