@@ -175,15 +175,6 @@ class Adjoint:
         """The active terms (static), those of the reference."""
         return self.structure.model
 
-    def _start(self, scene, x0):
-        x = np.asarray(scene.nodes.position if x0 is None else x0, dtype=float)
-        if x.shape != (scene.n_nodes, 3):
-            raise ValueError(f"Adjoint: x0 (start positions) must have shape ({scene.n_nodes}, 3), got {x.shape}")
-        bad = np.argwhere(~np.isfinite(x))
-        if bad.size:
-            raise ValueError(f"Adjoint: x0 (start positions) of node {int(bad[0][0])} is not finite")
-        return x.ravel()[self._free]
-
     def _pieces(self, start, scene):
         # the static solver's programs for this scene's shapes: looked up once per shape, not at every solve
         leaves, treedef = jax.tree.flatten(scene)
@@ -212,7 +203,7 @@ class Adjoint:
         return jax.device_put(params), jax.device_put(rest)
 
     def _solve(self, scene, x0):
-        start = self._start(scene, x0)
+        start = statics.start_coordinates(scene, self._free, x0, who="Adjoint")
         return statics.host_loop(start, scene, self._pattern, self.model, self.solver, self._pieces(start, scene))
 
     def value(self, figure, scene, x0=None):

@@ -64,7 +64,8 @@ from jaxnet.solve.options import STATIC, Newton
 from jaxnet.solve.results import (CONVERGED, MAX_ITERATIONS, NON_FINITE, REASONS, RUNNING, STALLED,  # noqa: F401
                                   Equilibrium, SolveError, Timing)
 
-__all__ = ["solve", "host_loop", "compile_pieces", "constant_loads", "Newton", "Equilibrium", "SolveError", "Timing",
+__all__ = ["solve", "host_loop", "compile_pieces", "start_coordinates", "constant_loads", "Newton", "Equilibrium",
+           "SolveError", "Timing",
            "REASONS", "RUNNING", "CONVERGED", "MAX_ITERATIONS", "NON_FINITE", "STALLED"]
 
 
@@ -333,6 +334,20 @@ def host_loop(start, scene, pattern, model, solver: Newton, pieces=None, step=No
     )
 
 
+def start_coordinates(scene, free, x0=None, who="solve"):
+    """The free coordinates (m) a solve starts from: ``x0`` ((N, 3) m, checked: its shape and finite values;
+    ValueError naming the node, ``who`` the caller) or the scene's positions, at the indices ``free``."""
+    if x0 is not None:
+        x0 = np.asarray(x0, dtype=float)
+        if x0.shape != (scene.n_nodes, 3):
+            raise ValueError(f"{who}: x0 (start positions) must have shape ({scene.n_nodes}, 3), got {x0.shape}")
+        bad = np.argwhere(~np.isfinite(x0))
+        if bad.size:
+            raise ValueError(f"{who}: x0 (start positions) of node {int(bad[0][0])} is not finite: "
+                             f"{x0[bad[0][0]].tolist()}")
+    return np.asarray(scene.nodes.position if x0 is None else x0, dtype=float).ravel()[np.asarray(free)]
+
+
 def solve(scene, solver: Newton | None = None, x0=None, throw: bool = True, **options) -> Equilibrium:
     """Static equilibrium of ``scene``.
 
@@ -356,15 +371,7 @@ def solve(scene, solver: Newton | None = None, x0=None, throw: bool = True, **op
     linalg.solver_choice()  # a sparse solver asked for that cannot run here: said before anything compiles
     model = model_lib.active_terms(scene)
     pattern = assemble.build_pattern(scene, model)
-    if x0 is not None:
-        x0 = np.asarray(x0, dtype=float)
-        if x0.shape != (scene.n_nodes, 3):
-            raise ValueError(f"solve: x0 (start positions) must have shape ({scene.n_nodes}, 3), got {x0.shape}")
-        bad = np.argwhere(~np.isfinite(x0))
-        if bad.size:
-            raise ValueError(f"solve: x0 (start positions) of node {int(bad[0][0])} is not finite: "
-                             f"{x0[bad[0][0]].tolist()}")
-    start = np.asarray(scene.nodes.position if x0 is None else x0, dtype=float).ravel()[np.asarray(pattern.free)]
+    start = start_coordinates(scene, pattern.free, x0)
     t0 = time.perf_counter()
     pieces = compile_pieces(start, scene, pattern, model, solver.stiffness)
     t1 = time.perf_counter()
