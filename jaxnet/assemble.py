@@ -327,6 +327,36 @@ def term_forces(x, scene, model):
     return out
 
 
+def forces_by_element(x, scene, model):
+    """Per term, the (E, k, 3) force (N) each element of its family exerts on each of its k vertices at positions
+    x (N, 3), before the elements' forces are summed onto the nodes (:func:`term_forces` is their sum): what
+    tells a force by what carries it (the weight of each cable, of the sinkers and of the floats; a node is its
+    own element, k = 1).
+
+    Energy terms give -grad of the element's own energy, load terms their load, force terms their force, each
+    on the element's environment (:func:`element_environment`) and, for a force term, its global state."""
+    state = states(x, scene, model)
+    env = scene.environment
+    out = {}
+    for t in model:
+        family = t.term.family
+        conn = connectivity(scene, family)
+        rows = getattr(scene, family)
+        levels = surface_levels(scene, family, conn)
+        with jax.named_scope(t.name):
+            if t.term.kind == "energy":
+                def element(xe, p, level, t=t):
+                    return -jax.grad(t.energy)(xe, p, element_environment(env, level))
+                out[t.name] = jax.vmap(element)(x[conn], rows, levels)
+            elif t.term.kind == "load":
+                out[t.name] = jax.vmap(lambda p, t=t: t.load(p, env))(rows).reshape(conn.shape[0], -1, 3)
+            else:
+                def element(xe, p, level, t=t):
+                    return t.force(xe, p, element_environment(env, level), state.get(t.name))
+                out[t.name] = jax.vmap(element)(x[conn], rows, levels)
+    return out
+
+
 def scatter_hessians(x, scene, pattern, element_energies, element_forces=None, state=None, element_blocks=None,
                      motion: Motion | None = None):
     """CSR entries (nnz,) of the stiffness of per-element energies and forces: :func:`element_stiffnesses`

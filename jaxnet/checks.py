@@ -1,8 +1,9 @@
 """The checks of a scene before anything is compiled: :func:`validate` raises :class:`~jaxnet.scene.SceneError`
 naming the culprit (the node, the triangle and its panel, the bar and its cable, the parameter) and what is
-wrong with it: shapes, indices, finite and signed values, the codes of the netting's drag model and knot law
-(the terms' own tables), a net held somewhere in every direction, every piece of it connected to a fixed
-node.
+wrong with it: shapes, indices, finite and signed values (a traction stiffness EA > 0: an element without it
+holds nothing, and the net is a mechanism that a solve would only report as no step lowering the energy), the
+codes of the netting's drag model and knot law (the terms' own tables), a net held somewhere in every
+direction, every piece of it connected to a fixed node.
 """
 
 from __future__ import annotations
@@ -367,7 +368,7 @@ def validate(scene: Scene, dynamic: bool = False) -> None:
         per_triangle = {f.name: (len(tri),) for f in dataclasses.fields(Netting) if f.name not in ("vertices", "uv")}
         _check_shapes(net, "netting", per_triangle)
         _check_positive(net.l0, "unstretched twine length l0", culprit)
-        _check_positive(net.ea_traction, "traction stiffness EA", culprit, strict=False)
+        _check_positive(net.ea_traction, "traction stiffness EA", culprit)
         _check_positive(net.ea_compression, "compression stiffness EA", culprit, strict=False)
         _check_positive(net.diameter, "twine diameter", culprit, strict=False)
         _check_positive(net.density, "volumic mass", culprit, strict=False)
@@ -398,8 +399,8 @@ def validate(scene: Scene, dynamic: bool = False) -> None:
                                           "ea_compression": (len(tri), 3), "diameter": (len(tri),),
                                           "density": (len(tri),), "panel": (len(tri),)})
         for name in ("l0", "ea_traction", "ea_compression"):
-            values = np.asarray(getattr(hexa, name), dtype=float).min(axis=1)
-            _check_positive(values, name, culprit, strict=(name == "l0"))
+            values = np.asarray(getattr(hexa, name), dtype=float).min(axis=1)   # the smallest of its families
+            _check_positive(values, name, culprit, strict=(name != "ea_compression"))
         _check_positive(hexa.diameter, "twine diameter", culprit, strict=False)
         _check_positive(hexa.density, "volumic mass", culprit, strict=False)
         # say so rather than leave hexagonal netting silently without this load
@@ -419,7 +420,7 @@ def validate(scene: Scene, dynamic: bool = False) -> None:
             raise SceneError(f"bar {b} ({_cable_name(scene, b)}): end node index outside 0..{n - 1}")
         culprit = lambda b: f"bar {b} ({_cable_name(scene, b)})"  # noqa: E731
         _check_positive(bars.rest_length, "unstretched length", culprit)
-        _check_positive(bars.ea_traction, "traction stiffness EA", culprit, strict=False)
+        _check_positive(bars.ea_traction, "traction stiffness EA", culprit)
         _check_positive(bars.ea_compression, "compression stiffness EA", culprit, strict=False)
         _check_positive(bars.diameter, "diameter", culprit, strict=False)
         _check_positive(bars.density, "volumic mass", culprit, strict=False)

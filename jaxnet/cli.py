@@ -1,6 +1,6 @@
 """Command line: ``jaxnet run [SCENE] [--scene NAME [--set KEY=VALUE ...]] [--mesh CASE.mdg] [--out DIR]``,
-``jaxnet export --scene NAME [--set ...] FILE`` (a built-in scene written as a scene file to edit), ``jaxnet show
-DIR`` (a run's pictures drawn again without solving), ``jaxnet --version``.
+``jaxnet export --scene NAME [--set ...] [--force] FILE`` (a built-in scene written as a scene file to edit),
+``jaxnet show DIR`` (a run's pictures drawn again without solving), ``jaxnet --version``.
 
 With no SCENE, solves a built-in scene (``--scene``, default ``cage``: a fish cage in a current; see
 ``jaxnet run --help`` for the list). SCENE may be a jaxnet scene file (.json, .toml) or a FEMNET case
@@ -8,88 +8,168 @@ With no SCENE, solves a built-in scene (``--scene``, default ``cage``: a fish ca
 of jaxnet's, and ``--start CASE.sta`` (with ``--mesh``) starts it from FEMNET's stored node positions (its
 equilibrium, or an earlier case's, as FEMNET's ``phobos`` and ``dyna`` start theirs); result.json gets a "femnet"
 section with FEMNET's summary figures (drag on netting, cables and catch, total force on the fixings, catch
-thickness and diameter). A FEMNET case uses FEMNET's own
-laws where they differ from the book's (``docs/errata.md``), so that it gives FEMNET's answers;
-``--jaxnet-laws`` solves it with jaxnet's.
-Writes DIR/result.json (the figures, ``docs/result.md``), DIR/net.vtu (ParaView: tensions, displacement, nodal
-forces by group, reactions; DIR/net_whole.vtu beside it for a model with symmetry planes), DIR/net.png (the
-pictures) and DIR/command.json (the command, for ``jaxnet show``), prints one line per Newton iteration and a
-short summary. ``--set`` changes a built-in scene's numbers (its function's keyword arguments). Exit status 0
-on convergence, 1 on a failed solve (its last state still written, net.vtu with its residual), 2 on bad input.
+thickness and diameter). A FEMNET case uses FEMNET's own laws where they differ from the book's
+(``docs/errata.md``), so that it gives FEMNET's answers; ``--jaxnet-laws`` solves it with jaxnet's.
+
+Writes, in this order, the answer first: DIR/command.json (the command, for ``jaxnet show``), DIR/result.json (the
+figures, ``docs/result.md``), DIR/net.vtu (ParaView: tensions, displacement, nodal forces by group, reactions;
+DIR/net_whole.vtu beside it for a model with symmetry planes), then the pictures, DIR/net.png and DIR/net.html
+(``docs/pictures.md``; ``--no-pictures`` leaves them out). Prints one line per Newton iteration under a legend,
+and a summary (the balance of the forces on the net, the weight and buoyancy by what carries them, the largest
+tensions). ``--set`` changes a built-in scene's numbers (its function's keyword arguments); the run's label is
+made from the numbers it ran with. Exit status (:data:`OK`, :data:`FAILED`, :data:`BAD_INPUT`, :data:`STOPPED`):
+0 on convergence, 1 on a failed solve (its last state still written, net.vtu with its residual), 2 on bad input,
+130 when stopped by Ctrl-C. Bad input is one line naming the culprit, never a traceback, and is found before
+anything is compiled where it can be: an option that would not apply (``--end`` without ``--dynamic``, FEMNET's
+options with a scene file, ``--scene`` with a file), a path in the way (``--out`` under a file, an existing file
+to export without ``--force``), a file that does not exist; a file that cannot be written during the run (a full
+disk) is named too.
 
 ``--dynamic`` runs the scene in time instead (:mod:`jaxnet.solve.dynamics`, the book's implicit scheme):
 from its static equilibrium (computed first), to ``--end`` seconds with steps of ``--dt`` seconds, a record
 every ``--record`` seconds written to DIR as it goes (series.json + raw/ arrays, series.npz at the end,
 series.pvd + net_NNNNN.vtu for ParaView, checkpoint.npz; ``--resume`` continues a stopped run from its last
-record; run.png at the end: the reactions and largest tensions against time), with a progress bar. A FEMNET case takes its own time settings, towing tables, winches and numerics
-(its threshold, iterations and displacement limit, for the static start and for every time step); ``--tol``,
-``--max-iter`` and ``--stiffness`` apply to both as in a static run. The built-in ``cage_waves`` (the default with ``--dynamic``) is
-the cage in regular waves, its collar heaving.
+record; run.png at the end: the reactions and largest tensions against time), its progress a bar on a terminal
+and plain lines in a log (:mod:`jaxnet.io.progress`). A FEMNET case takes its own time settings, towing tables,
+winches and numerics (its threshold, iterations and displacement limit, for the static start and for every time
+step); ``--tol``, ``--max-iter`` and ``--stiffness`` apply to both as in a static run. The built-in
+``cage_waves`` (the default with ``--dynamic``) is the cage in regular waves, its collar heaving.
 
 Compiled programs are kept on disk (in ``--cache DIR``, default ``$XDG_CACHE_HOME/jaxnet`` or
 ``~/.cache/jaxnet``: the static solver's programs whole, :mod:`jaxnet.solve.programs`, the others in JAX's
 persistent compilation cache; ``--no-cache`` to switch both off; a ``JAX_COMPILATION_CACHE_DIR`` set by the
 user wins): a second run of a case of the same shape and terms — another current speed, another catch, the
 same case again — loads them instead of tracing and compiling, most of a first run's time
-(``validation/femnet_cases.py`` times cold runs with and without them).
+(``validation/whole_process.py`` times whole runs cold and with them). The program of the outputs' figures is
+obtained in a thread of its own while the solver iterates.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import errno
 import json
 import os
 import pathlib
 import sys
 
+# The command line imports what a command needs when it needs it: parsing the arguments, ``--help`` and
+# ``--version`` import neither JAX nor the physics (``jaxnet/__init__.py`` loads its names on first use).
 
-def _use_compilation_cache(directory):
-    """Turn on JAX's persistent compilation cache in ``directory`` (the solver's pieces hold no host
-    callback, so they can be cached), unless the user already chose one."""
+#: exit statuses: converged (or done), a failed solve, bad input (a file, a key, an option, a path), stopped by Ctrl-C
+OK, FAILED, BAD_INPUT, STOPPED = 0, 1, 2, 130
+
+
+class CommandError(ValueError):
+    """A command line that cannot run as given: an option that does not apply, a path that cannot be written,
+    a file that would be overwritten. Printed as ``jaxnet: bad input: ...``, exit status 2, before anything is
+    solved."""
+
+
+#: JAX's settings of its persistent compilation cache that a run changes (:func:`_compilation_cache`)
+_CACHE_SETTINGS = ("jax_compilation_cache_dir", "jax_persistent_cache_min_compile_time_secs")
+
+
+@contextlib.contextmanager
+def _compilation_cache(directory):
+    """JAX's persistent compilation cache in ``directory`` for the time of a run (the solver's pieces hold no host
+    callback, so they can be cached; None: none), unless the user already chose one; JAX's settings are put back
+    as they were after it, so that a run started from Python (a notebook, a test) leaves the process as it
+    found it."""
+    if directory is None or os.environ.get("JAX_COMPILATION_CACHE_DIR"):
+        yield
+        return
     import jax
 
-    if os.environ.get("JAX_COMPILATION_CACHE_DIR"):
-        return
+    before = {name: getattr(jax.config, name) for name in _CACHE_SETTINGS}
     jax.config.update("jax_compilation_cache_dir", str(directory))
     # the default (1 s) would leave out the smaller pieces of a small scene
     jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.2)
+    try:
+        yield
+    finally:
+        for name, value in before.items():
+            jax.config.update(name, value)
 
 
-def _case(args, dynamic):
+def _reason(err: OSError) -> str:
+    """An operating-system error in words, without its path (the message names the path itself)."""
+    if not err.errno:
+        return str(err)
+    return err.strerror or os.strerror(err.errno)
+
+
+def writable_directory(path, option) -> pathlib.Path:
+    """The directory ``path`` (given by ``option``, e.g. ``--out``), created with its parents if it does not exist,
+    checked to take new files; a :class:`CommandError` naming the option, the path and what is in the way (a file
+    where a directory should be, no permission, a read-only or full disk) otherwise."""
+    problem = directory_problem(path)
+    if problem is not None:
+        raise CommandError(f"{option} {path}: {problem}")
+    return pathlib.Path(path)
+
+
+def directory_problem(path) -> str | None:
+    """Create the directory ``path`` (and its parents) if need be and check that it takes new files: None if it
+    does, else what is in the way, in words."""
+    directory = pathlib.Path(path)
+    blocking = next((p for p in [directory, *directory.parents] if p.exists() and not p.is_dir()), None)
+    if blocking is not None:
+        return f"{blocking} is a file, not a directory"
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        return f"cannot create it ({_reason(err)})"
+    probe = directory / f".jaxnet-write-test-{os.getpid()}"
+    try:
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as err:
+        return f"cannot write in it ({_reason(err)})"
+    return None
+
+
+def _existing_file(path, what) -> str:
+    """``path`` if it is a file; a :class:`CommandError` naming ``what`` it should be otherwise."""
+    p = pathlib.Path(path)
+    if not p.exists():
+        raise CommandError(f"{what} {path} does not exist")
+    if p.is_dir():
+        raise CommandError(f"{what} {path} is a directory, not a file")
+    return str(path)
+
+
+def case_of(args, dynamic):
     """The case the command names (a built-in scene, a scene file, a FEMNET case on jaxnet's or FEMNET's mesh,
-    started from a FEMNET .sta)."""
+    started from a FEMNET .sta) and its label: a built-in scene's from its own numbers (``--set`` included)."""
     import dataclasses
 
-    from jaxnet.io import femnet, scene_file
-    from jaxnet.scene import SceneError
-    from jaxnet.scenes import BUILT_IN, DYNAMIC, DYNAMIC_DEFAULT
+    from jaxnet.catalogue import BUILT_IN, DYNAMIC, DYNAMIC_DEFAULT
 
-    if args.mesh is not None and (args.scene is None or not str(args.scene).endswith(".don")):
-        raise SceneError("--mesh (FEMNET's .mdg mesh) goes with a FEMNET case CASE.don")
-    if args.refine is not None and (args.scene is None or not str(args.scene).endswith(".don") or args.mesh):
-        raise SceneError("--refine (a mesh finer than the file's) goes with a FEMNET case CASE.don meshed by jaxnet "
-                         "(not with --mesh)")
     settings = getattr(args, "set", None) or []
-    if settings and args.scene is not None:
-        raise SceneError("--set changes a built-in scene's arguments (--scene NAME); a scene file or a FEMNET case "
-                         "is changed by editing it (jaxnet export --scene NAME FILE writes a built-in to a file)")
     if args.scene is None:
-        if dynamic:
-            name = args.builtin if args.builtin in DYNAMIC else DYNAMIC_DEFAULT
-            make, description = DYNAMIC[name]
-        else:
-            if args.builtin not in BUILT_IN:
-                raise SceneError(f"the built-in scene '{args.builtin}' is a dynamic one: run it with --dynamic")
-            name = args.builtin
-            make, description = BUILT_IN[name]
+        catalogue = DYNAMIC if dynamic else BUILT_IN
+        name = args.builtin or (DYNAMIC_DEFAULT if dynamic else None)
+        if name is None:
+            from jaxnet.catalogue import DEFAULT
+
+            name = DEFAULT
+        if name not in catalogue:
+            raise CommandError(f"--scene {name} is a static scene: run it without --dynamic, or run one of the scenes "
+                               f"in time: {', '.join(catalogue)}" if dynamic else
+                               f"--scene {name} is a dynamic scene: run it with --dynamic")
+        make = catalogue[name].make()
         changes = built_in_arguments(make, name, settings)
+        case = make(**changes)
+        kind = "built-in dynamic scene" if dynamic else "built-in scene"
+        # its label from the numbers it was built with; and what --set changed, said again
         said = "; " + ", ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in changes.items()) \
             if changes else ""
-        kind = "built-in dynamic scene" if dynamic else "built-in scene"
-        return make(**changes), f"{kind} '{name}': {description}{said}"
-    if args.start is not None and args.mesh is None:
-        raise SceneError("--start (FEMNET's node positions, a .sta) goes with --mesh: they are numbered on its mesh")
+        return case, f"{kind} '{name}': {case.label}{said}"
     if str(args.scene).endswith(".don"):
+        from jaxnet.io import femnet
+
         laws = not args.jaxnet_laws
         case = (femnet.read_mdg(args.mesh, args.scene, femnet_laws=laws) if args.mesh is not None
                 else femnet.read_don(args.scene, femnet_laws=laws, refine=1.0 if args.refine is None else args.refine))
@@ -97,19 +177,79 @@ def _case(args, dynamic):
             case = femnet.started_from_sta(case, args.start)
             case = dataclasses.replace(case, label=f"{case.label}, started from {args.start}")
         return case, case.label
+    from jaxnet.io import scene_file
+
     case = scene_file.read(args.scene)
     return case, case.label
 
 
+def check_options(args):
+    """Refuse what the command line asks that would not apply (a :class:`CommandError` naming the option and
+    what it goes with), before anything is read or compiled: options of a run in time without ``--dynamic``,
+    options of a FEMNET case without one, a built-in's ``--set`` or ``--scene`` with a file, ``--cache`` with
+    ``--no-cache``; and the input files that do not exist."""
+    def given(*names):
+        return [f"--{n.replace('_', '-')}" for n in names if getattr(args, n, None) not in (None, False)]
+
+    if not args.dynamic:
+        stray = given("end", "dt", "loop", "record", "resume")
+        if stray:
+            raise CommandError(f"{', '.join(stray)} {'applies' if len(stray) == 1 else 'apply'} to a run in time: "
+                               "add --dynamic, or leave "
+                               f"{'it' if len(stray) == 1 else 'them'} out for a static solve")
+    don = args.scene is not None and str(args.scene).endswith(".don")
+    if not don:
+        stray = given("mesh", "start", "refine", "jaxnet_laws")
+        if stray:
+            raise CommandError(f"{', '.join(stray)} {'goes' if len(stray) == 1 else 'go'} with a FEMNET case "
+                               f"(jaxnet run CASE.don {' '.join(stray)} ...)")
+    if args.mesh is not None and args.refine is not None:
+        raise CommandError("--refine (a mesh finer than the file's) is for jaxnet's mesh of a FEMNET case, not with "
+                           "--mesh (FEMNET's own mesh)")
+    if args.start is not None and args.mesh is None:
+        raise CommandError("--start (FEMNET's node positions, a .sta) goes with --mesh: they are numbered on its mesh")
+    if args.scene is not None:
+        if args.set:
+            raise CommandError("--set changes a built-in scene's numbers (--scene NAME); a scene file or a FEMNET case "
+                               "is changed by editing it (jaxnet export --scene NAME FILE writes a built-in to a file)")
+        if args.builtin is not None:
+            raise CommandError(f"--scene {args.builtin} (a built-in scene) and the file {args.scene}: give one of them")
+        _existing_file(args.scene, "the scene file" if not don else "the FEMNET case")
+        for option in ("mesh", "start"):
+            if getattr(args, option) is not None:
+                _existing_file(getattr(args, option), f"--{option}")
+        if pathlib.Path(args.scene).suffix not in (".don", ".toml", ".json"):
+            raise CommandError(f"{args.scene}: a scene file is .toml or .json, a FEMNET case .don")
+    if args.no_cache and args.cache is not None:
+        raise CommandError("--cache DIR and --no-cache: give one of them")
+
+
+def _cache_directory(args):
+    """The directory of compiled programs this run keeps (``--cache``, else the default), or None: ``--no-cache``,
+    or the default directory that cannot be written (a read-only home: said, and the run goes on without it).
+    A ``--cache`` given that cannot be written is a :class:`CommandError`."""
+    if args.no_cache:
+        return None
+    if args.cache is not None:
+        return writable_directory(args.cache, "--cache")
+    try:
+        return writable_directory(default_cache(), "the cache of compiled programs")
+    except CommandError as err:
+        print(f"jaxnet: note: {err}; compiling without it (--cache DIR to choose another)", file=sys.stderr)
+        return None
+
+
+def default_cache() -> pathlib.Path:
+    """Where compiled programs are kept by default: ``$XDG_CACHE_HOME/jaxnet``, else ``~/.cache/jaxnet``."""
+    return pathlib.Path(os.environ.get("XDG_CACHE_HOME") or pathlib.Path.home() / ".cache") / "jaxnet"
 
 
 def built_in_arguments(make, name, settings):
     """The keyword arguments ``--set KEY=VALUE ...`` give the function ``make`` of the built-in scene ``name``:
     each KEY one of its number or integer parameters (its defaults say which), VALUE read as that type. Raises
-    SceneError naming an unknown key (with the known ones) or a value of the wrong kind, before anything is built."""
+    a :class:`CommandError` naming an unknown key (with the known ones) or a value of the wrong kind, before
+    anything is built."""
     import inspect
-
-    from jaxnet.scene import SceneError
 
     parameters = {p.name: p for p in inspect.signature(make).parameters.values()
                   if isinstance(p.default, (int, float)) and not isinstance(p.default, bool)}
@@ -118,15 +258,15 @@ def built_in_arguments(make, name, settings):
         key, sep, text = item.partition("=")
         key = key.strip()
         if not sep or not key:
-            raise SceneError(f"--set {item!r}: expected KEY=VALUE, e.g. --set current=0.8")
+            raise CommandError(f"--set {item!r}: expected KEY=VALUE, e.g. --set current=0.8")
         if key not in parameters:
-            raise SceneError(f"--set {key}: the built-in scene '{name}' has no such number; it has: "
-                             f"{', '.join(f'{k} (default {p.default!r})' for k, p in parameters.items())}")
+            raise CommandError(f"--set {key}: the built-in scene '{name}' has no such number; it has: "
+                               f"{', '.join(f'{k} (default {p.default!r})' for k, p in parameters.items())}")
         kind = type(parameters[key].default)
         try:
             value = kind(text) if kind is float else int(text)
         except ValueError:
-            raise SceneError(f"--set {key}={text}: expected {'an integer' if kind is int else 'a number'}") from None
+            raise CommandError(f"--set {key}={text}: expected {'an integer' if kind is int else 'a number'}") from None
         out[key] = value
     return out
 
@@ -157,20 +297,88 @@ def time_stepping(case, args):
     return settings, implicit
 
 
+def _shown(value, scale=0.0):
+    """A force component as the console prints it: 4 significant digits, 0 where it is rounding beside ``scale``
+    (below 1e-12 of it: the forces of the balance it is printed with), and -0.0 + 0.0 is 0.0: no "-0"."""
+    return f"{(value if abs(value) > 1e-12 * scale else 0.0) + 0.0:.4g}"
+
+
+def _vector(values, scale=0.0):
+    return "[" + ", ".join(_shown(v, scale) for v in values) + "] N"
+
+
+def _size(*vectors):
+    """The largest component of the vectors (N): the scale below which a printed component is rounding."""
+    return max((abs(v) for vector in vectors for v in vector), default=0.0)
+
+
+def carrier_groups(carriers):
+    """result.json's weight and buoyancy by carrier (name -> [x, y, z] N) as the console gives them: the cables
+    of one name numbered (``collar 0`` ... ``collar 7``, a FEMNET case's ``cable 1`` ...) summed as one line
+    (``collar (8 cables)``), the other carriers as they are."""
+    import re
+
+    groups, members = {}, {}
+    for name, force in carriers.items():
+        stem = re.sub(r" \d+$", "", name)
+        key = stem if stem != name else name
+        groups[key] = [a + b for a, b in zip(groups.get(key, [0.0, 0.0, 0.0]), force)]
+        members[key] = members.get(key, 0) + 1
+    return {(f"{key} ({members[key]} cables)" if members[key] > 1 else
+             next(n for n in carriers if n == key or re.sub(r" \d+$", "", n) == key)): force
+            for key, force in groups.items()}
+
+
+def print_summary(result, where=None):
+    """The console's summary of a static run's ``result`` (:func:`jaxnet.figures.summary`, with a FEMNET case's
+    sections): how the solve ended, the balance of the forces on the net (the fixings', the weight and other
+    loads', the water's), its whole net where the model has symmetry planes, the largest tensions, the weight
+    and buoyancy by what carries them, FEMNET's text outputs."""
+    whole = result["whole_net"] if "whole_net" in result else None
+    print(f"  {'converged' if result['converged'] else 'NOT converged: ' + result['reason']} in {result['iterations']} "
+          f"iterations, residual {result['residual_N']:.3g} N")
+    if "wall_s" in result:
+        print(f"  wall {result['wall_s']:.2f} s (compile {result['compile_s']:.2f} s{'; ' + where if where else ''})")
+    part = f" (the model: {result['modelled_part']})" if whole is not None else ""
+    scale = _size(result["reaction_N"], result["load_N"], result["water_N"])
+    print(f"  reaction of the fixings {_vector(result['reaction_N'], scale)}; weight, buoyancy and other loads "
+          f"{_vector(result['load_N'], scale)}; the water's forces {_vector(result['water_N'], scale)}{part}")
+    if whole is not None:
+        catch = f", catch drag {_shown(result['catch']['drag_whole_net_N'])} N" if "catch" in result else ""
+        scale = _size(whole["reaction_N"], whole["load_N"], whole["water_N"])
+        print(f"  whole net ({whole['copies']} mirrored copies): reaction {_vector(whole['reaction_N'], scale)}, "
+              f"weight, buoyancy and other loads {_vector(whole['load_N'], scale)}, the water's forces "
+              f"{_vector(whole['water_N'], scale)}{catch}")
+    carriers = carrier_groups(result.get("weight_and_buoyancy_by_carrier_N", {}))
+    if carriers:
+        up = result["inputs"]["environment"]["up"]
+        print("  weight (-) and buoyancy (+) along up: " + ", ".join(
+            f"{name} {_shown(sum(a * b for a, b in zip(force, up)))} N" for name, force in carriers.items()))
+    tensions = ([f"max twine tension {_shown(result['max_twine_tension_N'])} N"] if result["n_triangles"] else []) + (
+        [f"max bar tension {_shown(result['max_bar_tension_N'])} N"] if result["n_bars"] else [])
+    if tensions:
+        print("  " + ", ".join(tensions))
+    for figure in result.get("femnet", {}).get("printed", []):   # FEMNET's text outputs, as it prints them
+        if figure["kind"] == "heading":      # a distance from a node to itself: FEMNET's way of printing a title
+            print(f"  {figure['comment']}")
+        elif figure["value"] is not None:
+            print(f"  {figure['comment']}: {figure['value']:.6g} {figure['unit']}")
+
+
 def _run(args):
+    """``jaxnet run``: the options checked and the output directory made before anything is read or compiled,
+    then a static run or a run in time, with the cache of compiled programs on for its duration."""
+    check_options(args)
+    out = writable_directory(args.out, "--out")
+    with _compilation_cache(_cache_directory(args)):
+        return _run_dynamic(args, out) if args.dynamic else _run_static(args, out)
+
+
+def _run_static(args, out):
     import dataclasses
+    import time
 
-    if not args.no_cache:
-        _use_compilation_cache(args.cache)
-    if args.dynamic:
-        return _run_dynamic(args)
-    import jax
-
-    from jaxnet import figures, linalg
-    from jaxnet.io import femnet, plot, vtk
-    from jaxnet.solve.statics import SolveError, solve
-
-    case, label = _case(args, dynamic=False)
+    case, label = case_of(args, dynamic=False)
     scene = case.scene
     print(f"jaxnet: {label}")
     print(f"  {scene.n_nodes} nodes, {scene.n_elements} elements, {scene.n_dof} unknowns")
@@ -178,58 +386,90 @@ def _run(args):
         print(f"  note: {line}")
     if case.info.get("dynamic_only"):
         print(f"  left out of this static run (FEMNET's dynamics only): {', '.join(case.info['dynamic_only'])}")
-    out = pathlib.Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
     _record_command(out, args)
+    from jaxnet import figures
+    from jaxnet.io import vtk
+    from jaxnet.solve.statics import SolveError, solve
+
     failed = None
-    try:
-        eq = solve(case, verbose=not args.quiet, **_overrides(args))
-    except SolveError as err:
-        failed, eq = err, err.equilibrium
+    # what the outputs need is made ready while the solver iterates (the figures' program compiles in XLA beside
+    # the Newton loop's host work; the pictures' modules import), then waited for after the solve
+    from concurrent.futures import ThreadPoolExecutor
+
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        figures_program = pool.submit(_prepare_outputs, scene, not args.no_pictures)
+        try:
+            eq = solve(case, verbose=not args.quiet, **_overrides(args))
+        except SolveError as err:
+            failed, eq = err, err.equilibrium
+        figures_program.exception()   # done (an error there is raised again, and named, by net_figures below)
     # what the solve ran with: the case's options with the command line's (solve() above took the same)
     used = dataclasses.replace(case.solver, verbose=not args.quiet, **_overrides(args))
-    result = figures.summary(scene, eq, case=case, source=None if args.scene is None else str(args.scene), solver=used)
+    t = time.perf_counter()
+    source = args.scene if args.scene is not None else f"built-in scene '{args.builtin or _default_scene()}'"
+    net = figures.net_figures(scene, eq.x)   # one program's figures, for every output below
+    result = figures.summary(scene, eq, case=case, source=str(source), solver=used, figures=net)
     if "symmetry_axes" in case.info:  # a FEMNET case: its own figures, and what the reader decided
-        result["femnet"] = femnet.femnet_figures(scene, eq, case.info["symmetry_axes"], case.info.get("fixity"))
+        from jaxnet.io import femnet
+
+        result["femnet"] = femnet.femnet_figures(scene, eq, case.info["symmetry_axes"], case.info.get("fixity"),
+                                                 groups=result["forces_N"])
         result["femnet"]["printed"] = femnet.text_output_figures(scene, eq, case.info)
         result["femnet_case"] = case.info
+    # the answer first: result.json, then ParaView's files, then the pictures (skipped by --no-pictures)
     (out / "result.json").write_text(json.dumps(result, indent=2))
-    # a failed solve's file holds its residual, where the net is out of balance
-    written = [out / "result.json", *vtk.write_vtu(out / "net.vtu", scene, eq.x,
+    written = [out / "result.json", *vtk.write_vtu(out / "net.vtu", scene, eq.x, figures=net, force=eq.force,
                                                   residual=None if failed is None else eq.force)]
-    plot.save_png(out / "net.png", scene, eq.x, title=label, catch_front=result.get("catch", {}).get("front_m"))
-    written.append(out / "net.png")
-
-    def shown(value):  # -0.0 + 0.0 is 0.0: no "-0" printed
-        return f"{value + 0.0:.4g}"
-
-    def vector(values):
-        return "[" + ", ".join(shown(v) for v in values) + "] N"
-
-    whole = result["whole_net"]
-    print(f"  {'converged' if result['converged'] else 'NOT converged: ' + result['reason']} in {result['iterations']} "
-          f"iterations, residual {result['residual_N']:.3g} N")
-    if eq.timing is not None:
-        print(f"  wall {eq.timing.wall_s:.2f} s (compile {eq.timing.compile_s:.2f} s; JAX on {jax.default_backend()}, "
-              f"tangents factorised by {linalg.solver_choice()})")
-    part = f" (the model: {result['modelled_part']})" if whole["copies"] > 1 else ""
-    print(f"  reaction at fixed nodes {vector(result['reaction_N'])}, load {vector(result['load_N'])}{part}")
-    if whole["copies"] > 1:
-        catch = f", catch drag {shown(result['catch']['drag_whole_net_N'])} N" if "catch" in result else ""
-        print(f"  whole net ({whole['copies']} mirrored copies): reaction {vector(whole['reaction_N'])}, load "
-              f"{vector(whole['load_N'])}{catch}")
-    tensions = ([f"max twine tension {shown(result['max_twine_tension_N'])} N"] if result["n_triangles"] else []) + (
-        [f"max bar tension {shown(result['max_bar_tension_N'])} N"] if result["n_bars"] else [])
-    if tensions:
-        print("  " + ", ".join(tensions))
-    for figure in result.get("femnet", {}).get("printed", []):   # FEMNET's text outputs, as it prints them
-        if figure["value"] is not None:
-            print(f"  {figure['comment']}: {figure['value']:.6g} {figure['unit']}")
-    print(f"  wrote {', '.join(str(p) for p in written)}")
+    outputs_s = time.perf_counter() - t
+    print_summary(result, where=_where_it_ran() if eq.timing is not None else None)
+    if not args.no_pictures:
+        t = time.perf_counter()
+        written += _pictures(out, scene, eq.x, result, label, net)
+        outputs_s += time.perf_counter() - t
+    print(f"  wrote {', '.join(str(p) for p in written)} (in {outputs_s:.2f} s)")
     if failed is not None:
         print(f"jaxnet: {failed}", file=sys.stderr)
-        return 1
-    return 0
+        return FAILED
+    return OK
+
+
+def _prepare_outputs(scene, pictures):
+    """Obtain the program of the outputs' figures (:func:`jaxnet.figures.prepare_figures`) and, for ``pictures``,
+    import the modules that draw them (matplotlib's import is a good part of a picture's time)."""
+    from jaxnet import figures
+
+    figures.prepare_figures(scene)
+    if pictures:
+        from jaxnet.io import page, plot  # noqa: F401
+
+
+def _where_it_ran():
+    """Where the solve ran, in words: JAX's backend and the sparse factorisation of its tangents."""
+    import jax
+
+    from jaxnet import linalg
+
+    return f"JAX on {jax.default_backend()}, tangents factorised by {linalg.solver_choice()}"
+
+
+def _default_scene():
+    from jaxnet.catalogue import DEFAULT
+
+    return DEFAULT
+
+
+def _pictures(out, scene, x, result, label, net=None):
+    """Draw a static run's pictures in ``out``: net.png and the page net.html (``net``: the
+    :class:`jaxnet.figures.NetFigures` at x, whose tensions they colour by). Returns the files written."""
+    from jaxnet.io import plot
+
+    tensions = {} if net is None else {"twine_tension": net.twine_tension, "bar_tension": net.bar_tension}
+    front = result.get("catch", {}).get("front_m")
+    plot.save_png(out / "net.png", scene, x, title=label, catch_front=front, **tensions)
+    from jaxnet.io import page
+
+    page.write_html(out / "net.html", scene, x, result=result, title=label, **tensions)
+    return [out / "net.png", out / "net.html"]
 
 
 def _stopped(out, argv):
@@ -243,28 +483,25 @@ def _stopped(out, argv):
     where = f"its records in {out} end at t = {point[0].time:g} s" if point else f"no record in {out} yet"
     again = [a for a in argv if a != "--resume"] + ["--resume"]
     print(f"jaxnet: stopped (Ctrl-C); {where}. Continue with: jaxnet {shlex.join(again)}", file=sys.stderr)
-    return 130
+    return STOPPED
 
 
-def _run_dynamic(args):
+def _run_dynamic(args, out):
     import numpy as np
 
     import equinox as eqx
 
-    from jaxnet.scene import SceneError
     from jaxnet.solve import dynamics
     from jaxnet.solve.statics import solve
 
-    case, label = _case(args, dynamic=True)
+    case, label = case_of(args, dynamic=True)
     overrides = _overrides(args)
     settings, implicit = time_stepping(case, args)
     end_time = args.end if args.end is not None else settings.end_time
     record_every = args.record if args.record is not None else settings.record_every
     if end_time is None:
-        raise SceneError("--dynamic: give the end time (--end, s); the scene has none")
+        raise CommandError("--dynamic: give the end time (--end, s); the scene has none")
     scene = case.scene
-    out = pathlib.Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
     _record_command(out, args)
     print(f"jaxnet: {label}")
     print(f"  {scene.n_nodes} nodes, {scene.n_elements} elements, {scene.n_dof} unknowns; dynamics to "
@@ -294,23 +531,25 @@ def _run_dynamic(args):
                                 resume=args.resume, x0=x0, progress=not args.quiet)
     except dynamics.DynamicsError as err:
         print(f"jaxnet: {err}", file=sys.stderr)
-        return 1
+        return FAILED
     except KeyboardInterrupt:
         return _stopped(out, args.argv)
     print(f"  {run.steps} steps, {run.mean_iterations:.2f} Newton iterations per step, {int(run.state.retries)} "
           f"retried; wall {run.timing.wall_s:.2f} s (first interval with compilation {run.timing.compile_s:.2f} s; "
           f"{run.loop} loop)")
-    from jaxnet.io import plot
+    written = [out / "series.npz", out / "series.pvd"]
+    if not args.no_pictures:
+        from jaxnet.io import plot
 
-    plot.save_run_png(out / "run.png", scene, run.times, run.positions, run.figures, title=label)
-    print(f"  wrote {out / 'series.npz'}, {out / 'series.pvd'}, {out / 'run.png'}")
-    return 0
+        plot.save_run_png(out / "run.png", scene, run.times, run.positions, run.figures, title=label)
+        written.append(out / "run.png")
+    print(f"  wrote {', '.join(str(p) for p in written)}")
+    return OK
 
 
 def argument_parser() -> argparse.ArgumentParser:
-    """The command line's parser (``jaxnet run ...``)."""
-    from jaxnet.scenes import BUILT_IN, DEFAULT, DYNAMIC
-    from jaxnet.solve.options import Implicit
+    """The command line's parser (``jaxnet run ...``). Building it imports neither JAX nor the physics."""
+    from jaxnet.catalogue import BUILT_IN, DEFAULT, DYNAMIC, DYNAMIC_DEFAULT
 
     import jaxnet
 
@@ -320,17 +559,21 @@ def argument_parser() -> argparse.ArgumentParser:
         "Reads jaxnet scene files and FEMNET cases (.don).")
     parser.add_argument("--version", action="version", version=f"jaxnet {jaxnet.__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
-    listing = "; ".join(f"{name}: {text}" for name, (_, text) in BUILT_IN.items())
+    listing = "; ".join(f"{name}: {b.description}" for name, b in BUILT_IN.items())
+    moving = "; ".join(f"{name}: {b.description}" for name, b in DYNAMIC.items())
     run = sub.add_parser("run", help="solve a scene (a built-in scene if no file is given)",
-                         description=f"Built-in scenes ({DEFAULT} by default): {listing}.")
+                         description=f"Built-in scenes ({DEFAULT} by default): {listing}. In time (--dynamic, "
+                                     f"{DYNAMIC_DEFAULT} by default): {moving}. Exit status 0 converged, 1 a failed "
+                                     "solve (its last state written), 2 bad input, 130 stopped by Ctrl-C.")
     run.add_argument("scene", nargs="?", help="scene file (.json or .toml) or FEMNET case (.don)")
     run.add_argument("--mesh", help="with a FEMNET case: solve on FEMNET's mesh (CASE.mdg) instead of jaxnet's")
     run.add_argument("--start", help="with --mesh: start from FEMNET's node positions in this .sta, held nodes too "
                      "(its equilibrium on that mesh, where its dyna starts; or an earlier case's, as its phobos does)")
     run.add_argument("--refine", type=float, help="with a FEMNET case: mesh it this many times finer than its file "
                                                   "says (nodes grow about as its square; for mesh convergence)")
-    run.add_argument("--scene", dest="builtin", choices=sorted(set(BUILT_IN) | set(DYNAMIC)), default=DEFAULT,
-                     help=f"built-in scene to solve when no file is given (default: {DEFAULT})")
+    run.add_argument("--scene", dest="builtin", choices=sorted(set(BUILT_IN) | set(DYNAMIC)),
+                     help=f"built-in scene to solve when no file is given (default: {DEFAULT}; with --dynamic "
+                          f"{DYNAMIC_DEFAULT})")
     run.add_argument("--set", action="append", metavar="KEY=VALUE",
                      help="change a number of the built-in scene (repeatable), e.g. --set current=0.8 --set step=0.3; "
                           "an unknown KEY lists the scene's")
@@ -338,6 +581,9 @@ def argument_parser() -> argparse.ArgumentParser:
     run.add_argument("--tol", type=float, help="convergence threshold on the largest nodal force (N)")
     run.add_argument("--max-iter", type=int, dest="max_iter", help="maximum Newton iterations")
     run.add_argument("--quiet", action="store_true", help="no per-iteration progress lines")
+    run.add_argument("--no-pictures", action="store_true", dest="no_pictures",
+                     help="write the answer only (result.json, ParaView's files), no net.png, net.html or run.png: "
+                          "for batch work (jaxnet show DIR draws them later)")
     run.add_argument("--stiffness", choices=("autodiff", "closed_form"),
                      help="the tangent's path: closed_form (the default: the book's hand-derived stiffness where a "
                           "term has one; docs/errata.md) or autodiff (jax.jacfwd of every term, the reference); the "
@@ -346,16 +592,20 @@ def argument_parser() -> argparse.ArgumentParser:
                      help="with a FEMNET case: jaxnet's own laws (the book's, corrected) where FEMNET's differ (knot "
                           "contact, netting drag with a catch: docs/errata.md), instead of FEMNET's")
     run.add_argument("--dynamic", action="store_true",
-                     help="run in time (implicit dynamics) from the static equilibrium; built-in default: cage_waves")
+                     help="run in time (implicit dynamics) from the static equilibrium; built-in default: "
+                          f"{DYNAMIC_DEFAULT}")
     run.add_argument("--end", type=float, help="with --dynamic: end time (s)")
-    run.add_argument("--dt", type=float,
-                     help=f"with --dynamic: time step (s), default {Implicit.time_step:g} or the case's")
+    run.add_argument("--dt", type=float, help="with --dynamic: time step (s), default the case's, else "
+                                              "jaxnet.Implicit's")
     run.add_argument("--loop", choices=("auto", "host", "compiled"),
                      help="with --dynamic: who drives the steps (jaxnet.solve.options.Implicit.loop): host (its "
                      "programs kept on disk, reused by the next run and --resume), compiled (one program, compiled "
                      "by every run, cheaper per step), or auto (default: compiled for a run of many steps)")
     run.add_argument("--record", type=float, help="with --dynamic: time between records (s), default every step")
     run.add_argument("--resume", action="store_true", help="with --dynamic: continue the run in --out from its last record")
+    run.add_argument("--cache", help=f"directory of compiled programs kept between runs (default: "
+                                     f"$XDG_CACHE_HOME/jaxnet or ~/.cache/jaxnet)")
+    run.add_argument("--no-cache", action="store_true", dest="no_cache", help="compile everything afresh, keep nothing")
     export = sub.add_parser("export", help="write a built-in scene as a scene file to edit",
                             description="Write a built-in scene (its numbers changed by --set) as a scene file "
                                         "(.toml or .json) to edit and run with jaxnet run FILE.")
@@ -364,36 +614,42 @@ def argument_parser() -> argparse.ArgumentParser:
                         help=f"the built-in scene (default: {DEFAULT})")
     export.add_argument("--set", action="append", metavar="KEY=VALUE",
                         help="change a number of the built-in scene first (repeatable), as jaxnet run --set")
+    export.add_argument("--force", action="store_true", help="overwrite the file if it exists")
     show = sub.add_parser("show", help="redraw the pictures of a run without solving",
                           description="Draw the pictures of a run again from the files it wrote in DIR "
                                       "(result.json and net.vtu of a static run, the records of a run in time).")
     show.add_argument("directory", help="the run's output directory (jaxnet run --out DIR)")
-    default_cache = pathlib.Path(os.environ.get("XDG_CACHE_HOME") or pathlib.Path.home() / ".cache") / "jaxnet"
-    run.add_argument("--cache", default=str(default_cache),
-                     help=f"directory of compiled programs kept between runs (default: {default_cache})")
-    run.add_argument("--no-cache", action="store_true", dest="no_cache", help="compile everything afresh, keep nothing")
     return parser
 
 
 def _export(args):
-    """``jaxnet export --scene NAME [--set KEY=VALUE ...] FILE``: a built-in scene (its numbers changed by ``--set``)
-    written as a scene file (.toml or .json) to edit and run (:func:`jaxnet.io.scene_file.write`)."""
-    from jaxnet.io import scene_file
-    from jaxnet.scene import SceneError
-    from jaxnet.scenes import BUILT_IN, DYNAMIC
+    """``jaxnet export --scene NAME [--set KEY=VALUE ...] [--force] FILE``: a built-in scene (its numbers changed by
+    ``--set``) written as a scene file (.toml or .json) to edit and run (:func:`jaxnet.io.scene_file.write`); an
+    existing FILE is kept unless ``--force``."""
+    from jaxnet.catalogue import BUILT_IN, DYNAMIC
 
     scenes = {**BUILT_IN, **DYNAMIC}
-    if args.builtin not in scenes:
-        raise SceneError(f"export: no built-in scene '{args.builtin}' (there are: {', '.join(scenes)})")
-    make, description = scenes[args.builtin]
+    path = pathlib.Path(args.path)
+    if path.suffix not in (".toml", ".json"):
+        raise CommandError(f"{path}: a scene file is .toml or .json")
+    if path.is_dir():
+        raise CommandError(f"{path} is a directory; give the scene file's name (e.g. {path / 'scene.toml'})")
+    if path.exists() and not args.force:
+        raise CommandError(f"{path} exists: give another name, or --force to overwrite it")
+    problem = directory_problem(path.parent)
+    if problem is not None:
+        raise CommandError(f"cannot write {path}: {problem}")
+    make = scenes[args.builtin].make()
     case = make(**built_in_arguments(make, args.builtin, args.set or []))
-    path = scene_file.write(args.path, case)
-    print(f"jaxnet: wrote the built-in scene '{args.builtin}' ({description}) to {path}; run it with: "
-          f"jaxnet run {path}")
+    from jaxnet.io import scene_file
+
+    written = scene_file.write(path, case)
+    print(f"jaxnet: wrote the built-in scene '{args.builtin}' ({case.label}) to {written}; run it with: "
+          f"jaxnet run {written}")
     if case.time is not None:
         print("  its time settings (end, steps, records, prescribed motions) are not in the file: give them to "
               "jaxnet run --dynamic (--end, --dt, --record)")
-    return 0
+    return OK
 
 
 #: the file in a run's directory that says what ran: the command line and where it ran from (``jaxnet show``)
@@ -416,21 +672,26 @@ def _show(args):
     import numpy as np
 
     from jaxnet.io import plot, timeseries
-    from jaxnet.scene import SceneError
 
     directory = pathlib.Path(args.directory)
+    if not directory.is_dir():
+        raise CommandError(f"show: {directory} is not a directory (the output directory of jaxnet run --out DIR)")
     recorded = directory / COMMAND
     if not recorded.exists():
-        raise SceneError(f"show: {directory} holds no {COMMAND}: it is not the output directory of a jaxnet run "
-                         f"(jaxnet run --out DIR), or of one older than the command")
-    command = json.loads(recorded.read_text())
-    ran = argument_parser().parse_args(command["argv"])
-    ran.argv = command["argv"]
+        raise CommandError(f"show: {directory} holds no {COMMAND}: it is not the output directory of a jaxnet run "
+                           f"(jaxnet run --out DIR), or of one older than the command")
+    try:
+        command = json.loads(recorded.read_text())
+        argv = list(command["argv"])
+    except (json.JSONDecodeError, KeyError, TypeError) as err:
+        raise CommandError(f"show: {recorded} is not the record of a run's command ({err})") from None
+    ran = argument_parser().parse_args(argv)
+    ran.argv = argv
     for name in ("scene", "mesh", "start"):  # files named relative to where the run was started
         value = getattr(ran, name, None)
         if value is not None and not pathlib.Path(value).is_absolute():
             setattr(ran, name, str(pathlib.Path(command["cwd"]) / value))
-    case, label = _case(ran, dynamic=ran.dynamic)
+    case, label = case_of(ran, dynamic=ran.dynamic)
     scene = case.scene
     written = []
     if ran.dynamic:
@@ -445,8 +706,8 @@ def _show(args):
         mesh = meshio.read(directory / "net.vtu")
         x = np.asarray(mesh.points, dtype=float)
         if x.shape != (scene.n_nodes, 3):
-            raise SceneError(f"show: {directory / 'net.vtu'} holds {x.shape[0]} nodes but {label} has "
-                             f"{scene.n_nodes}: the scene changed since the run")
+            raise CommandError(f"show: {directory / 'net.vtu'} holds {x.shape[0]} nodes but {label} has "
+                               f"{scene.n_nodes}: the scene changed since the run")
         cells = {k: np.concatenate(v) for k, v in mesh.cell_data.items()}
         triangles = 0 if scene.netting is None else scene.netting.vertices.shape[0]
         tensions = {}
@@ -455,25 +716,55 @@ def _show(args):
                                                   cells["twine_tension_V_N"][:triangles]], axis=1)
         if scene.bars is not None and "bar_tension_N" in cells:
             tensions["bar_tension"] = cells["bar_tension_N"][-scene.bars.ends.shape[0]:]
-        result = json.loads((directory / "result.json").read_text()) if (directory / "result.json").exists() else {}
+        try:
+            result = json.loads((directory / "result.json").read_text()) if (directory / "result.json").exists() else {}
+        except json.JSONDecodeError as err:
+            raise CommandError(f"show: {directory / 'result.json'} is not JSON ({err}): the run's answer is "
+                               "damaged") from None
         path = directory / "net.png"
         plot.save_png(path, scene, x, title=label, catch_front=result.get("catch", {}).get("front_m"), **tensions)
         written.append(path)
+        if result:
+            from jaxnet.io import page
+
+            page.write_html(directory / "net.html", scene, x, result=result, title=label, **tensions)
+            written.append(directory / "net.html")
     print(f"jaxnet: drew {', '.join(str(p) for p in written)} from the run in {directory} ({label})")
-    return 0
+    return OK
+
+
+def _bad_input_error(err) -> bool:
+    """Whether ``err`` is the physics' bad-input error (:class:`jaxnet.scene.SceneError`), without importing the
+    physics to ask: where it was never imported, nothing raised one."""
+    scene = sys.modules.get("jaxnet.scene")
+    return scene is not None and isinstance(err, scene.SceneError)
 
 
 def main(argv=None):
-    from jaxnet.scene import SceneError
-
+    """Run the command line ``argv`` (default ``sys.argv[1:]``); returns the exit status (:data:`OK`,
+    :data:`FAILED`, :data:`BAD_INPUT`, :data:`STOPPED`). A user's mistake (a bad file, key or option, a path that
+    cannot be read or written) is one line naming it, never a traceback."""
     args = argument_parser().parse_args(argv)
     args.argv = list(sys.argv[1:] if argv is None else argv)  # what a stopped run's hint repeats
-
     try:
         return {"run": _run, "export": _export, "show": _show}[args.command](args)
-    except SceneError as err:
+    except CommandError as err:
         print(f"jaxnet: bad input: {err}", file=sys.stderr)
-        return 2
+        return BAD_INPUT
+    except KeyboardInterrupt:
+        print("jaxnet: stopped (Ctrl-C)", file=sys.stderr)
+        return STOPPED
+    except OSError as err:
+        # a file that could not be read or written while running: named, with the system's reason
+        where = f" {err.filename}" if err.filename else ""
+        what = "disk full" if err.errno == errno.ENOSPC else _reason(err)
+        print(f"jaxnet: bad input: cannot use{where}: {what}", file=sys.stderr)
+        return BAD_INPUT
+    except Exception as err:
+        if _bad_input_error(err):
+            print(f"jaxnet: bad input: {err}", file=sys.stderr)
+            return BAD_INPUT
+        raise
 
 
 if __name__ == "__main__":

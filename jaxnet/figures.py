@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 import datetime
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -52,6 +53,86 @@ def bar_tensions(scene, x):
         return np.zeros(0)
     args = (np.asarray(x, dtype=float), bars.ends, bars.rest_length, bars.ea_traction, bars.ea_compression)
     return np.asarray(programs.obtain("bar_tensions", _bar_tensions_jit, args)(*args))
+
+
+class NetFigures(NamedTuple):
+    """Every figure of a net at its positions that the outputs of a run read (result.json, ParaView's files, the
+    pictures and the page), computed together by one compiled program (:func:`net_figures`).
+
+    twine_tension: (E, 2) N, the U and V twines of every diamond netting triangle; opening_angle: (E,) rad, its
+    meshes' opening angle; hexagonal_tension: (H, 3) N, the l, m, n twines of every hexagonal triangle;
+    bar_tension: (B,) N, every cable bar; element_forces: per active term of a result group (the external forces:
+    drag, catch, weight and buoyancy, applied forces, the sea bed; not the internal ones, twines and bars, mesh
+    opening, knots, bending, which sum to zero over the net), (E, k, 3) N, the force each element of its family
+    exerts on each of its vertices (:func:`jaxnet.assemble.forces_by_element`); nodal_forces: per such term,
+    (N, 3) N, those forces summed onto the nodes."""
+
+    twine_tension: np.ndarray
+    opening_angle: np.ndarray
+    hexagonal_tension: np.ndarray
+    bar_tension: np.ndarray
+    element_forces: dict
+    nodal_forces: dict
+
+
+def _net_figures(x, scene, model):
+    """:class:`NetFigures`' arrays at positions x, in one program (``model``: the active terms whose forces it
+    computes, static)."""
+    out = {"element_forces": assemble.forces_by_element(x, scene, model)}
+    net, bars, hexagonal = scene.netting, scene.bars, scene.hexagonal
+    if net is not None:
+        out["twine_tension"] = _netting_tensions(x, net.vertices, net.uv, net.l0, net.ea_traction, net.ea_compression)
+        out["opening_angle"] = _opening_angles(x, net.vertices, net.uv)
+    if bars is not None:
+        out["bar_tension"] = _bar_tensions(x, bars.ends, bars.rest_length, bars.ea_traction, bars.ea_compression)
+    if hexagonal is not None:
+        out["hexagonal_tension"] = _hexagonal_tensions(x, hexagonal.vertices, hexagonal.uv, hexagonal.l0,
+                                                       hexagonal.ea_traction, hexagonal.ea_compression)
+    return out
+
+
+def _figures_program(scene, x, forces):
+    """The compiled program of :func:`net_figures` for ``scene``'s shape, its arguments and the terms it computes
+    the forces of."""
+    model = tuple(t for t in model_lib.active_terms(scene) if t.term.group is not None) if forces else ()
+    args = (np.asarray(x, dtype=float), scene)
+    return programs.obtain("net_figures", _net_figures_jit, args, {"model": model}), args, model
+
+
+def prepare_figures(scene, forces=True):
+    """Obtain the program of :func:`net_figures` for ``scene`` now (load it from disk or compile it), without
+    running it, so that a later :func:`net_figures` of the same scene finds it in memory: the command line calls
+    it in a thread of its own while the solver iterates, which then leaves the figures little more than their
+    arithmetic to wait for."""
+    _figures_program(scene, scene.nodes.position, forces)
+
+
+def net_figures(scene, x, forces=True) -> NetFigures:
+    """The :class:`NetFigures` of ``scene`` at positions x (N, 3) (m), by one compiled program kept by
+    :mod:`jaxnet.solve.programs` (on disk where the solver's are): what a run's outputs read, computed once and
+    handed to each of them (:func:`summary`'s and :func:`jaxnet.io.vtk.write_vtu`'s ``figures``, the pictures'
+    tensions), where computing each figure on its own would compile a program for each. The forces are those of
+    the terms in a result group (:attr:`jaxnet.terms.term.Term.group`): the internal terms, whose stiffness makes
+    most of a solver's program, are left out; a reaction is the solve's own out-of-balance force
+    (:meth:`jaxnet.solve.results.Equilibrium.reaction`). ``forces=False``: the tensions and angles only (the
+    forces by term empty), for a record of a run in time."""
+    program, args, model = _figures_program(scene, x, forces)
+    raw = jax.device_get(program(*args))
+    n = scene.n_nodes
+    nodal = {}
+    for term in model:
+        per_element = np.asarray(raw["element_forces"][term.name])
+        conn = np.asarray(assemble.connectivity(scene, term.term.family))
+        total = np.zeros((n, 3))
+        np.add.at(total, conn.ravel(), per_element.reshape(-1, 3))
+        nodal[term.name] = total
+    empty = np.zeros((0,))
+    return NetFigures(
+        twine_tension=np.asarray(raw.get("twine_tension", np.zeros((0, 2)))),
+        opening_angle=np.asarray(raw.get("opening_angle", empty)),
+        hexagonal_tension=np.asarray(raw.get("hexagonal_tension", np.zeros((0, 3)))),
+        bar_tension=np.asarray(raw.get("bar_tension", empty)),
+        element_forces={k: np.asarray(v) for k, v in raw["element_forces"].items()}, nodal_forces=nodal)
 
 
 def total_load(scene):
@@ -303,33 +384,102 @@ def _catch_parts(report, copies):
     }
 
 
-def summary(scene, eq, *, case=None, source=None, solver=None):
+#: one line on each of result.json's main figures, written into the file as its ``about`` (docs/result.md has
+#: the whole schema)
+ABOUT = {
+    "reaction_N": "the force the fixings exert on the net (N, [x, y, z]), the symmetry planes' holding included",
+    "load_N": "every force on the net that is not the water's: weight and buoyancy, forces applied to nodes, the sea "
+              "bed, a catch's weight (N); reaction_N + load_N + water_N = 0 at the equilibrium",
+    "water_N": "the water's forces on the net: drag of the netting, cables and nodes, and the catch's pressure (N)",
+    "forces_N": "the force of each group of terms on the net (N); load_N and water_N are their sums",
+    "weight_and_buoyancy_by_carrier_N": "forces_N.weight_and_buoyancy_N split by what carries it: the netting, each "
+                                        "cable, the sinkers (lumped masses heavier than the water they displace) "
+                                        "and the floats (lighter) (N; - along up is weight, + buoyancy)",
+    "max_twine_tension_N": "the largest tension of a netting twine (N), the top of net.png's colour bar",
+    "max_bar_tension_N": "the largest tension of a cable bar (N)",
+    "residual_N": "the largest out-of-balance force left on a node (N): how far from equilibrium the answer is",
+    "whole_net": "the force figures of the whole net, the modelled part and its mirror images (present only for a "
+                 "model with symmetry planes)",
+}
+
+
+def weight_by_carrier(scene, element_forces):
+    """The weight and buoyancy of the net (N, (3,) each) by what carries it, from ``element_forces`` (per term,
+    (E, k, 3) N: :attr:`NetFigures.element_forces`): ``"netting"``, ``"hexagonal netting"``, each cable by its name
+    (:attr:`jaxnet.scene.Scene.cable_names`), ``"sinkers"`` (the lumped masses whose weight exceeds their buoyancy:
+    sinkers, clump weights) and ``"floats"`` (those lighter than the water they displace: floats, buoys); only the
+    carriers present, in that order. They sum to the ``weight_and_buoyancy_N`` group of :func:`force_breakdown`,
+    whose terms they split: the constant loads of a net under water and the energies of the heights of what
+    floats at a free surface alike."""
+    weight_terms = term_lib.groups().get(term_lib.WEIGHT.name, ())
+    families = {t.name: t.family for t in term_lib.registered()}
+    out = {}
+
+    def add(name, force):
+        out[name] = out.get(name, np.zeros(3)) + force
+
+    for name in weight_terms:
+        if name not in element_forces:
+            continue
+        per_element = np.asarray(element_forces[name]).sum(axis=1)        # (E, 3) N
+        family = families[name]
+        if family == "netting":
+            add("netting", per_element.sum(axis=0))
+        elif family == "hexagonal":
+            add("hexagonal netting", per_element.sum(axis=0))
+        elif family == "bars":
+            cable = np.asarray(scene.bars.cable)
+            for c in np.unique(cable):
+                label = scene.cable_names[c] if c < len(scene.cable_names) else f"cable {c}"
+                add(label, per_element[cable == c].sum(axis=0))
+        elif family == "nodes":
+            lumped = np.asarray(scene.nodes.mass) - float(scene.environment.water_density) * np.asarray(scene.nodes.volume)
+            for label, rows in (("sinkers", lumped > 0), ("floats", lumped < 0)):
+                if rows.any():
+                    add(label, per_element[rows].sum(axis=0))
+        else:
+            add(family, per_element.sum(axis=0))
+    order = ["netting", "hexagonal netting", *scene.cable_names, "sinkers", "floats"]
+    ranked = sorted(out, key=lambda k: order.index(k) if k in order else len(order))
+    return {k: out[k] for k in ranked if np.any(out[k] != 0) or k in ("sinkers", "floats")}
+
+
+def summary(scene, eq, *, case=None, source=None, solver=None, figures=None):
     """The figures of ``result.json`` (``docs/result.md``: every key, its unit, the balance they obey).
 
     scene, eq: the scene solved and its :class:`~jaxnet.solve.results.Equilibrium`. case: the
     :class:`~jaxnet.case.Case` it came from, for its label (and solver options where ``solver`` is not given);
-    source: the file read (a path), None for a built-in scene or a scene made in Python; solver: the
-    :class:`~jaxnet.solve.options.Newton` options the solve ran with (the case's with the command line's changes).
+    source: what was solved: the file read (a path), a built-in scene's name (``"built-in scene 'cage'"``), None
+    for a scene made in Python; solver: the :class:`~jaxnet.solve.options.Newton` options the solve ran with (the
+    case's with the command line's changes); figures: the :class:`NetFigures` at the equilibrium when already
+    computed (the command line hands the same to every output), else computed here.
     Recorded under ``inputs`` with the scene's environment, catches and symmetry planes, so that a result says
     what it is a result of.
 
-    The force figures (``reaction_N``, ``load_N``, ``forces_N``) are of the modelled part; ``whole_net`` holds
-    them for the whole net (the mirrored copies of a model with symmetry planes: ``copies`` 1 for a whole net).
-    ``load_N`` is the total of the groups that are not the water's (weight and buoyancy, external forces, the sea
-    bed, a catch's weight) at the equilibrium, so that ``reaction_N + load_N + the hydrodynamic groups = 0`` to
-    the residual, with a free surface too (where weight is an energy of the positions, not a constant load).
+    The force figures (``reaction_N``, ``load_N``, ``water_N``, ``forces_N``) are of the modelled part; for a
+    model with symmetry planes ``whole_net`` holds them for the whole net (its mirrored copies). ``load_N`` is the
+    total of the groups that are not the water's (weight and buoyancy, external forces, the sea bed, a catch's
+    weight) at the equilibrium, ``water_N`` that of the water's (the hydrodynamic groups), so that ``reaction_N +
+    load_N + water_N = 0`` to the residual, with a free surface too (where weight is an energy of the positions,
+    not a constant load). ``weight_and_buoyancy_by_carrier_N`` splits the weight and buoyancy by what carries it
+    (:func:`weight_by_carrier`); ``about`` says in a line what the main figures are (:data:`ABOUT`).
     Plain JSON values throughout: a non-finite number (a failed solve's NaN residual) is null.
     """
     import jaxnet  # its version (a module-level import would be circular: jaxnet imports the readers)
 
     x = np.asarray(eq.x, dtype=float)
+    figures = net_figures(scene, x) if figures is None else figures
     reaction = eq.reaction(scene).sum(axis=0)
-    tw = twine_tensions(scene, x)
-    bt = bar_tensions(scene, x)
+    tw, bt = figures.twine_tension, figures.bar_tension
     hist = np.asarray(eq.history)
-    forces = force_breakdown(scene, x)
+    forces = force_breakdown(scene, x, figures.nodal_forces)
     loads = term_lib.groups(lambda group, term: not group.hydrodynamic)
     load = np.sum([forces[g] for g in loads] or [np.zeros(3)], axis=0)
+    water = np.sum([forces[g] for g in forces if g not in loads] or [np.zeros(3)], axis=0)
+    # a carrier whose weight is rounding beside the forces on the net (a rope as dense as the water) is left out
+    scale = float(np.linalg.norm(reaction) + np.linalg.norm(load) + np.linalg.norm(water))
+    carriers = {k: v for k, v in weight_by_carrier(scene, figures.element_forces).items()
+                if np.linalg.norm(v) > 1e-12 * scale}
     worst = int(eq.worst_node)
     out = {
         "jaxnet_version": jaxnet.__version__,
@@ -349,6 +499,8 @@ def summary(scene, eq, *, case=None, source=None, solver=None):
         "modelled_part": _modelled_part(scene),
         "reaction_N": reaction.tolist(),
         "load_N": load.tolist(),
+        "water_N": water.tolist(),
+        "weight_and_buoyancy_by_carrier_N": {k: v.tolist() for k, v in carriers.items()},
         "max_twine_tension_N": float(tw.max()) if tw.size else 0.0,
         "max_bar_tension_N": float(bt.max()) if bt.size else 0.0,
         "bounding_box_m": [x.min(axis=0).tolist(), x.max(axis=0).tolist()],
@@ -360,6 +512,7 @@ def summary(scene, eq, *, case=None, source=None, solver=None):
         "copies": scene_lib.mirror_copies(scene),
         "reaction_N": _whole(signs, reaction).tolist(),
         "load_N": _whole(signs, load).tolist(),
+        "water_N": _whole(signs, water).tolist(),
         "forces_N": {k: _whole(signs, v).tolist() for k, v in forces.items()},
         "bounding_box_m": [images.min(axis=0).tolist(), images.max(axis=0).tolist()],
     }
@@ -367,7 +520,8 @@ def summary(scene, eq, *, case=None, source=None, solver=None):
     if volume is not None:
         out["enclosed_volume_m3"] = volume
         whole["enclosed_volume_m3"] = whole["copies"] * volume
-    out["whole_net"] = whole
+    if whole["copies"] > 1:   # a whole net's figures are the top level's: not repeated
+        out["whole_net"] = whole
     report = catch_report(scene, x)
     if report is not None:
         out["catch"] = _catch_parts(report, float(scene.catch.symmetry))
@@ -376,6 +530,7 @@ def summary(scene, eq, *, case=None, source=None, solver=None):
         copies = float(scene.panel_catches.symmetry)
         out["panel_catches"] = [{"panels": p["panels"], **_catch_parts(p, copies)} for p in panels]
     out["inputs"] = _inputs(scene, case, source, solver)
+    out["about"] = {k: v for k, v in ABOUT.items() if k in out}
     if eq.timing is not None:
         out["wall_s"] = float(eq.timing.wall_s)
         out["compile_s"] = float(eq.timing.compile_s)
@@ -455,3 +610,6 @@ def hexagonal_twine_tensions(scene, x):
     args = (np.asarray(x, dtype=float), hexagonal.vertices, hexagonal.uv, hexagonal.l0, hexagonal.ea_traction,
             hexagonal.ea_compression)
     return np.asarray(programs.obtain("hexagonal_twine_tensions", _hexagonal_tensions_jit, args)(*args))
+
+
+_net_figures_jit = programs.jit(_net_figures, static_argnames="model")

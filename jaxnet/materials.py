@@ -8,12 +8,22 @@ that fill a family themselves (FEMNET's ``.mdg`` mesh) both use them, so the map
 
 Units: m, N, kg/m³; drag coefficients dimensionless; stiffnesses of the mesh opening and knots in N·m/rad,
 of bending in N·m².
+
+A material checks its stiffnesses when it is made (:class:`MaterialError`, a :class:`~jaxnet.scene.SceneError`
+naming the material, the parameter and its value): a traction stiffness EA must be > 0 (twines or a rope without
+it hold nothing: the net is a mechanism, which a solve would only report as a step that lowers no energy); a
+compression, opening, knot or bending stiffness must be >= 0 (0: none, a twine that goes slack in compression,
+meshes that open freely, ...). :func:`check` checks all its parameters (lengths, diameters, coefficients, the
+names of its laws): what :meth:`~jaxnet.net.Net.panel` and :meth:`~jaxnet.net.Net.cable` ask of the material
+they are given, and a scene file of each material table it reads.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import difflib
 
+import jax
 import numpy as np
 
 from jaxnet.scene import SceneError
@@ -76,6 +86,9 @@ class Twine:
     bending_stiffness: float = 0.0
     tarp_cd: float = 0.0
 
+    def __post_init__(self):
+        _check_stiffnesses(self)
+
 
 @dataclasses.dataclass(frozen=True)
 class Rope:
@@ -96,6 +109,9 @@ class Rope:
     tangential_ratio: float = 0.08
     bending_stiffness: float = 0.0
 
+    def __post_init__(self):
+        _check_stiffnesses(self)
+
 
 @dataclasses.dataclass(frozen=True)
 class HexTwine:
@@ -111,6 +127,9 @@ class HexTwine:
     diameter: float
     ea_compression: float | tuple = 0.0
     density: float = 1140.0
+
+    def __post_init__(self):
+        _check_stiffnesses(self)
 
     def per_family(self, name):
         value = np.broadcast_to(np.asarray(getattr(self, name), dtype=float), (3,))
@@ -166,10 +185,91 @@ def bar_rows(ropes, material) -> dict:
     return {k: np.array([c[k] for c in columns])[material] for k in columns[0]}
 
 
-def check_material(material, what, fields, positive=()):
-    """SceneError naming ``what`` unless the ``fields`` of ``material`` are finite and >= 0 (> 0 for those in
-    ``positive``)."""
-    for f in fields:
-        v = getattr(material, f)
-        if not np.isfinite(v) or v < 0 or (f in positive and v == 0):
-            raise SceneError(f"{what}: {f} must be {'> 0' if f in positive else '>= 0'}, got {v!r}")
+class MaterialError(SceneError):
+    """A parameter of a material out of its range. ``parameter``: the field's name ("ea"); ``problem``: what is
+    wrong, in words that start with the parameter ("ea must be > 0, got 0.0 (traction stiffness EA, N)"), for a
+    caller to say whose material it is (a panel, a scene file's table); the message names the material's class."""
+
+    def __init__(self, material, parameter, problem):
+        super().__init__(f"{type(material).__name__}: {problem}")
+        self.parameter, self.problem = parameter, problem
+
+
+#: a material's stiffnesses: (field, > 0 required, what it is). A traction stiffness of 0 leaves the twines or the
+#: rope holding nothing; the others may be 0 (none)
+STIFFNESSES = (("ea", True, "traction stiffness EA, N"),
+               ("ea_compression", False, "compression stiffness, N; 0: slack in compression"),
+               ("opening_stiffness", False, "mesh opening stiffness, N·m/rad"),
+               ("knot_stiffness", False, "knot contact stiffness, N·m/rad"),
+               ("bending_stiffness", False, "flexural stiffness EI, N·m²"))
+#: the other numbers of a material, finite and >= 0 (l0 > 0)
+_AMOUNTS = ("l0", "diameter", "density", "cd_normal", "tangential_ratio", "knot_size", "tarp_cd")
+
+
+def _values(value):
+    """A material's number, or its numbers per twine family, as a 1-D float array; None for a traced value (a
+    material made inside a JAX transformation is checked by the scene's own checks instead)."""
+    if any(isinstance(v, jax.core.Tracer) for v in jax.tree_util.tree_leaves(value)):
+        return None
+    try:
+        return np.atleast_1d(np.asarray(value, dtype=float)).ravel()
+    except (TypeError, ValueError):
+        return np.array([np.nan])
+
+
+def _check_range(material, name, positive, what=""):
+    """MaterialError unless the field ``name`` of ``material`` is finite and >= 0 (> 0 if ``positive``), per twine
+    family where it has one value per family."""
+    value = getattr(material, name)
+    values = _values(value)
+    if values is None or (np.all(np.isfinite(values)) and np.all(values > 0 if positive else values >= 0)):
+        return
+    several = isinstance(value, (tuple, list, np.ndarray)) and np.size(value) > 1
+    family = " per twine family (l, m, n)" if several else ""
+    shown = values.tolist() if family else (value.item() if isinstance(value, np.generic) else value)
+    raise MaterialError(material, name, f"{name} must be {'> 0' if positive else '>= 0'}{family}, got {shown!r}"
+                                        + (f" ({what})" if what else ""))
+
+
+def _check_stiffnesses(material):
+    """What a material checks when it is made: its stiffnesses (:data:`STIFFNESSES`), those it has."""
+    names = {f.name for f in dataclasses.fields(material)}
+    for name, positive, what in STIFFNESSES:
+        if name in names and not (name == "knot_stiffness" and material.knot_stiffness is None):
+            _check_range(material, name, positive, what)
+
+
+def check(material):
+    """:class:`MaterialError` naming the first parameter of ``material`` (a :class:`Twine`, :class:`HexTwine` or
+    :class:`Rope`) out of its range: its stiffnesses (:data:`STIFFNESSES`), its unstretched length (> 0), its
+    diameter, density and drag coefficients, knot size and tarp coefficient (finite, >= 0); a twine's drag model
+    and knot law among those there are, its rest angle in (0, pi/2] rad, and a tarp only with a drag model of
+    twines (a screen model has no twines whose drag the tarp's pressure replaces)."""
+    if not isinstance(material, (Twine, HexTwine, Rope)):
+        raise SceneError(f"expected a jaxnet material (Twine, HexTwine or Rope), got {material!r}")
+    _check_stiffnesses(material)
+    names = {f.name for f in dataclasses.fields(material)}
+    for name in _AMOUNTS:
+        if name in names:
+            _check_range(material, name, name == "l0")
+    if not isinstance(material, Twine):
+        return
+    for name, names in (("drag_model", DRAG_MODELS), ("knot_form", KNOT_FORMS)):
+        value = getattr(material, name)
+        if value not in names:
+            raise MaterialError(material, name, f"{name} must be one of {sorted(names)}, got {value!r}"
+                                                f"{_nearest(value, names)}")
+    angle = _values(material.rest_angle)
+    if angle is not None and not (0.0 < angle[0] <= np.pi / 2):
+        raise MaterialError(material, "rest_angle", "rest_angle (half opening angle, rad) must be in (0, pi/2], got "
+                                                    f"{material.rest_angle!r}")
+    if material.tarp_cd > 0 and not NETTING_DRAG_MODELS[DRAG_MODELS[material.drag_model]].twines:
+        raise MaterialError(material, "drag_model", f"a tarp (tarp_cd {material.tarp_cd!r}) replaces the drag of its "
+                                                    f"twines; drag_model {material.drag_model!r} is a screen model "
+                                                    "(use 'twines' or 'femnet-catch')")
+
+
+def _nearest(word, names):
+    """The hint ``" (did you mean 'NAME'?)"`` for the name of ``names`` nearest a misspelt ``word``, or ""."""
+    close = difflib.get_close_matches(str(word), list(names), n=1) if isinstance(word, str) else []
+    return f" (did you mean {close[0]!r}?)" if close else ""

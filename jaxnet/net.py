@@ -28,7 +28,7 @@ Joining rules (decided in :meth:`Net.build`):
     where they share a node: the angle between them resists change from ``neutral_angle``
     (:mod:`jaxnet.terms.cable_bending`).
 
-What is attached to nodes: ``attach`` (and ``sinker``, ``float_``) *shares* a mass, volume, force or drag
+What is attached to nodes: ``attach`` (and ``sinker``, ``float``) *shares* a mass, volume, force or drag
 area among the nodes of a reference and adds up over calls; ``body`` (a box-shaped body with a drag per
 axis) and ``limit`` (a floor or ceiling per axis, the sea bed) are FEMNET's node-type properties, *given* to
 every node of a reference, a later call replacing an earlier one on the nodes they share.
@@ -37,11 +37,12 @@ every node of a reference, a later call replacing an earlier one on the nodes th
 from __future__ import annotations
 
 import dataclasses
+import warnings
 
 import numpy as np
 
-from jaxnet.materials import DRAG_MODELS, KNOT_FORMS, HexTwine, Rope, Twine, bar_columns, check_material, netting_rows
-from jaxnet.terms.drag import NETTING_DRAG_MODELS
+from jaxnet import materials
+from jaxnet.materials import HexTwine, Rope, Twine, bar_columns, netting_rows
 from jaxnet.mesh.hinges import netting_hinges
 from jaxnet.mesh.joining import NodeJoiner
 from jaxnet.mesh.panel import lattice_divisions, mesh_panel
@@ -64,7 +65,7 @@ class Layout:
     attached: per :meth:`Net.attach` call (sinkers and floats included), the scene nodes sharing its amounts;
       attached_where: the reference of each call.
     sinkers: (attach call index, mass kg, density kg/m³) per :meth:`Net.sinker` call; floats: (attach call
-      index, buoyancy N, gravity m/s², water density kg/m³, own mass kg) per :meth:`Net.float_` call.
+      index, buoyancy N, gravity m/s², water density kg/m³, own mass kg) per :meth:`Net.float` call.
     """
 
     meshes: dict
@@ -249,6 +250,8 @@ class Net:
         lattice cells."""
         if name in self._panels or name in self._cables:
             raise SceneError(f"panel '{name}': the name is already used")
+        if not isinstance(twine, (Twine, HexTwine)):
+            raise SceneError(f"panel '{name}': its material must be a Twine or a HexTwine, got {twine!r}")
         corners = np.asarray(corners, dtype=float)
         if corners.ndim != 2 or corners.shape[1] != 5:
             raise SceneError(f"panel '{name}': corners must be rows of x y z U V, got shape {corners.shape}")
@@ -260,8 +263,7 @@ class Net:
             bad = twines.check(f"panel '{name}'")
             if bad:
                 raise SceneError(bad)
-            check_material(twine, f"panel '{name}'", ("l0", "ea", "ea_compression", "diameter", "density",
-                                                      "cd_normal", "tangential_ratio"), positive=("l0",))
+            _check_material(twine, f"panel '{name}'")
             self._panels[name] = _Panel(name, corners, twine, float("nan") if step is None else float(step), twines)
             return PanelRef(name)
         if lattice is not None:
@@ -277,25 +279,10 @@ class Net:
             step = float("nan") if step is None else step
         if step is None:
             raise SceneError(f"panel '{name}': give its meshing step (m), or twines= to mesh it as numerical twines")
+        _check_material(twine, f"panel '{name}'")
         if isinstance(twine, HexTwine):
-            for field in ("l0", "ea", "ea_compression"):
-                v = twine.per_family(field)
-                if not np.all(np.isfinite(v)) or np.any(v < 0) or (field == "l0" and np.any(v == 0)):
-                    raise SceneError(f"panel '{name}': {field} must be {'> 0' if field == 'l0' else '>= 0'} per family, got {v.tolist()}")
-            check_material(twine, f"panel '{name}'", ("diameter", "density"))
             self._panels[name] = _Panel(name, corners, twine, float(step))
             return PanelRef(name)
-        check_material(twine, f"panel '{name}'", ("l0", "ea", "ea_compression", "diameter", "density", "cd_normal",
-                        "tangential_ratio", "opening_stiffness", "knot_size", "bending_stiffness"), positive=("l0",))
-        if twine.drag_model not in DRAG_MODELS:
-            raise SceneError(f"panel '{name}': drag_model must be one of {sorted(DRAG_MODELS)}, got {twine.drag_model!r}")
-        _check_tarp(twine, name)
-        if not 0.0 < twine.rest_angle <= np.pi / 2:
-            raise SceneError(f"panel '{name}': rest_angle (half opening angle, rad) must be in (0, pi/2], got {twine.rest_angle!r}")
-        if twine.knot_stiffness is not None:
-            check_material(twine, f"panel '{name}'", ("knot_stiffness",))
-        if twine.knot_form not in KNOT_FORMS:
-            raise SceneError(f"panel '{name}': knot_form must be one of {sorted(KNOT_FORMS)}, got {twine.knot_form!r}")
         self._panels[name] = _Panel(name, corners, twine, float(step), lattice=lattice)
         return PanelRef(name)
 
@@ -307,8 +294,7 @@ class Net:
             raise SceneError(f"cable '{name}': the name is already used")
         if rope is None:
             raise SceneError(f"cable '{name}': no rope material given")
-        check_material(rope, f"cable '{name}'", ("ea", "ea_compression", "diameter", "density", "cd_normal", "tangential_ratio",
-                                                 "bending_stiffness"))
+        _check_material(rope, f"cable '{name}'")
         if along is None and (start is None or end is None):
             raise SceneError(f"cable '{name}': give both ends (start=, end=) or a panel side (along=)")
         if n_bars is not None and (int(n_bars) != n_bars or n_bars < 1):
@@ -386,12 +372,18 @@ class Net:
         self.attach(where, mass=mass, volume=mass / density)
         self._sinkers.append((len(self._attached) - 1, float(mass), float(density)))
 
-    def float_(self, where, buoyancy_N, mass=0.0, size=0.0, drag_area=0.0):
+    def float(self, where, buoyancy_N, mass=0.0, size=0.0, drag_area=0.0):
         """A float pulling up with ``buoyancy_N`` newtons net of its own weight (+ optional mass, kg) when
-        immersed; ``size`` (m) its height, for a float at the free surface; ``drag_area`` Cd·A (m²)."""
+        immersed; ``size`` (m) its height, for a float at the free surface; ``drag_area`` Cd·A (m²). (Named as
+        the gear's floats are; inside the class's methods ``float`` is still Python's number type.)"""
         g, rho = self.environment.gravity, self.environment.water_density
         self.attach(where, mass=mass, volume=(buoyancy_N / g + mass) / rho, drag_area=drag_area, size=size)
         self._floats.append((len(self._attached) - 1, float(buoyancy_N), float(g), float(rho), float(mass)))
+
+    def float_(self, *args, **kwargs):
+        """The former name of :meth:`float`, kept for one release: it warns and calls :meth:`float`."""
+        warnings.warn("Net.float_ is now Net.float", DeprecationWarning, stacklevel=2)
+        return self.float(*args, **kwargs)
 
     def body(self, where, length, drag_coefficient):
         """Give the node(s) at ``where`` a box-shaped body with a drag per axis, as FEMNET's node types
@@ -839,6 +831,7 @@ class Net:
         if isinstance(ref, Corner):
             return np.array([self._point(builder, meshes, ref, what)[0]])
         if isinstance(ref, Side):
+            self._check_side(ref, what)
             return self._side_nodes(meshes, ref)
         if isinstance(ref, Nearest):
             self._panel(ref.panel, what)
@@ -983,13 +976,13 @@ def _mesh_length(twine):
     return twine.base_mesh_side if isinstance(twine, HexTwine) else twine.l0
 
 
-def _check_tarp(twine: Twine, name: str):
-    """SceneError unless the panel's tarp coefficient is finite and >= 0, and, for a tarp, its drag model one
-    whose twine drag the tarp's pressure replaces (a screen model has no twines to take out)."""
-    check_material(twine, f"panel '{name}'", ("tarp_cd",))
-    if twine.tarp_cd > 0 and not NETTING_DRAG_MODELS[DRAG_MODELS[twine.drag_model]].twines:
-        raise SceneError(f"panel '{name}': a tarp (tarp_cd {twine.tarp_cd!r}) replaces the drag of its twines; "
-                         f"drag_model {twine.drag_model!r} is a screen model (use 'twines' or 'femnet-catch')")
+def _check_material(material, what):
+    """SceneError naming ``what`` (the panel or cable) and the parameter of its material out of its range
+    (:func:`jaxnet.materials.check`)."""
+    try:
+        materials.check(material)
+    except materials.MaterialError as err:
+        raise SceneError(f"{what}: {err.problem}") from None
 
 
 def outward(position, triangles, center, uv=None, panel=None) -> np.ndarray:

@@ -280,7 +280,7 @@ def test_run_is_simulate_at_the_same_step():
     reference = dynamics.simulate(scene, STEPS * STEP, dynamics.Implicit(time_step=STEP, newton=NEWTON), loading,
                                   progress=False)
     assert int(reference.state.retries) == 0 and reference.steps == STEPS
-    for ours, theirs in zip(ad.lumped_masses(scene), dynamics.lumped_masses(scene)):
+    for ours, theirs in zip(jax.jit(ad.lumped_masses)(scene), dynamics.lumped_masses(scene)):
         np.testing.assert_allclose(np.asarray(ours), theirs, rtol=1e-14, atol=0)
     figures, _, record = panel_adjoint()(np.zeros(len(PARAMETERS)))
     assert np.abs(reference.positions[-1] - reference.positions[0]).max() > 1e-3  # the net does move
@@ -289,15 +289,20 @@ def test_run_is_simulate_at_the_same_step():
     fixed = np.flatnonzero(np.asarray(scene.nodes.fixed).any(axis=1))
     np.testing.assert_allclose(np.asarray(record["reactions"])[:, fixed], reference.figures["reaction_N"][1:], rtol=0,
                                atol=1e-8 * np.abs(reference.figures["reaction_N"]).max())
-    # the drag of the last step, as simulate records it (its own small program: the adjoint's is big enough)
-    last = jax.tree.map(lambda a: a[-1], record)
-    scene_t = dynamics.scene_at(scene, loading, STEPS * STEP)
-    masses = ad.lumped_masses(scene)
-    water = masses[1] * dynamics.water_acceleration(jnp.asarray(record["x"][-2]), scene_t, loading, False)
-    step = dynamics.TimeStep(record["x"][-2], record["v"][-2], jnp.asarray(STEP), masses[0], water)
-    now = ad.Instant(t=STEPS * STEP, x=last["x"], v=last["v"], force=-last["reactions"], scene=scene_t, step=step,
-                     structure=panel()[2])
-    np.testing.assert_allclose(np.asarray(jax.jit(ad.drag)(now)), reference.figures["drag_netting_N"][-1], rtol=1e-9)
+    # the drag of the last step, as simulate records it (its own small program, the instant built inside it: the
+    # adjoint's is big enough)
+    def last_drag(record):
+        last = jax.tree.map(lambda a: a[-1], record)
+        scene_t = dynamics.scene_at(scene, loading, STEPS * STEP)
+        masses = ad.lumped_masses(scene)
+        water = masses[1] * dynamics.water_acceleration(record["x"][-2], scene_t, loading, False)
+        step = dynamics.TimeStep(record["x"][-2], record["v"][-2], jnp.asarray(STEP), masses[0], water)
+        now = ad.Instant(t=STEPS * STEP, x=last["x"], v=last["v"], force=-last["reactions"], scene=scene_t, step=step,
+                         structure=panel()[2])
+        return ad.drag(now)
+
+    np.testing.assert_allclose(np.asarray(jax.jit(last_drag)(record)), reference.figures["drag_netting_N"][-1],
+                               rtol=1e-9)
     total = reference.figures["reaction_total_N"][1:]
     np.testing.assert_allclose(np.asarray(record["pull"]), total[:, 1], rtol=1e-9)
     np.testing.assert_allclose(np.asarray(record["magnitude"]), np.linalg.norm(total, axis=1), rtol=1e-9)

@@ -65,19 +65,49 @@ def test_self_intersecting_panel():
 
 
 def test_negative_stiffness():
-    with pytest.raises(jn.SceneError, match=r"panel 'wall': ea must be >= 0, got -5"):
-        hanging(twine=Twine(l0=0.02, ea=-5.0, diameter=1e-3))
-    net, p = hanging()
-    with pytest.raises(jn.SceneError, match=r"cable 'rope': ea_compression must be >= 0, got -1"):
-        net.cable("rope", along=p.side(2), rope=Rope(ea=1e4, diameter=0.01, ea_compression=-1.0))
+    # refused where the material is made, naming it, the parameter and its value
+    with pytest.raises(jn.SceneError, match=r"^Twine: ea must be > 0, got -5\.0 \(traction stiffness EA, N\)$"):
+        Twine(l0=0.02, ea=-5.0, diameter=1e-3)
+    with pytest.raises(jn.SceneError, match=r"^Rope: ea_compression must be >= 0, got -1\.0 \(compression stiffness"):
+        Rope(ea=1e4, diameter=0.01, ea_compression=-1.0)
     # a scene built by hand is checked too, naming the element
     scene = hanging()[0].build()
     ea = np.asarray(scene.netting.ea_traction).copy()
     ea[3] = -1.0
     bad = jn.Scene(nodes=scene.nodes, netting=scene.netting.__class__(**{**scene.netting.__dict__, "ea_traction": ea}),
                    panel_names=scene.panel_names)
-    with pytest.raises(jn.SceneError, match=r"triangle 3 \(wall\): traction stiffness EA must be >= 0"):
+    with pytest.raises(jn.SceneError, match=r"triangle 3 \(wall\): traction stiffness EA must be > 0"):
         jn.solve_static(bad)
+
+
+def test_zero_traction_stiffness_is_bad_input():
+    """A twine or a rope without traction stiffness holds nothing (a mechanism, which a solve reported only as "no
+    step decreases the energy"): refused before anything is built, naming EA; a compression, opening, knot or
+    bending stiffness of 0 is none (slack twines, free meshes) and accepted."""
+    from jaxnet.materials import HexTwine
+
+    with pytest.raises(jn.SceneError, match=r"^Twine: ea must be > 0, got 0\.0 \(traction stiffness EA, N\)$"):
+        Twine(l0=0.02, ea=0.0, diameter=1e-3)
+    with pytest.raises(jn.SceneError, match=r"^Rope: ea must be > 0, got 0\.0"):
+        Rope(ea=0.0, diameter=0.01)
+    with pytest.raises(jn.SceneError, match=r"^HexTwine: ea must be > 0 per twine family \(l, m, n\), got "
+                                            r"\[1000\.0, 0\.0, 1000\.0\]"):
+        HexTwine(l0=0.02, ea=(1000.0, 0.0, 1000.0), diameter=1e-3)
+    for name in ("opening_stiffness", "knot_stiffness", "bending_stiffness"):
+        with pytest.raises(jn.SceneError, match=rf"^Twine: {name} must be >= 0, got -1\.0"):
+            Twine(l0=0.02, ea=1000.0, diameter=1e-3, **{name: -1.0})
+    slack = Twine(l0=0.02, ea=1000.0, diameter=1e-3, ea_compression=0.0, opening_stiffness=0.0, knot_stiffness=0.0,
+                  bending_stiffness=0.0)
+    assert hanging(twine=slack)[0].build().n_nodes > 4
+    # a scene built by hand: a bar of zero EA is named
+    net, p = hanging()
+    net.cable("rope", along=p.side(2), rope=Rope(ea=1e4, diameter=0.01))
+    scene = net.build()
+    ea = np.asarray(scene.bars.ea_traction).copy()
+    ea[1] = 0.0
+    with pytest.raises(jn.SceneError, match=r"bar 1 \(rope\): traction stiffness EA must be > 0, got 0\.0"):
+        jn.solve_static(jn.Scene(nodes=scene.nodes, netting=scene.netting, bars=scene.bars.__class__(
+            **{**scene.bars.__dict__, "ea_traction": ea}), panel_names=scene.panel_names, cable_names=scene.cable_names))
 
 
 def test_negative_length():
@@ -141,17 +171,19 @@ def test_unknown_keys_in_scene_file(tmp_path):
     assert scene_file.read(path).scene.n_nodes > 4
     doc["panels"][0]["mesh_size"] = 3
     path.write_text(json.dumps(doc))
-    with pytest.raises(jn.SceneError, match=r"panels\[0\]: unknown key\(s\) \['mesh_size'\]"):
+    with pytest.raises(jn.SceneError, match=r"ok\.json:1: panels\[0\]: unknown key\(s\) \['mesh_size'\]"):
         scene_file.read(path)
     del doc["panels"][0]["mesh_size"]
     doc["twines"]["pa"]["EA"] = 5
     path.write_text(json.dumps(doc))
-    with pytest.raises(jn.SceneError, match=r"twines.pa: unknown key\(s\) \['EA'\]"):
+    with pytest.raises(jn.SceneError, match=r"twines.pa: unknown key\(s\) \['EA'\]: did you mean ea\?"):
         scene_file.read(path)
     del doc["twines"]["pa"]["EA"]
     doc["currents"] = {}
     path.write_text(json.dumps(doc))
-    with pytest.raises(jn.SceneError, match=r"scene: unknown key\(s\) \['currents'\]"):
+    # a key of another table is suggested with its path
+    with pytest.raises(jn.SceneError,
+                       match=r"scene: unknown key\(s\) \['currents'\]: did you mean environment\.current_speed\?"):
         scene_file.read(path)
 
 

@@ -4,8 +4,8 @@ file:LINE), raised before the solver compiles anything.
 
 The catalogue is the one the report's section runs. A case marked ``pending`` names the library file whose
 check is still missing: it is expected to fail (strictly: once the check is added the test says so, and the
-mark must go). The one case judged by solving (netting of zero stiffness carrying a sinker, a valid scene) must
-compile and stop with a named reason.
+mark must go). A case judged by solving (``solve=True``: a valid scene; none at present) must compile and stop
+with a named reason.
 """
 
 import pytest

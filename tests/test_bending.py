@@ -10,7 +10,6 @@ from jaxnet import geometry
 from jaxnet.mesh.hinges import find_hinges
 from jaxnet.terms import bending
 
-RNG = np.random.default_rng(20260307)
 L0, EI = 0.02, 2e-4  # m, N m²
 
 
@@ -60,19 +59,29 @@ def fold(x, theta):
     return x
 
 
-def random_hinge(clockwise=False):
+def random_hinge(rng, clockwise=False):
     """Random hinge: p and q on either side of a-b in twine coordinates, positions a distorted folded net."""
     while True:
-        uv = RNG.uniform(-4, 4, size=(4, 2))
+        uv = rng.uniform(-4, 4, size=(4, 2))
         d1 = geometry.twine_determinant(uv[[0, 1, 2]])
         d2 = geometry.twine_determinant(uv[[1, 0, 3]])
         if min(abs(d1), abs(d2)) > 2.0 and d1 * d2 > 0 and abs(uv[1] - uv[0]).min() > 0.5:
             break
     if (d1 < 0) != clockwise:
         uv = uv[:, ::-1].copy()  # swapping U and V mirrors the twine plane: d changes sign
-    theta = RNG.choice([-1, 1]) * RNG.uniform(0.2, 1.0)
-    x = fold(net_plane(uv), theta) * (1.0 + 0.1 * RNG.normal(size=(4, 3)))  # folded, stretched, sheared
+    theta = rng.choice([-1, 1]) * rng.uniform(0.2, 1.0)
+    x = fold(net_plane(uv), theta) * (1.0 + 0.1 * rng.normal(size=(4, 3)))  # folded, stretched, sheared
     return jnp.asarray(x.ravel()), jnp.asarray(uv)
+
+
+def flattened_hinge(rng, clockwise=False):
+    """A random hinge flattened onto z = 0: flat, distorted in its plane. Drawn again where flattening put q on p's
+    side of a-b (1 draw in 130): that folds the hinge over by pi instead."""
+    while True:
+        x, uv = random_hinge(rng, clockwise)
+        x = x.reshape(4, 3).at[:, 2].set(0.0).ravel()
+        if abs(float(fold_angle(x.reshape(4, 3)))) < np.pi / 2:
+            return x, uv
 
 
 def fd_gradient(f, x, h):
@@ -81,13 +90,12 @@ def fd_gradient(f, x, h):
 
 # ---------------------------------------------------------------- the bending term
 
-def test_flat_panel_has_no_bending_force_and_the_finite_fold_stiffness():
+def test_flat_panel_has_no_bending_force_and_the_finite_fold_stiffness(rng):
     # A flat hinge, however distorted in its plane (Ua != Ub: the book's alpha is not 0 there), stores no
     # energy and pulls nothing; its stiffness is finite and is 2 k grad(theta) grad(theta)^T.
     for clockwise in (False, True):
         for _ in range(4):
-            x, uv = random_hinge(clockwise)
-            x = x.reshape(4, 3).at[:, 2].set(0.0).ravel()
+            x, uv = flattened_hinge(rng, clockwise)
             assert float(energy(x, uv)) == 0.0
             assert float(jnp.abs(force(x, uv)).max()) == 0.0
             K = stiffness(x, uv)
@@ -207,13 +215,13 @@ def test_all_twelve_forces_agree_with_the_book_to_second_order_in_the_fold():
     np.testing.assert_allclose(errors[0] / errors[1], 4.0, rtol=0.02)
 
 
-def test_book_angle_derivatives_241_to_244():
+def test_book_angle_derivatives_241_to_244(rng):
     # 4.241-4.242 as printed, and 4.243-4.244 (printed garbled / missing) as the chain rule gives them,
     # against central differences of alpha (4.240). With G_a = d(alpha)/d(Ua), G_b = d(alpha)/d(Ub):
     # d/dx1 = (V3-V4)/d_a G_a, d/dx2 = (V4-V3)/d_b G_b, d/dx3 = (V4-V1)/d_a G_a + (V2-V4)/d_b G_b,
     # d/dx4 = (V1-V3)/d_a G_a + (V3-V2)/d_b G_b (book vertices 1, 2, 3, 4 = our p, q, a, b).
     uv = np.array([[0.0, 0.0], [1.4, 2.0], [-1.5, 1.2], [2.2, 0.5]])
-    x = fold(net_plane(uv), 0.3) * (1 + 0.05 * RNG.normal(size=(4, 3)))
+    x = fold(net_plane(uv), 0.3) * (1 + 0.05 * rng.normal(size=(4, 3)))
     v3, v4, v1, v2 = uv[:, 1]
     (Ua, _, da), (Ub, _, db) = book_twine_vectors(x, uv)
     alpha = angle(Ua, Ub)
@@ -232,12 +240,12 @@ def test_book_angle_derivatives_241_to_244():
             np.testing.assert_allclose(g[k], fd, rtol=1e-6, atol=1e-8 * np.abs(Ga).max() / abs(da))
 
 
-def test_book_angle_is_the_in_plane_kink_plus_the_fold():
+def test_book_angle_is_the_in_plane_kink_plus_the_fold(rng):
     # The decomposition the energy rests on: 4 sin²(alpha/2) = 4 sin²((phi_a - phi_b)/2)
     # + sin(phi_a) sin(phi_b) 4 sin²(theta/2), for any positions (distorted, folded, d < 0).
     for clockwise in (False, True):
         for _ in range(5):
-            x, uv = random_hinge(clockwise)
+            x, uv = random_hinge(rng, clockwise)
             theta = float(fold_angle(x.reshape(4, 3)))
             x = np.asarray(x).reshape(4, 3)
             e = x[1] - x[0]
@@ -257,9 +265,9 @@ def test_fold_angle_sign_and_magnitude():
 
 
 @pytest.mark.parametrize("clockwise", [False, True])
-def test_force_is_minus_gradient_and_stiffness_is_its_jacobian(clockwise):
+def test_force_is_minus_gradient_and_stiffness_is_its_jacobian(clockwise, rng):
     for _ in range(4):
-        x, uv = random_hinge(clockwise)
+        x, uv = random_hinge(rng, clockwise)
         assert abs(float(fold_angle(x.reshape(4, 3)))) > 0.05  # a real fold, not near flat
         f = force(x, uv)
         fd = -fd_gradient(lambda y: energy(y, uv), x, 1e-7)
@@ -271,25 +279,24 @@ def test_force_is_minus_gradient_and_stiffness_is_its_jacobian(clockwise):
         np.testing.assert_allclose(K, K.T, atol=1e-10 * np.abs(K).max())
 
 
-def test_stiffness_at_the_flat_state_matches_finite_differences():
+def test_stiffness_at_the_flat_state_matches_finite_differences(rng):
     # the flat state is where 4.241-4.242 divide by sin(alpha) = 0; here the tangent is finite and exact
-    x, uv = random_hinge()
-    x = x.reshape(4, 3).at[:, 2].set(0.0).ravel()
+    x, uv = flattened_hinge(rng)
     K = stiffness(x, uv)
     fdK = -np.stack([(force(x.at[i].add(1e-7), uv) - force(x.at[i].add(-1e-7), uv)) / 2e-7
                      for i in range(12)], axis=1)
     np.testing.assert_allclose(K, fdK, rtol=1e-5, atol=1e-6 * np.abs(fdK).max())
 
 
-def test_rigid_motions_produce_no_force():
+def test_rigid_motions_produce_no_force(rng):
     for clockwise in (False, True):
-        x, uv = random_hinge(clockwise)
+        x, uv = random_hinge(rng, clockwise)
         y = x.reshape(4, 3)
         f = np.asarray(force(x, uv)).reshape(4, 3)
         assert np.abs(f).max() > 0
         # invariance: the energy of a translated and rotated hinge is the same, its forces rotate with it
-        R = rotation(RNG.normal(size=3), 1.1)
-        moved = jnp.asarray(np.asarray(y) @ R.T + RNG.normal(size=3))
+        R = rotation(rng.normal(size=3), 1.1)
+        moved = jnp.asarray(np.asarray(y) @ R.T + rng.normal(size=3))
         np.testing.assert_allclose(energy(moved.ravel(), uv), energy(x, uv), rtol=1e-12)
         np.testing.assert_allclose(np.asarray(force(moved.ravel(), uv)).reshape(4, 3), f @ R.T,
                                    atol=1e-10 * np.abs(f).max())
@@ -298,7 +305,7 @@ def test_rigid_motions_produce_no_force():
         np.testing.assert_allclose(np.cross(np.asarray(y), f).sum(0), 0.0, atol=1e-12 * np.abs(f).max() * L0)
         # and the stiffness does not resist a translation
         K = np.asarray(stiffness(x, uv))
-        np.testing.assert_allclose(K @ np.tile(RNG.normal(size=3), 4), 0.0, atol=1e-10 * np.abs(K).max())
+        np.testing.assert_allclose(K @ np.tile(rng.normal(size=3), 4), 0.0, atol=1e-10 * np.abs(K).max())
 
 
 def test_degenerate_hinges_stay_finite():
@@ -352,24 +359,24 @@ def reference_energy_force_stiffness(x, uv):
     return reference_energy(x, uv), f(x), -jax.jacfwd(f)(x)
 
 
-def flat_hinge(clockwise):
+def flat_hinge(rng, clockwise):
     """A flat hinge distorted in its plane (Ua != Ub): an affine image of the net, q then moved away from
     the side a-b (so that it cannot cross it: theta stays 0, not pi)."""
-    _, uv = random_hinge(clockwise)
-    x = net_plane(np.asarray(uv)) @ np.diag([1.0 + 0.2 * RNG.uniform(), 1.0 - 0.2 * RNG.uniform(), 1.0])
+    _, uv = random_hinge(rng, clockwise)
+    x = net_plane(np.asarray(uv)) @ np.diag([1.0 + 0.2 * rng.uniform(), 1.0 - 0.2 * rng.uniform(), 1.0])
     side = (x[1] - x[0]) / np.linalg.norm(x[1] - x[0])
     away = x[3] - x[0] - np.dot(x[3] - x[0], side) * side
     x[3] += 0.1 * L0 * (side + away / np.linalg.norm(away))
     return jnp.asarray(x.ravel()), uv
 
 
-def test_closed_form_stiffness_is_autodiff_of_the_formula():
+def test_closed_form_stiffness_is_autodiff_of_the_formula(rng):
     # The assembly's stiffness, jax.jacfwd(jax.grad(hinge_energy)) vmapped over hinges, comes from the
     # module's closed-form derivatives (custom JVP rules); it and the forces must be autodiff's of the
     # plainly written formula, to roundoff: random folded, stretched and sheared hinges (both
     # orientations), flat ones, folds near +-pi.
-    hinges = [random_hinge(clockwise) for clockwise in (False, True) for _ in range(2)]
-    flat = [flat_hinge(clockwise) for clockwise in (False, True)]
+    hinges = [random_hinge(rng, clockwise) for clockwise in (False, True) for _ in range(2)]
+    flat = [flat_hinge(rng, clockwise) for clockwise in (False, True)]
     near_pi = [(jnp.asarray(fold(np.asarray(x).reshape(4, 3), t)).ravel(), uv)
                for (x, uv), t in zip(flat, (3.0, -3.1))]
     hinges += flat + near_pi
@@ -385,10 +392,10 @@ def test_closed_form_stiffness_is_autodiff_of_the_formula():
     assert float(ours[0][4]) == 0.0 and float(ours[0][6]) > 0.0  # flat: no energy; folded: some
 
 
-def test_derivatives_in_twine_coordinates_length_and_stiffness():
+def test_derivatives_in_twine_coordinates_length_and_stiffness(rng):
     # Not taken by the solver (the closed forms are in x only; these fall back on autodiff), but the
     # simulator is differentiable in its parameters: dE/d(uv, l0, EI) against central differences.
-    x, uv = random_hinge()
+    x, uv = random_hinge(rng)
     params = (uv, jnp.asarray(L0), jnp.asarray(EI))
     e = jax.jit(lambda uv, l0, ei: bending.hinge_energy(x.reshape(4, 3), uv, l0, ei))
     grads = jax.jit(jax.grad(lambda *p: e(*p), argnums=(0, 1, 2)))(*params)
@@ -412,7 +419,7 @@ def grid_triangles(nx, ny):
     return tri, np.concatenate([i.ravel(), i.ravel()])
 
 
-def test_hinges_of_a_structured_mesh_are_its_interior_sides():
+def test_hinges_of_a_structured_mesh_are_its_interior_sides(rng):
     nx, ny = 4, 3
     tri, _ = grid_triangles(nx, ny)
     pairs, nodes = find_hinges(tri)
@@ -428,7 +435,7 @@ def test_hinges_of_a_structured_mesh_are_its_interior_sides():
     # deterministic, and independent of the order the triangles are listed in (as a set of hinges)
     again = find_hinges(tri)
     assert np.array_equal(again[0], pairs) and np.array_equal(again[1], nodes)
-    perm = RNG.permutation(len(tri))
+    perm = rng.permutation(len(tri))
     _, nodes_perm = find_hinges(tri[perm])
     key = lambda n: {(min(a, b), max(a, b), frozenset((p, q))) for a, b, p, q in n}
     assert key(nodes_perm.tolist()) == key(nodes.tolist())

@@ -83,8 +83,9 @@ def test_scene_file_and_bad_scene_file(tmp_path, capsys):
 
 
 def test_compiled_programs_are_kept_on_disk_and_reused(tmp_path):
-    """The solver's compiled programs (evaluation, tangent, scatter, spring network, loads) and those of the
-    result's figures (tensions, forces by term) are kept on disk whole
+    """The solver's compiled programs (evaluation, tangent, scatter, spring network, loads) and the one of the
+    result's figures (tensions, opening angles, forces by term: :func:`jaxnet.figures.net_figures`) are kept on
+    disk whole
     (:mod:`jaxnet.solve.programs`): a second process solving the same scene loads them, compiles nothing
     (no new program, none rewritten, no new entry in JAX's own cache) and gives the same answer; a damaged
     program file is compiled again and replaced, never trusted. Run in subprocesses: the cache is
@@ -100,9 +101,8 @@ def test_compiled_programs_are_kept_on_disk_and_reused(tmp_path):
                 {p.name: p.stat().st_mtime_ns for p in programs.iterdir()}, set(p.name for p in cache.iterdir()))
 
     first, kept, entries = run("a")
-    assert sorted(name.split("-")[0] for name in kept) == ["bar_tensions", "evaluate", "loads", "mesh_opening_angles",
-                                                           "scatter", "springs", "tangent", "term_forces",
-                                                           "twine_tensions"]
+    assert sorted(name.split("-")[0] for name in kept) == ["evaluate", "loads", "net_figures", "scatter", "springs",
+                                                           "tangent"]
     second, kept_after, entries_after = run("b")
     assert kept_after == kept and entries_after == entries  # loaded: nothing compiled, nothing written
     assert second["iterations"] == first["iterations"]
@@ -181,7 +181,7 @@ def test_a_dynamic_run_takes_the_case_numerics_and_the_solver_flags(tmp_path):
 
     path = _dynamic_don(tmp_path)
     args = cli.argument_parser().parse_args(["run", str(path), "--dynamic"])
-    case, _ = cli._case(args, dynamic=True)
+    case, _ = cli.case_of(args, dynamic=True)
     settings, implicit = cli.time_stepping(case, args)
     assert (settings.end_time, settings.record_every, implicit.time_step) == (1.0, 0.1, 0.05)
     newton = implicit.newton
@@ -201,7 +201,7 @@ def test_a_dynamic_run_of_a_scene_file_takes_the_solver_flags(tmp_path):
     path = tmp_path / "scene.json"
     path.write_text(json.dumps(wall_scene()))
     args = cli.argument_parser().parse_args(["run", str(path), "--dynamic", "--tol", "5e-5", "--max-iter", "12"])
-    case, _ = cli._case(args, dynamic=True)
+    case, _ = cli.case_of(args, dynamic=True)
     settings, implicit = cli.time_stepping(case, args)
     assert settings.end_time is None  # a scene file has no end time: --end must say
     assert (implicit.newton.tol, implicit.newton.max_iter) == (5e-5, 12)
@@ -261,14 +261,15 @@ def test_a_dynamic_run_of_a_case_with_a_winch_pays_out_its_cable(tmp_path, capsy
 def test_a_run_starts_from_femnets_stored_equilibrium(tmp_path, capsys):
     """``--start CASE.sta`` on FEMNET's mesh: the seine s4_libre, which no load holds any more (many equilibria
     on the sea bed, held along x at jaxnet's gauge node only), starts where FEMNET's .sta has it, laid out over
-    2 km, where its drawn shape would fold it up; its winch then hauls cable 14 in, its gauge free in time. Without --mesh, and with a .sta too short for the mesh, --start is
-    refused naming the file and line."""
+    2 km, where its drawn shape would fold it up; its winch then hauls cable 14 in (from 10 s, at 1 m/s: its table),
+    its gauge free in time. Without --mesh, and with a .sta too short for the mesh, --start is refused naming the
+    file and line."""
     from jaxnet.io import femnet, timeseries
 
     folder = pathlib.Path(__file__).resolve().parent / "data" / "femnet-corpus" / "11bottom_seine"
     don, mdg, sta = (folder / f"s4_libre.{ext}" for ext in ("don", "mdg", "sta"))
     out = tmp_path / "s4"
-    args = ["run", str(don), "--mesh", str(mdg), "--start", str(sta), "--dynamic", "--end", "20", "--record", "10",
+    args = ["run", str(don), "--mesh", str(mdg), "--start", str(sta), "--dynamic", "--end", "12", "--record", "6",
             "--quiet", "--no-cache", "--out", str(out)]
     assert cli.main(args) == 0
     series = timeseries.read_series(out)
@@ -277,7 +278,7 @@ def test_a_run_starts_from_femnets_stored_equilibrium(tmp_path, capsys):
     # jaxnet's equilibrium from FEMNET's: the seine stays laid out where FEMNET has it, to 1 % of its 2 km (its
     # drawn shape lies 2.2 km away)
     assert np.abs(series["position"][0] - stored).max() < 0.01 * np.ptp(stored[:, 0])
-    np.testing.assert_allclose(series["winch_hauled_m"][:, 0], [0.0, 0.0, 10.0], atol=1e-12)
+    np.testing.assert_allclose(series["winch_hauled_m"][:, 0], [0.0, 0.0, 2.0], atol=1e-12)
     # the gauge that held the seine along x for its static start is free in time: no reaction there
     gauge = femnet.read_mdg(mdg, don).info["gauge"]
     assert f"its gauge node {gauge['node']} (x), held for the static start, is free in time" in capsys.readouterr().out
@@ -316,7 +317,7 @@ def test_version_and_built_in_numbers_set_on_the_command_line(tmp_path, capsys):
     path = tmp_path / "panel.json"
     path.write_text("{}")
     assert cli.main(["run", str(path), "--set", "step=1", "--out", str(out), "--no-cache"]) == 2
-    assert "--set changes a built-in scene's arguments" in capsys.readouterr().err
+    assert "--set changes a built-in scene's numbers" in capsys.readouterr().err
 
 
 def test_export_writes_a_built_in_scene_that_runs_as_a_file(tmp_path, capsys):
@@ -370,3 +371,141 @@ def test_show_redraws_the_pictures_of_a_run_without_solving(tmp_path, capsys, mo
     assert positions.shape[0] == 4 and "reaction_total_N" in figures_
     assert cli.main(["show", str(tmp_path)]) == 2
     assert "holds no command.json: it is not the output directory of a jaxnet run" in capsys.readouterr().err
+
+
+def test_a_label_says_the_numbers_the_scene_was_built_with(tmp_path, capsys):
+    """A built-in scene's label (the run's first line, its pictures' title, the exported file's description) is
+    made from the numbers it was built with, ``--set`` included, not from its defaults."""
+    path = tmp_path / "c08.toml"
+    assert cli.main(["export", "--scene", "cage", "--set", "current=0.8", str(path)]) == 0
+    printed = capsys.readouterr().out
+    assert "in a 0.8 m/s current" in printed and "0.5 m/s" not in printed
+    assert "in a 0.8 m/s current" in path.read_text() and "0.5 m/s" not in path.read_text()
+    out = tmp_path / "small"
+    assert cli.main(["run", "--scene", "hanging", "--set", "meshes=8", "--set", "step=0.05", "--out", str(out),
+                     "--quiet", "--no-cache", "--no-pictures"]) == 0
+    first = capsys.readouterr().out.splitlines()[0]
+    assert first.startswith("jaxnet: built-in scene 'hanging': square panel of 8 x 8 meshes"), first
+    assert json.loads((out / "result.json").read_text())["inputs"]["label"].startswith("square panel of 8 x 8 meshes")
+
+
+def test_a_femnet_case_on_its_own_mesh_keeps_its_symmetry_planes(tmp_path, capsys):
+    """FEMNET's cod-end c2 is a quarter (symmetry planes y = 0 and z = -10 m in its .don): read on FEMNET's own mesh
+    (``--mesh c2.mdg``) it is the same quarter as on jaxnet's, so that the whole net's figures, its ParaView file and
+    its mirrored pictures are those of the whole cod-end."""
+    from jaxnet.io import femnet
+
+    data = pathlib.Path(__file__).parent / "data" / "femnet"
+    don, mdg = data / "c2.don", data / "c2.mdg"
+    planes = femnet.read_don(don).scene.symmetry_planes
+    assert planes == ((1, 0.0), (2, -10.0)) == femnet.read_mdg(mdg, don).scene.symmetry_planes
+    out = tmp_path / "c2"
+    assert cli.main(["run", str(don), "--mesh", str(mdg), "--out", str(out), "--quiet", "--no-cache",
+                     "--no-pictures"]) == 0
+    printed = capsys.readouterr().out
+    result = json.loads((out / "result.json").read_text())
+    assert result["modelled_part"].startswith("a quarter of the net") and result["whole_net"]["copies"] == 4
+    assert "whole net (4 mirrored copies)" in printed
+    np.testing.assert_allclose(result["whole_net"]["reaction_N"][0], 4 * result["reaction_N"][0], rtol=1e-12)
+    assert result["whole_net"]["reaction_N"][1:] == [0.0, 0.0]
+    whole = meshio.read(out / "net_whole.vtu")
+    assert len(whole.points) == 4 * result["n_nodes"]
+
+
+def test_paths_that_cannot_be_used_are_named_without_a_traceback(tmp_path, capsys, monkeypatch):
+    """A path in the way is bad input (exit status 2), named, before anything is solved: an output directory under
+    a file, a --cache under a file, an exported file under a file, a scene file that does not exist; a disk that
+    fills while a run writes names the file. Ctrl-C during a static solve stops it with status 130."""
+    from jaxnet.io import vtk
+    from jaxnet.solve import statics
+
+    a_file = tmp_path / "a_file"
+    a_file.write_text("")
+    small = ["--scene", "hanging", "--set", "meshes=4", "--set", "step=0.05", "--quiet", "--no-pictures"]
+    cases = [
+        (["run", *small, "--no-cache", "--out", str(a_file / "sub")], f"--out {a_file / 'sub'}: {a_file} is a file"),
+        (["run", *small, "--no-cache", "--out", str(a_file)], f"--out {a_file}: {a_file} is a file, not a directory"),
+        (["run", *small, "--cache", str(a_file / "c"), "--out", str(tmp_path / "o")], f"{a_file} is a file"),
+        (["export", "--scene", "cage", str(a_file / "x.toml")],
+         f"cannot write {a_file / 'x.toml'}: {a_file} is a file, not a directory"),
+        (["export", "--scene", "cage", str(tmp_path / "x.txt")], "a scene file is .toml or .json"),
+        (["run", str(tmp_path / "missing.toml"), "--no-cache", "--out", str(tmp_path / "o")],
+         f"the scene file {tmp_path / 'missing.toml'} does not exist"),
+    ]
+    monkeypatch.setattr(statics, "solve", lambda *a, **k: pytest.fail("nothing is solved on bad input"))
+    for argv, message in cases:
+        assert cli.main(argv) == 2, argv
+        err = capsys.readouterr().err
+        assert err.startswith("jaxnet: bad input: ") and message in err and "Traceback" not in err, (argv, err)
+    monkeypatch.undo()
+
+    def full(path, *a, **k):
+        raise OSError(28, "No space left on device", str(path))
+
+    monkeypatch.setattr(vtk, "write_vtu", full)
+    out = tmp_path / "full"
+    assert cli.main(["run", *small, "--no-cache", "--out", str(out)]) == 2
+    assert f"jaxnet: bad input: cannot use {out / 'net.vtu'}: disk full" in capsys.readouterr().err
+    assert (out / "result.json").exists()   # the answer was written before
+
+    def interrupted(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(statics, "solve", interrupted)
+    assert cli.main(["run", *small, "--no-cache", "--out", str(out)]) == 130
+    assert "jaxnet: stopped (Ctrl-C)" in capsys.readouterr().err
+
+
+def test_export_keeps_an_existing_file_unless_forced(tmp_path, capsys):
+    path = tmp_path / "cage.toml"
+    path.write_text("# mine\n")
+    assert cli.main(["export", "--scene", "cage", str(path)]) == 2
+    assert f"{path} exists: give another name, or --force to overwrite it" in capsys.readouterr().err
+    assert path.read_text() == "# mine\n"
+    assert cli.main(["export", "--scene", "cage", "--set", "current=0.7", "--force", str(path)]) == 0
+    assert "0.7 m/s" in path.read_text()
+
+
+def test_options_that_do_not_apply_are_refused_before_anything_runs(tmp_path, capsys, monkeypatch):
+    """An option that would be ignored is bad input naming it and what it goes with, before anything is built or
+    solved: options of a run in time without --dynamic, FEMNET's options with a scene file, a built-in's --scene with
+    a file, a static built-in run in time, --cache with --no-cache."""
+    from jaxnet.solve import statics
+
+    monkeypatch.setattr(statics, "solve", lambda *a, **k: pytest.fail("nothing is solved on bad input"))
+    scene = tmp_path / "wall.json"
+    scene.write_text(json.dumps(wall_scene()))
+    out = ["--out", str(tmp_path / "o")]
+    cases = [
+        (["run", "--end", "2"], "--end applies to a run in time: add --dynamic"),
+        (["run", "--dt", "0.1", "--resume"], "--dt, --resume apply to a run in time"),
+        (["run", str(scene), "--jaxnet-laws"], "--jaxnet-laws goes with a FEMNET case"),
+        (["run", str(scene), "--mesh", "x.mdg"], "--mesh goes with a FEMNET case"),
+        (["run", str(scene), "--scene", "hanging"], "--scene hanging (a built-in scene) and the file"),
+        (["run", "--scene", "cage", "--dynamic"], "--scene cage is a static scene"),
+        (["run", "--scene", "cage_waves"], "--scene cage_waves is a dynamic scene: run it with --dynamic"),
+        (["run", "--cache", str(tmp_path / "c"), "--no-cache"], "--cache DIR and --no-cache: give one of them"),
+    ]
+    for argv, message in cases:
+        assert cli.main(argv + out) == 2, argv
+        err = capsys.readouterr().err
+        assert message in err, (argv, err)
+    assert not (tmp_path / "o" / "result.json").exists()
+
+
+def test_help_and_version_import_no_jax_and_the_iterations_have_a_legend(tmp_path, capsys):
+    """``jaxnet --version`` and ``jaxnet run --help`` answer without importing JAX or the physics (a fresh process
+    is asked what it imported); a run prints once what the columns of its iteration lines are."""
+    probe = ("import sys\nfrom jaxnet import cli\nfor argv in (['--version'], ['run', '--help']):\n"
+             "    try:\n        cli.main(argv)\n    except SystemExit:\n        pass\n"
+             "print('IMPORTED', sorted(m for m in sys.modules if m == 'jax' or m.startswith(('jax.', 'jaxnet.'))))\n")
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True)
+    imported = done.stdout.rsplit("IMPORTED", 1)[1]
+    assert "'jax'" not in imported and "jaxnet.scene'" not in imported and "jaxnet.cli" in imported, imported
+    assert "Built-in scenes (cage by default)" in done.stdout and "jaxnet " in done.stdout
+    assert cli.main(["run", "--scene", "hanging", "--set", "meshes=4", "--set", "step=0.05", "--no-cache",
+                     "--no-pictures", "--out", str(tmp_path)]) == 0
+    printed = capsys.readouterr().out
+    legend = [line for line in printed.splitlines() if "one line per Newton iteration" in line]
+    assert len(legend) == 1 and all(w in legend[0] for w in ("residual:", "damping:", "step:", "stiffness x"))
+    assert printed.index(legend[0]) < printed.index("  newton    1")

@@ -19,7 +19,7 @@ import numpy as np
 import jaxnet  # noqa: F401
 from jaxnet.design import objectives
 from jaxnet.design.space import DesignSpace
-from jaxnet.solve import implicit, statics
+from jaxnet.solve import implicit, programs, statics
 from jaxnet.net import Twine
 from test_design_space import L0, rig
 
@@ -31,7 +31,7 @@ def setup():
     space = DesignSpace(rig(Twine(l0=L0, ea=1000.0, diameter=2e-3, ea_compression=100.0)))
     structure = implicit.structure_of(space.reference)
     theta0 = space.initial()
-    x0 = np.asarray(implicit.solve(space.reference, solver=NEWTON, structure=structure).x)
+    x0 = np.asarray(statics.solve(space.reference, tol=NEWTON.tol).x)  # the reference's equilibrium, to 1e-10 N
     rng = np.random.default_rng(7)
     families = [f for f in sorted(theta0) if theta0[f]]
     directions = {}
@@ -53,27 +53,36 @@ def setup():
         eq = implicit.equilibrium(scene, structure, x0=x0, solver=NEWTON)
         return jnp.stack([drag(objectives.Outcome(eq.x, scene, structure.model)), jnp.mean(eq.x[:, 2])])
 
-    return families, figures, space, x0
+    def figures_and_value(t):
+        value = figures(t)
+        return value, value
+
+    # one program gives the forward derivative and the figures themselves: the differences' full solves are
+    # its values at the neighbouring designs (the same solve, from the same start, to the same tolerance).
+    # Both derivatives compiled with the XLA options of jaxnet's own programs (programs.jit)
+    forward = programs.jit(jax.jacfwd(figures_and_value, has_aux=True))
+    reverse = programs.jit(jax.jacrev(figures))
+    return families, forward, reverse, space, x0
 
 
 def test_every_family_forward_reverse_and_finite_differences():
-    families, figures, space, x0 = setup()
+    families, forward_and_value, adjoint, space, x0 = setup()
     assert families == ["buoyancy", "cable_length", "cut", "ea", "hanging_ratio", "mesh_side", "sinker_mass",
                         "twine_diameter"]
     t0 = np.zeros(len(families))
-    forward = np.asarray(jax.jacfwd(figures)(t0))            # (2 figures, families)
-    reverse = np.asarray(jax.jacrev(figures)(t0))            # the adjoint: one K^T solve per figure
+    forward = np.asarray(forward_and_value(t0)[0])           # (2 figures, families)
+    reverse = np.asarray(adjoint(t0))                        # the adjoint: one K^T solve per figure
     np.testing.assert_allclose(reverse, forward, rtol=0, atol=1e-9 * np.abs(forward).max(axis=1, keepdims=True).max())
     h = 1e-3
     for k, family in enumerate(families):
         e = np.zeros_like(t0)
         e[k] = h
-        f = lambda t: np.asarray(figures(t))  # noqa: E731
+        f = lambda t: np.asarray(forward_and_value(t)[1])  # noqa: E731
         fd = (8 * (f(t0 + e) - f(t0 - e)) - (f(t0 + 2 * e) - f(t0 - 2 * e))) / (12 * h)
         for i, figure in enumerate(("drag", "mean depth")):
             assert abs(fd[i]) > 1e-9, (family, figure)  # every family changes both figures
             assert abs(forward[i, k] - fd[i]) <= 1e-6 * abs(fd[i]), (family, figure, forward[i, k], fd[i])
     from jaxnet import figures as figures_lib
 
-    tensions = figures_lib.twine_tensions(space.reference, implicit.equilibrium(space.reference, solver=NEWTON, x0=x0).x)
-    assert (tensions <= 0).any()  # slack twines at this design
+    tensions = figures_lib.twine_tensions(space.reference, x0)
+    assert (tensions <= 0).any()  # slack twines at this design (x0 is its equilibrium)

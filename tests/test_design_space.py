@@ -47,7 +47,7 @@ def rig(twine=None):
     net.cable("bridle b", start=(top + 0.1, 0.0, 0.3), end=p.corner(1), rope=rope, n_bars=2, length=0.4)
     net.fix((-0.1, 0.0, 0.3))
     net.fix((top + 0.1, 0.0, 0.3))
-    net.float_(p.corner(0), 2.0, mass=0.05)
+    net.float(p.corner(0), 2.0, mass=0.05)
     net.sinker(p.corner(2), 0.3)
     net.sinker(p.nearest(0.5 * top, 0.0, -0.2), 0.1)
     return net

@@ -182,8 +182,9 @@ def test_drag_per_swept_width_gradient_through_the_trawl_equilibrium(trawl):
     directional = sum(float(jnp.sum(e.grad["cut"][p] * d[p])) for p in cuts)
     assert e.value == pytest.approx(561.14, rel=1e-4)  # jaxnet's drag per swept width of b1 (N/m)
     assert e.adjoint_residual < 1e-9
-    assert difference(1e-4) == pytest.approx(difference(5e-5), rel=1e-5)
-    assert directional == pytest.approx(difference(5e-5), rel=1e-5)
+    halved = difference(5e-5)
+    assert difference(1e-4) == pytest.approx(halved, rel=1e-5)
+    assert directional == pytest.approx(halved, rel=1e-5)
     # the height above a sea bed the node does not have: in the host path's compiled figure (its node types an
     # argument), an error naming the node when it runs, not a number
     free = int(np.flatnonzero(np.asarray(space.reference.nodes.limit_sense)[:, 2] != 1)[0])

@@ -10,7 +10,6 @@ import jaxnet  # noqa: F401  (float64)
 from jaxnet import current, geometry
 from jaxnet.terms import drag
 
-RNG = np.random.default_rng(20261204)
 
 L0, D, CN, CT, RHO = 0.02, 0.0012, 1.2, 0.1, 1025.0
 #: ½ ρ Cn D l0 and ½ ρ Ct D l0: drag of one twine per (m/s)² normal to and along it
@@ -27,16 +26,16 @@ jac_x = jax.jit(jax.jacfwd(netting, argnums=0))
 jac_c = jax.jit(jax.jacfwd(netting, argnums=2))
 
 
-def random_element(clockwise=False):
+def random_element(rng, clockwise=False):
     """A random triangle: twine coordinates (d of the requested sign) and positions around 5 cm."""
-    uv = RNG.uniform(-5, 5, size=(3, 2))
+    uv = rng.uniform(-5, 5, size=(3, 2))
     if (geometry.twine_determinant(uv) < 0) != clockwise:
         uv = uv[[0, 2, 1]]
-    return jnp.asarray(RNG.normal(size=(3, 3)) * 0.05), jnp.asarray(uv)
+    return jnp.asarray(rng.normal(size=(3, 3)) * 0.05), jnp.asarray(uv)
 
 
-def random_rotation():
-    q, r = np.linalg.qr(RNG.normal(size=(3, 3)))
+def random_rotation(rng):
+    q, r = np.linalg.qr(rng.normal(size=(3, 3)))
     q = q * np.sign(np.diag(r))
     return jnp.asarray(q * np.linalg.det(q))  # proper rotation
 
@@ -62,7 +61,7 @@ def diamond_panel(nu=4, nv=3, stretch=1.05, half_angle=0.6):
 
 
 @pytest.mark.parametrize("rotated", [False, True])
-def test_flat_panel_normal_to_the_current(rotated):
+def test_flat_panel_normal_to_the_current(rotated, rng):
     # every twine is normal to c: total drag = (number of twines) ½ ρ Cd D l0 c² along c, nothing tangential
     x, uv = diamond_panel()
     d = jax.vmap(geometry.twine_determinant)(uv)
@@ -71,7 +70,7 @@ def test_flat_panel_normal_to_the_current(rotated):
     np.testing.assert_allclose(jnp.abs(d).sum(), n_twines)
     c = jnp.array([0.0, 0.0, -0.8])
     if rotated:
-        R = random_rotation()
+        R = random_rotation(rng)
         x, c = x @ R.T, R @ c
     f = jax.vmap(netting_jit, in_axes=(0, 0, None))(x, uv, c)
     total = f.sum(axis=(0, 1))
@@ -86,10 +85,10 @@ def test_flat_panel_normal_to_the_current(rotated):
         assert np.isfinite(jax.vmap(jac, in_axes=(0, 0, None))(x, uv, c)).all()
 
 
-def test_drag_uses_unstretched_twine_length():
+def test_drag_uses_unstretched_twine_length(rng):
     # book text after 4.117: the area is D l0 whatever the stretch; only U's direction matters
-    x, uv = random_element()
-    c = jnp.asarray(RNG.normal(size=3))
+    x, uv = random_element(rng)
+    c = jnp.asarray(rng.normal(size=3))
     np.testing.assert_allclose(netting_jit(1.7 * x, uv, c), netting_jit(x, uv, c), rtol=1e-12)
 
 
@@ -159,10 +158,10 @@ def test_collapsed_element_is_finite():
 
 
 @pytest.mark.parametrize("clockwise", [False, True])
-def test_stiffness_equals_finite_differences(clockwise):
+def test_stiffness_equals_finite_differences(clockwise, rng):
     for _ in range(6):
-        x, uv = random_element(clockwise)
-        c = jnp.asarray(RNG.normal(size=3))
+        x, uv = random_element(rng, clockwise)
+        c = jnp.asarray(rng.normal(size=3))
         jx = np.asarray(jac_x(x, uv, c)).reshape(9, 9)
         fd = central_differences(lambda y: netting_jit(y.reshape(3, 3), uv, c).ravel(), x.ravel(), 1e-7)
         np.testing.assert_allclose(jx, fd, rtol=1e-5, atol=1e-6 * np.abs(fd).max())
@@ -180,10 +179,10 @@ def book_directions(U, c):
 
 @pytest.mark.parametrize("clockwise", [False, True])
 @pytest.mark.parametrize("alpha_deg", [17.0, 60.0, 110.0, 163.0])
-def test_twine_at_an_angle_matches_book_4114_4117(alpha_deg, clockwise):
+def test_twine_at_an_angle_matches_book_4114_4117(alpha_deg, clockwise, rng):
     # U twines at angle alpha to c: |F| = ½ρ Cd D l0 (|c| sin a)² |d|/2, |T| = f ½ρ Cd D l0 (|c| cos a)² |d|/2
     # (Ct = f Cd), directions 4.116-4.117; the V twines alike with beta
-    R = random_rotation()
+    R = random_rotation(rng)
     uv = jnp.array([[0.0, 0.0], [3.0, 0.0], [0.0, 2.0]])
     if clockwise:
         uv = uv[jnp.array([0, 2, 1])]
@@ -238,11 +237,11 @@ def test_bar_drag_closed_form(alpha_deg):
         np.testing.assert_allclose(2 * f[0], expected, rtol=1e-12, atol=1e-15)
 
 
-def test_bar_stiffness_equals_finite_differences():
+def test_bar_stiffness_equals_finite_differences(rng):
     jx = jax.jit(jax.jacfwd(bar, argnums=0))
     jc = jax.jit(jax.jacfwd(bar, argnums=2))
     for _ in range(6):
-        x, c, rest = jnp.asarray(RNG.normal(size=(2, 3))), jnp.asarray(RNG.normal(size=3)), 0.7
+        x, c, rest = jnp.asarray(rng.normal(size=(2, 3))), jnp.asarray(rng.normal(size=3)), 0.7
         fd = central_differences(lambda y: bar_jit(y.reshape(2, 3), rest, c).ravel(), x.ravel(), 1e-7)
         got = np.asarray(jx(x, rest, c)).reshape(6, 6)
         np.testing.assert_allclose(got, fd, rtol=1e-5, atol=1e-7 * np.abs(fd).max())
@@ -267,13 +266,13 @@ def test_node_drag_closed_form():
     np.testing.assert_array_equal(drag.node_drag(cda, jnp.zeros(3), RHO), 0.0)
 
 
-def test_rotating_element_and_current_rotates_the_forces():
+def test_rotating_element_and_current_rotates_the_forces(rng):
     for clockwise in (False, True):
         for _ in range(3):
-            x, uv = random_element(clockwise)
-            c = jnp.asarray(RNG.normal(size=3))
-            R = random_rotation()
-            shift = jnp.asarray(RNG.normal(size=3))
+            x, uv = random_element(rng, clockwise)
+            c = jnp.asarray(rng.normal(size=3))
+            R = random_rotation(rng)
+            shift = jnp.asarray(rng.normal(size=3))
             moved = netting_jit(x @ R.T + shift, uv, R @ c)
             np.testing.assert_allclose(moved, netting_jit(x, uv, c) @ R.T, rtol=1e-11, atol=1e-16)
             moved = bar_jit(x[:2] @ R.T + shift, 0.3, R @ c)
@@ -331,10 +330,10 @@ def test_current_without_profile_and_with_one_point():
     np.testing.assert_allclose(sheared_dz(-5.0, jnp.nan, 1.0, east)[0], 0.02, rtol=1e-14)
 
 
-def test_drag_in_a_sheared_current_sees_dc_dz():
+def test_drag_in_a_sheared_current_sees_dc_dz(rng):
     # with the current evaluated at the element's centroid inside the differentiated function, the stiffness
     # includes d c/d z: compare with finite differences of the composed force
-    x, uv = random_element()
+    x, uv = random_element(rng)
     x = x + jnp.array([0.0, 0.0, -5.0])
     force = jax.jit(lambda y: netting(y, uv, sheared(geometry.centroid(y)[2])))
     jx = np.asarray(jax.jit(jax.jacfwd(force))(x)).reshape(9, 9)
@@ -422,28 +421,38 @@ def test_femnet_catch_cod_end_twines_lose_the_cross_flow():
     assert np.abs(exact[1]) < 1e-14 * exact[0] and abs(exact[2]) > 0.1 * exact[0]
 
 
-def test_femnet_catch_along_the_current_and_frame():
-    # random elements and currents: the part along c is the exact drag's; only the cross part differs;
-    # the form is a vector function of the element and c (turning both turns the force)
+def test_femnet_catch_along_the_current_and_frame(rng):
+    # random elements and currents: the part along c is the exact drag's; only the cross part differs, by U's cross
+    # part turned from ê_U onto ê_V (the docstring's form: (F_U.ê_U)(ê_V - ê_U), a third per vertex); the form is
+    # a vector function of the element and c (turning both turns the force)
     differs = 0
     for clockwise in (False, True):
         for _ in range(4):
-            x, uv = random_element(clockwise)
-            c = jnp.asarray(RNG.normal(size=3))
+            x, uv = random_element(rng, clockwise)
+            c = jnp.asarray(rng.normal(size=3))
             f, exact = femnet_catch_jit(x, uv, c), netting_jit(x, uv, c)
             np.testing.assert_allclose(f @ c, exact @ c, rtol=1e-12, atol=1e-14 * np.abs(exact).max())
+            U, V, _ = geometry.twine_vectors(x, uv)
+            parts = netting_parts(x, uv, c)
+            e_c = np.asarray(c) / np.linalg.norm(c)
+            across = [np.asarray(w) - (np.asarray(w) @ e_c) * e_c for w in (U, V)]
+            e_u, e_v = (a / np.linalg.norm(a) for a in across)
+            moved = np.asarray(parts["u_normal"] + parts["u_tangential"]) @ e_u * (e_v - e_u) / 3.0
+            np.testing.assert_allclose(f - exact, np.broadcast_to(moved, (3, 3)), atol=1e-12 * np.abs(exact).max())
             differs += np.abs(f - exact).max() > 1e-3 * np.abs(exact).max()
-            R = random_rotation()
+            R = random_rotation(rng)
             np.testing.assert_allclose(femnet_catch_jit(x @ R.T, uv, R @ c), f @ R.T, rtol=1e-11,
                                        atol=1e-13 * np.abs(f).max())
-    assert differs == 8
+    # and the forms do differ: that difference vanishes only as U turns normal to c (or along it) or ê_V turns onto
+    # ê_U, below 1e-3 of the drag on 1.5 % of random draws (400 drawn): most of the 8, not every one, differ
+    assert differs >= 4
 
 
 @pytest.mark.parametrize("clockwise", [False, True])
-def test_femnet_catch_stiffness_equals_finite_differences(clockwise):
+def test_femnet_catch_stiffness_equals_finite_differences(clockwise, rng):
     for _ in range(4):
-        x, uv = random_element(clockwise)
-        c = jnp.asarray(RNG.normal(size=3))
+        x, uv = random_element(rng, clockwise)
+        c = jnp.asarray(rng.normal(size=3))
         jx = np.asarray(femnet_jac_x(x, uv, c)).reshape(9, 9)
         fd = central_differences(lambda y: femnet_catch_jit(y.reshape(3, 3), uv, c).ravel(), x.ravel(), 1e-7)
         np.testing.assert_allclose(jx, fd, rtol=1e-5, atol=1e-6 * np.abs(fd).max())
@@ -483,14 +492,14 @@ def test_femnet_catch_degenerate_cases_are_finite(case):
         np.testing.assert_array_equal(jc, 0.0)
 
 
-def test_model_code_3_is_femnet_catch():
+def test_model_code_3_is_femnet_catch(rng):
     # the term passes code 3 Ct = f Cd, as the twine drag (code 0)
     from types import SimpleNamespace
 
     from jaxnet.terms import drag as drag_term
 
-    x, uv = random_element()
-    c = jnp.asarray(RNG.normal(size=3))
+    x, uv = random_element(rng)
+    c = jnp.asarray(rng.normal(size=3))
     p = SimpleNamespace(uv=uv, l0=L0, diameter=D, cd_normal=CN, tangential_ratio=CT / CN, drag_model=3)
     model = drag_term.NETTING_DRAG_MODELS[3]
     assert model.scope == "femnet_catch_drag" and model.twines
@@ -540,11 +549,11 @@ def test_the_wetted_share_is_smooth_and_keeps_the_ramps_integral():
     assert np.abs(np.diff(slope)).max() < 1e-3 / band  # no jump anywhere
 
 
-def test_netting_and_bodies_at_the_surface_keep_the_drag_of_their_immersed_vertices():
+def test_netting_and_bodies_at_the_surface_keep_the_drag_of_their_immersed_vertices(rng):
     # a triangle with a vertex deep, one on the water plane and one high above it: its vertices keep 1, 1/2 and 0
     # of their thirds; a float of size 0.1 m on the plane half its drag
     env = _surface_env()
-    x, uv = random_element()
+    x, uv = random_element(rng)
     x = x.at[:, 2].set(jnp.array([-1.0, 0.3, 1.5]))
     args = dict(uv=uv, l0=L0, diameter=D, cd_normal=jnp.asarray(CN), cd_tangential=jnp.asarray(CT),
                 drag_model=jnp.asarray(0), env=env, models=(0,), shielded=False)
@@ -558,7 +567,7 @@ def test_netting_and_bodies_at_the_surface_keep_the_drag_of_their_immersed_verti
                                0.5 * np.asarray(body), rtol=1e-14)
 
 
-def test_the_wetted_bar_drag_stiffness_is_its_derivative_across_the_surface():
+def test_the_wetted_bar_drag_stiffness_is_its_derivative_across_the_surface(rng):
     # ends inside the pipe's band, where the share changes with height: autodiff and the closed form's product
     # rule against central differences of the force
     from jaxnet.closed_form.drag_elements import bar_drag_on_element_stiffness
@@ -566,7 +575,7 @@ def test_the_wetted_bar_drag_stiffness_is_its_derivative_across_the_surface():
     env, diameter, rest = _surface_env(), 0.25, 2.0
     force = jax.jit(lambda y: drag.bar_drag_on_element(y, None, rest, diameter, 1.0, 0.1, env, wetted=True))
     for _ in range(4):
-        x = jnp.array([[0.0, 0.0, 0.3], [0.3, 1.9, 0.3]]) + jnp.asarray(RNG.uniform(-0.1, 0.1, size=(2, 3)))
+        x = jnp.array([[0.0, 0.0, 0.3], [0.3, 1.9, 0.3]]) + jnp.asarray(rng.uniform(-0.1, 0.1, size=(2, 3)))
         fd = central_differences(lambda y: force(y.reshape(2, 3)).ravel(), x.ravel(), 1e-6)
         auto = np.asarray(jax.jacfwd(force)(x)).reshape(6, 6)
         closed = np.asarray(bar_drag_on_element_stiffness(x, None, rest, diameter, 1.0, 0.1, env, wetted=True))
@@ -578,14 +587,15 @@ def test_the_wetted_bar_drag_stiffness_is_its_derivative_across_the_surface():
 
 
 @pytest.mark.parametrize("models", [(0,), (0, 3)])
-def test_the_wetted_netting_stiffness_behind_a_catch_front_is_its_derivative(models):
+def test_the_wetted_netting_stiffness_behind_a_catch_front_is_its_derivative(models, rng):
     # both product rules at once: a triangle cut by a catch front (its part behind it shielded) with two vertices
     # inside the twines' band at the surface; the closed form (the drag from its own intermediate values) against
     # autodiff, and autodiff against central differences
     from jaxnet.closed_form.drag_elements import netting_drag_on_element_stiffness
+    from jaxnet.terms import pressure
 
     env = _surface_env(0.3)
-    x, uv = random_element()
+    x, uv = random_element(rng)
     x = x.at[:, 2].set(jnp.array([0.3 + 3e-4, 0.3 - 4e-4, 0.28]))
     axis = jnp.array([1.0, 0.0, 0.0])
     state = {"front": jnp.median(x @ axis), "axis": axis}
@@ -594,8 +604,17 @@ def test_the_wetted_netting_stiffness_behind_a_catch_front_is_its_derivative(mod
     force = jax.jit(lambda y: drag.netting_drag_on_element(y, state, **args))
     auto = np.asarray(jax.jacfwd(force)(x)).reshape(9, 9)
     closed = np.asarray(netting_drag_on_element_stiffness(x, state, **args))
-    fd = central_differences(lambda y: force(y.reshape(3, 3)).ravel(), x.ravel(), 1e-8)
+    # Richardson-extrapolated, 2 D(h/2) - D(h): moving the vertex on the front along the axis, the shielded share is
+    # C1 with a jump of its second derivative (as the catch pressure, tests/test_pressure.py), which leaves an
+    # error h/4 times that jump in D(h): over the tolerance on 1 random element in 40, gone once extrapolated
+    force_of = lambda y: force(y.reshape(3, 3)).ravel()  # noqa: E731
+    fd = 2 * central_differences(force_of, x.ravel(), 5e-9) - central_differences(force_of, x.ravel(), 1e-8)
     np.testing.assert_allclose(auto, fd, rtol=1e-5, atol=1e-6 * np.abs(fd).max())
     np.testing.assert_allclose(-closed, auto, rtol=1e-10, atol=1e-12 * np.abs(auto).max())
-    keep = np.asarray(force(x))
-    assert 0.0 < np.abs(keep[0]).max() < np.abs(keep[2]).max()  # the wetted shares and the front both act
+    # the wetted shares and the front both act: vertices 0 and 1 in the band, partly wet; the front through the
+    # median vertex, part of the triangle behind it. (Not "vertex 0 keeps less drag than vertex 2": true of the
+    # shares, not of the force when vertex 2 is the one behind the front, as for some random elements.)
+    shares = np.asarray(drag.wetted_shares(x, D, env))
+    behind = np.asarray(pressure.clipped_shape_integrals(pressure.front_heights(x, state["front"], axis)))
+    assert np.all((0.0 < shares[:2]) & (shares[:2] < 1.0)) and shares[2] == 1.0 and 0.0 < behind.sum() < 1.0
+    assert np.abs(np.asarray(force(x))).max() > 0.0

@@ -19,6 +19,7 @@ from jaxnet.io import femnet
 from jaxnet.materials import DRAG_MODELS
 from jaxnet.net import Net, Twine
 from jaxnet.scene import SceneError
+from jaxnet.solve import programs
 from jaxnet.terms import drag as drag_term
 
 jax.config.update("jax_enable_x64", True)
@@ -250,9 +251,14 @@ def test_b2_on_femnets_mesh_at_femnets_equilibrium():
                                          scene.netting.vertices.shape[0])
     assert summary["surface drag (N)"][0] == 0.0
 
+    # one compiled program per set of terms (op by op, the element vmaps would compile dozens of small
+    # programs), with the XLA options of jaxnet's own programs
+    nodal_force = programs.jit(lambda x, s, model: assemble.nodal_force(x, s, model, assemble.loads(s, model)),
+                               static_argnames="model")
+
     def residual(s):
         model = model_lib.active_terms(s)
-        force = np.asarray(assemble.nodal_force(jnp.asarray(pos), s, model, assemble.loads(s, model)))
+        force = np.asarray(nodal_force(jnp.asarray(pos), s, model))
         return np.linalg.norm(np.where(np.asarray(s.nodes.fixed), 0.0, force), axis=1), [t.name for t in model]
 
     nodal, names = residual(scene)

@@ -219,7 +219,8 @@ def test_the_steps_tangent_is_the_derivative_of_its_residual():
     def residual(y):
         return kernel.evaluate(y, jnp.zeros_like(load), load, 1.0, scene, pattern, model, step)[1].ravel()[free]
 
-    data = kernel.tangent(jnp.asarray(x), state, 1.0, scene, pattern, model, "autodiff", step)
+    # one compiled program, as the solver runs it
+    data = jax.jit(lambda y: kernel.tangent(y, state, 1.0, scene, pattern, model, "autodiff", step))(jnp.asarray(x))
     import scipy.sparse as sp
 
     K = sp.csr_matrix((np.asarray(data), np.asarray(pattern.indices), np.asarray(pattern.indptr))).toarray()
@@ -231,7 +232,7 @@ def test_the_steps_tangent_is_the_derivative_of_its_residual():
         fd = -(np.asarray(residual(jnp.asarray(x + e))) - np.asarray(residual(jnp.asarray(x - e)))) / (2 * eps)
         np.testing.assert_allclose(K[:, j], fd, rtol=1e-6, atol=1e-6 * np.abs(fd).max())
     # the inertia alone is (M + M_a)/Δt² on the diagonal (4.271): jax.hessian of the inertia energy agrees
-    H = jax.hessian(step.inertia_energy)(x_prev)
+    H = jax.jit(jax.hessian(step.inertia_energy))(x_prev)
     np.testing.assert_allclose(np.asarray(H).reshape(x_prev.size, -1), np.diag(np.asarray(mass).ravel()) / h**2,
                                rtol=1e-12, atol=1e-9)
 
@@ -334,13 +335,15 @@ def test_the_cage_in_waves_starts_from_its_static_equilibrium_without_a_shock(tm
     assert again[2] == 6.0 and float(again[1].motions[0].motion.ramp) == 6.0
     eq = statics.solve(dynamics.scene_at(scene, loading, 0.0), case.solver)
     static = np.asarray(eq.reaction(scene)).sum(axis=0)
-    run = dynamics.simulate(scene, 12.0, case.time.solver, loading, record_every=0.25, x0=np.asarray(eq.x),
+    # to the end of the ramp and half a period at full height: the heave's crest (6 s) and trough (9 s)
+    run = dynamics.simulate(scene, 9.0, case.time.solver, loading, record_every=0.25, x0=np.asarray(eq.x),
                             out=tmp_path, vtk=False, progress=False)
     total = run.figures["reaction_total_N"]
     times = run.times
     np.testing.assert_allclose(total[0], static, rtol=1e-6, atol=1e-6 * np.abs(static).max())
-    # the swing of the vertical reaction once the waves are at full height (6-12 s), and how far the first
-    # second strays from the static reaction: a small part of it (measured: 1.5 kN of 19.4 kN)
+    # the swing of the vertical reaction once the waves are at full height, from the crest to the trough (6-9 s;
+    # the swing over a whole period is no smaller, so both bounds below are no looser than over 6-12 s), and
+    # how far the first second strays from the static reaction: a small part of it (measured: 0.28 kN of 12.1 kN)
     full = total[times >= 6.0, 2]
     swing = full.max() - full.min()
     first = np.abs(total[times <= 1.0, 2] - static[2]).max()

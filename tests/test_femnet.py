@@ -12,7 +12,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxnet import assemble, cli, geometry, model as model_lib
+from jaxnet import assemble, cli, figures, geometry, model as model_lib
 from jaxnet.io import femnet
 from jaxnet.scene import SceneError
 from jaxnet.solve.statics import solve
@@ -30,8 +30,10 @@ def _sta(case, scene):
 
 
 def _residual_at(scene, x):
-    """jaxnet's out-of-balance nodal forces (N, 3) at positions x, zero on held coordinates; and per term."""
-    per = assemble.term_forces(jnp.asarray(x), scene, model=model_lib.active_terms(scene))
+    """jaxnet's out-of-balance nodal forces (N, 3) at positions x, zero on held coordinates; and per term.
+    (:func:`jaxnet.assemble.term_forces` of every active term, by the compiled program of
+    :func:`jaxnet.figures.nodal_forces_by_term`, which the case's summary figures then reuse.)"""
+    per = figures.nodal_forces_by_term(scene, x)
     total = sum(np.asarray(v) for v in per.values())
     return np.where(np.asarray(scene.nodes.fixed), 0.0, total), {k: np.asarray(v).sum(axis=0) for k, v in per.items()}
 
@@ -106,7 +108,10 @@ def _line_of(text, needle):
     ("Traction stiffness (N):\t\t\t6000.000000", "Traction stiffnes (N):\t\t\t6000.000000", "Traction stiffnes",
      "expected the field"),
     ("Unstretched length (m):\t\t\t0.022000", "Unstretched length (m):\t\t\tnan", "nan", "not a finite number"),
-    ("Traction stiffness (N):\t\t\t6000.000000", "Traction stiffness (N):\t\t\t-6000.000000", "-6000", "must be >= 0"),
+    ("Traction stiffness (N):\t\t\t6000.000000", "Traction stiffness (N):\t\t\t-6000.000000", "-6000", "must be > 0"),
+    # twines without traction stiffness hold nothing: a mechanism, refused at the line (0 stays legal in compression)
+    ("Traction stiffness (N):\t\t\t6000.000000", "Traction stiffness (N):\t\t\t0.000000",
+     "Traction stiffness (N):\t\t\t0.0", "'panel 1: traction stiffness' must be > 0, got 0.0"),
     ("L: 1.97", "L: 0.0", "L: 0.0", "must be > 0"),
     # (waves and dynamic settings are read: test_dynamic_settings_and_waves_are_read checks their errors)
     # a limit's sense is -1 (ceiling), 0 (none) or 1 (floor, fond.c's sea bed): anything else is refused
@@ -178,11 +183,13 @@ def test_nr_netting_on_femnet_mesh_matches_femnet():
     # that leftover force alone, lands within 0.5 mm of jaxnet's equilibrium, 10.5 mm away: the difference
     # is the linear response of the net's soft (slack) modes to the force FEMNET's criterion leaves.
     from jaxnet import linalg
+    from jaxnet.solve import programs
 
     model = model_lib.active_terms(scene)
     pattern = assemble.build_pattern(scene, model)
     free = np.asarray(pattern.free)
-    K = np.asarray(assemble.tangent(jnp.asarray(pos), scene, model, pattern))
+    # compiled (op by op, its element vmaps would compile dozens of small programs), with the solver's XLA options
+    K = np.asarray(programs.jit(assemble.tangent, static_argnames="model")(jnp.asarray(pos), scene, model, pattern))
     dx, ok = linalg.HostSolver(pattern.indptr, pattern.indices).solve(K, r.ravel()[free])
     newton = pos.ravel().copy()
     newton[free] += dx
@@ -653,3 +660,25 @@ def test_the_docs_command_table_names_every_input_command_of_the_grammar():
             else:
                 named.add(name)
     assert named == set(grammar.INPUTS)
+
+
+def test_a_distance_from_a_node_to_itself_is_a_heading():
+    """FEMNET's cases print a title as a distance from global node 1 to itself ("PELAGIC TRAWL", 0 m, no decimals;
+    the manual: "is zero m because the two nodes are the same"): reported as a heading, with no value or unit, not
+    as a measurement of 0 m; a distance between two nodes stays a figure (m), in the file's order."""
+    import dataclasses
+    from types import SimpleNamespace
+
+    don = femnet.parse_don(pathlib.Path(__file__).parent / "data" / "femnet-corpus" / "1pelagic_trawl" / "s2.don")
+    outputs = [dataclasses.asdict(t) for t in don.text_outputs]
+    assert outputs[0]["kind"] == "distances" and outputs[0]["values"] == {"node_1": 1, "node_2": 1}
+    n = 60   # global node k is node k - 1 here, each at (k, 2k, 0): boat 48 to door 49 is sqrt(5) m
+    x = np.stack([np.arange(n), 2.0 * np.arange(n), np.zeros(n)], axis=1)
+    eq = SimpleNamespace(x=x, force=np.zeros_like(x))
+    printed = femnet.text_output_figures(SimpleNamespace(bars=None), eq,
+                                         {"text_outputs": outputs, "global_nodes": list(range(n))})
+    assert len(printed) == len(outputs)
+    assert printed[0] == {"kind": "heading", "comment": "PELAGIC TRAWL", "value": None, "unit": None}
+    assert printed[1] == {"kind": "distances", "comment": "Boat to door distance", "value": pytest.approx(np.sqrt(5.0)),
+                          "unit": "m"}
+    assert [p["kind"] for p in printed].count("heading") == 1

@@ -21,8 +21,9 @@ def test_the_view_draws_the_whole_net_coloured_by_tension():
     assert len(mesh.i) == copies * len(tri)
     np.testing.assert_array_equal(mesh.i[len(tri):2 * len(tri)], tri[:, 0] + n)  # the second copy's faces
     tw = figures.twine_tensions(scene, x)
-    np.testing.assert_allclose(mesh.intensity, np.tile(tw.mean(axis=1), copies))
-    assert tw.max() > 0 and mesh.colorbar.title.text == "twine tension (N)"
+    np.testing.assert_allclose(mesh.intensity, np.tile(tw.max(axis=1), copies))   # the larger of U and V
+    assert np.any(tw[:, 0] != tw[:, 1]) and np.max(mesh.intensity) == tw.max() > 0     # the bar's top: the largest
+    assert mesh.colorbar.title.text == "twine tension, larger of U and V (N)"
     # the copies mirror the model in y = 0 and z = 0: the drawn points span both sides symmetrically
     points = np.stack([mesh.x, mesh.y, mesh.z], axis=1)
     np.testing.assert_allclose(points[:, 1].min(), -points[:, 1].max())

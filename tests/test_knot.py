@@ -10,7 +10,6 @@ import jaxnet  # noqa: F401  (float64)
 from jaxnet import geometry
 from jaxnet.terms import knot, opening
 
-RNG = np.random.default_rng(4278)
 STEP = np.eye(9)
 ONE_MESH = jnp.array([[0.0, 0.0], [2.0, 0.0], [0.0, 2.0]])  # d = 4: one mesh, two knots
 L0, KNOT, EA = 0.05, 0.006, 2000.0  # m, m, N
@@ -28,8 +27,8 @@ def lattice_positions(uv, alpha, side=L0, twist=None):
     return x if twist is None else x @ np.asarray(twist).T
 
 
-def random_rotation():
-    q, r = np.linalg.qr(RNG.normal(size=(3, 3)))
+def random_rotation(rng):
+    q, r = np.linalg.qr(rng.normal(size=(3, 3)))
     return q * np.sign(np.diag(r))
 
 
@@ -72,10 +71,10 @@ def test_contact_angle_is_where_neighbouring_knots_touch():
     np.testing.assert_allclose(knot.default_knot_stiffness(L0, KNOT, EA), H_BOOK, rtol=1e-14)
 
 
-def test_no_contact_while_more_open_than_the_contact_angle():
+def test_no_contact_while_more_open_than_the_contact_angle(rng):
     for alpha in (ALPHA_MIN + 1e-9, 0.3, np.pi / 4, 1.2, np.pi / 2 - ALPHA_MIN - 1e-9):
         for band in (BAND, 0.0):
-            x = lattice_positions(ONE_MESH, alpha, L0, random_rotation()).ravel()
+            x = lattice_positions(ONE_MESH, alpha, L0, random_rotation(rng)).ravel()
             e, f, K = evaluate(x, ONE_MESH, band)
             assert float(e) == 0.0 and float(jnp.abs(f).max()) == 0.0 and float(jnp.abs(K).max()) == 0.0
     # the book's one-sided contact: nothing even at the other closure
@@ -96,11 +95,11 @@ def test_default_band_and_stiffness_are_the_documented_ones():
 
 
 @pytest.mark.parametrize("depth", [0.2, 0.6])
-def test_below_the_band_the_couple_is_4279_with_the_4280_stiffness(depth):
+def test_below_the_band_the_couple_is_4279_with_the_4280_stiffness(depth, rng):
     # per knot the couple C does work 2 C dα (opening.py), |d|/2 knots: C = (dE/dα) / |d|.
     # Below the band, C = H (α - α_min + b/2) (4.279 with the contact moved by b/2), dC/dα = H of 4.280
     alpha = ALPHA_MIN - BAND - depth * (ALPHA_MIN - BAND)
-    twist = random_rotation()
+    twist = random_rotation(rng)
     h = 1e-6
     e_minus, e0, e_plus = (along_path(alpha + s, twist=twist) for s in (-h, 0.0, h))
     couple = (e_plus - e_minus) / (2 * h) / 4.0
@@ -111,7 +110,7 @@ def test_below_the_band_the_couple_is_4279_with_the_4280_stiffness(depth):
     np.testing.assert_allclose((e_plus - e_minus) / (2 * h) / 4.0, H_BOOK * (alpha - ALPHA_MIN), rtol=1e-7)
 
 
-def test_stiffness_is_continuous_at_onset_and_at_the_end_of_the_band():
+def test_stiffness_is_continuous_at_onset_and_at_the_end_of_the_band(rng):
     # d²E/dα² along the closing path by finite differences of the energy: with the C² ramp it goes
     # continuously from 0 (above α_min) to |d| H (below the band); the plain penalty jumps by |d| H
     h = 1e-7
@@ -129,7 +128,7 @@ def test_stiffness_is_continuous_at_onset_and_at_the_end_of_the_band():
     # the same with the jacfwd stiffness of the vertices, in 3D: above α_min K = 0; at α_min - ε the
     # ramp's K is (ε/b) times the plain penalty's (K = (|d|/2) H [g'' ∇α ∇α^T - g' ∇∇α] with g'' = 2ε/b
     # against 2, g' = ε²/b against 2ε), which tends to 4 H ∇α ∇α^T as ε -> 0: a jump
-    twist = random_rotation()
+    twist = random_rotation(rng)
     K_plain = {}
     for eps in (BAND / 10, BAND / 1000):
         above = lattice_positions(ONE_MESH, ALPHA_MIN + eps, L0, twist).ravel()
@@ -160,18 +159,18 @@ def test_penalty_bounds_and_smoothness():
 
 
 @pytest.mark.parametrize("clockwise", [False, True])
-def test_forces_and_stiffness_in_contact_by_finite_differences(clockwise):
+def test_forces_and_stiffness_in_contact_by_finite_differences(clockwise, rng):
     for _ in range(4):
         # a nearly closed net (deep in contact, or in the band), rotated, twines stretched unequally; the
-        # unequal stretch moves the half angle, so draws that leave the contact are drawn again (how many
-        # depends on the generator's state, which the order of the tests sets)
+        # unequal stretch moves the half angle, so draws that leave the contact are drawn again (the test's own
+        # generator: the same draws whichever tests ran before)
         for _ in range(100):
-            uv = RNG.uniform(-4, 4, size=(3, 2))
+            uv = rng.uniform(-4, 4, size=(3, 2))
             if (geometry.twine_determinant(uv) < 0) != clockwise:
                 uv = uv[[0, 2, 1]]
-            alpha = RNG.uniform(ALPHA_MIN - 3 * BAND, ALPHA_MIN - 0.2 * BAND)
-            x = lattice_positions(uv, alpha, L0, random_rotation()) * RNG.uniform(0.9, 1.1, size=3)
-            x = x.ravel() + RNG.normal(size=9) * 1e-4
+            alpha = rng.uniform(ALPHA_MIN - 3 * BAND, ALPHA_MIN - 0.2 * BAND)
+            x = lattice_positions(uv, alpha, L0, random_rotation(rng)) * rng.uniform(0.9, 1.1, size=3)
+            x = x.ravel() + rng.normal(size=9) * 1e-4
             if float(opening.half_angle(x.reshape(3, 3), uv)[0]) < ALPHA_MIN:
                 break
         assert float(opening.half_angle(x.reshape(3, 3), uv)[0]) < ALPHA_MIN
@@ -268,7 +267,7 @@ def femnet_evaluate(x, uv):
     return [np.asarray(a) for a in _femnet_evaluate(np.asarray(x, float).ravel(), np.asarray(uv, float))]
 
 
-def test_femnet_contact_angle_and_stiffness():
+def test_femnet_contact_angle_and_stiffness(rng):
     np.testing.assert_allclose(knot.femnet_contact_half_angle(L0, KNOT), np.arctan(0.06), rtol=1e-15)
     np.testing.assert_allclose(knot.femnet_knot_stiffness(L0, KNOT, EA), 5.0 / 3.0, rtol=1e-14)  # 0.05² 2000 / 3
     np.testing.assert_allclose(knot.femnet_knot_stiffness(L0, KNOT, EA), H_BOOK / 5, rtol=1e-14)
@@ -278,7 +277,7 @@ def test_femnet_contact_angle_and_stiffness():
     assert ALPHA_C < ALPHA_MIN
     for alpha, touching in ((ALPHA_C + 1e-9, False), (ALPHA_C - 1e-6, True), (0.5 * (ALPHA_C + ALPHA_MIN), False),
                             (np.pi / 2 - ALPHA_C - 1e-9, False), (np.pi / 2 - ALPHA_C + 1e-6, True), (np.pi / 4, False)):
-        e = femnet_evaluate(lattice_positions(ONE_MESH, alpha, L0, random_rotation()), ONE_MESH)[0]
+        e = femnet_evaluate(lattice_positions(ONE_MESH, alpha, L0, random_rotation(rng)), ONE_MESH)[0]
         assert (float(e) > 0.0) == touching, alpha
     assert along_path(0.5 * (ALPHA_C + ALPHA_MIN), band=0.0) > 0.0
 
@@ -310,9 +309,9 @@ def test_femnet_force_on_one_twine_pair_by_hand(alpha):
 
 
 @pytest.mark.parametrize("closure", ["alpha to 0", "alpha to pi/2"])
-def test_femnet_couple_per_knot_along_the_closing_path(closure):
+def test_femnet_couple_per_knot_along_the_closing_path(closure, rng):
     # per knot the couple does work 2 C dα, |d|/2 knots: C = (dE/dα) / |d| = 2 H cos α (α - α_0)
-    twist = random_rotation()
+    twist = random_rotation(rng)
     h = 1e-6
     depth = (0.3, 0.9) if closure == "alpha to 0" else (-0.3, -0.9)
     rest = ALPHA_C if closure == "alpha to 0" else np.pi / 2 - ALPHA_C
@@ -324,15 +323,15 @@ def test_femnet_couple_per_knot_along_the_closing_path(closure):
 
 
 @pytest.mark.parametrize("clockwise", [False, True])
-def test_femnet_forces_and_stiffness_by_finite_differences(clockwise):
+def test_femnet_forces_and_stiffness_by_finite_differences(clockwise, rng):
     for closure in (0.0, np.pi / 2):
-        uv = RNG.uniform(-4, 4, size=(3, 2))
+        uv = rng.uniform(-4, 4, size=(3, 2))
         if (geometry.twine_determinant(uv) < 0) != clockwise:
             uv = uv[[0, 2, 1]]
-        depth = RNG.uniform(0.2, 0.9) * ALPHA_C
+        depth = rng.uniform(0.2, 0.9) * ALPHA_C
         alpha = ALPHA_C - depth if closure == 0.0 else np.pi / 2 - ALPHA_C + depth
-        x = lattice_positions(uv, alpha, L0, random_rotation()) * RNG.uniform(0.95, 1.05, size=3)
-        x = x.ravel() + RNG.normal(size=9) * 1e-5
+        x = lattice_positions(uv, alpha, L0, random_rotation(rng)) * rng.uniform(0.95, 1.05, size=3)
+        x = x.ravel() + rng.normal(size=9) * 1e-5
         e, f, K, own = femnet_evaluate(x, uv)
         assert float(e) > 0.0
         h = 1e-8

@@ -97,10 +97,13 @@ def test_design_panel_cuts(monkeypatch):
     assert all(best["report"][b][2].meshes == best["foot"] for b in ns["bottoms"])
 
 
-def test_design_trawl(monkeypatch):
-    """The trawl study on FEMNET's b1 (small: two Adam steps): its figures are what they say, the optimiser's
-    history starts at the drawn trawl's figure, and the design written as .don and re-meshed by jaxnet gives the
-    design space's figures within the re-meshing's difference."""
+def test_design_trawl(monkeypatch, tmp_path):
+    """The trawl study on FEMNET's b1 (small: one Adam step in each optimisation): its figures are what they say,
+    the optimiser's history starts at the drawn trawl's figure, and the design written as .don and re-meshed by
+    jaxnet gives the design space's figures within the re-meshing's difference."""
+    # the notebook writes its runs and the designed .don under $TMPDIR/jaxnet-design-trawl: this test's own folder,
+    # not the /tmp one that another run (or another user's) shares and leaves behind
+    monkeypatch.setenv("TMPDIR", str(tmp_path))
     ns = run_notebook("design_trawl.ipynb", monkeypatch)
     before, after, trimmed, checked = ns["before"], ns["after"], ns["trimmed_figures"], ns["checked"]
     assert after["twine"] == pytest.approx(trimmed["twine"], rel=1e-12)  # trimming ropes leaves the netting
@@ -202,6 +205,8 @@ def test_codend_with_catch(monkeypatch):
     ns = run_notebook("codend_with_catch.ipynb", monkeypatch)
     rows, tol = ns["rows"], jn.Newton().tol
     assert [row["requested"] for row in rows] == ns["volumes"]
+    # the cross-section A(s) at many abscissae s: one compiled program for every volume (the same mesh)
+    sections = jax.jit(jax.vmap(catch_lib.front_area, in_axes=(None, None, 0, None, None, None)))
     for row in rows:
         scene, x = ns["shapes"][row["requested"]]
         tri, c, env = scene.netting.vertices, scene.catch, scene.environment
@@ -212,12 +217,14 @@ def test_codend_with_catch(monkeypatch):
         # A is piecewise quadratic in s, so 4000 trapezoids are within 1e-6; measured 7e-9)
         assert row["volume_m3"] == pytest.approx(row["requested"], rel=1e-8)
         s = np.linspace(row["front_m"], np.max(x[np.asarray(tri)] @ np.asarray(c.axis)), 4001)
-        area = jax.vmap(lambda s_: catch_lib.front_area(x, tri, s_, c.axis, c.symmetry, sign))(s)
-        assert np.trapezoid(np.asarray(area), s) == pytest.approx(row["requested"], rel=1e-6)
+        area = np.asarray(sections(x, tri, s, c.axis, c.symmetry, sign))
+        assert np.trapezoid(area, s) == pytest.approx(row["requested"], rel=1e-6)
         # the axial push of the catch's pressure forces on the netting behind the front is p × the front's
-        # cross-section (the divergence theorem on the closed catch), with p = ½ ρ Cd U² (4.246)
+        # cross-section (the divergence theorem on the closed catch), with p = ½ ρ Cd U² (4.246); the section
+        # at the front is the first of A(s) above (s[0] is the front)
         p = 0.5 * float(env.water_density) * float(c.drag_coefficient) * float(env.current_speed) ** 2
-        front_area = float(catch_lib.front_area(x, tri, row["front_m"], c.axis, c.symmetry, sign))
+        assert s[0] == row["front_m"]
+        front_area = float(area[0])
         assert row["catch_force"] == pytest.approx(p * front_area, rel=1e-9)
         assert row["drag_N"] == pytest.approx(p * front_area, rel=1e-9)
         # the net in equilibrium as a whole: reactions + drag + catch pressure

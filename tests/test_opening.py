@@ -4,12 +4,12 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from elements import random_twine_coordinates  # tests/elements.py
 
 import jaxnet  # noqa: F401  (float64)
 from jaxnet import geometry
 from jaxnet.terms import opening
 
-RNG = np.random.default_rng(4211)
 STEP = np.eye(9)
 H, ALPHA0 = 0.8, 0.55  # N·m/rad, rad (half angle)
 ONE_MESH = jnp.array([[0.0, 0.0], [2.0, 0.0], [0.0, 2.0]])  # d = 4: one mesh, two knots
@@ -28,16 +28,17 @@ def lattice_positions(uv, alpha, side=0.05, twist=None):
     return jnp.asarray(x if twist is None else x @ np.asarray(twist).T)
 
 
-def random_rotation():
-    q, r = np.linalg.qr(RNG.normal(size=(3, 3)))
+def random_rotation(rng):
+    q, r = np.linalg.qr(rng.normal(size=(3, 3)))
     return jnp.asarray(q * np.sign(np.diag(r)))
 
 
-def random_element(clockwise):
-    uv = RNG.uniform(-4, 4, size=(3, 2))
-    if (geometry.twine_determinant(uv) < 0) != clockwise:
-        uv = uv[[0, 2, 1]]
-    x = RNG.normal(size=(3, 3)) * 0.05
+def random_element(rng, clockwise):
+    # well-conditioned twine coordinates (tests/elements.py: 2 < |d| < 40, no side under a third of the longest):
+    # drawn anywhere in [-4, 4]², a sliver (|d| = 1e-3) times a nearly closed mesh (alpha = 0.005°) rounded 4.218
+    # and autodiff's dalpha/dx 4e-8 apart, roundoff growing as 1 / (|d| sin 2 alpha)
+    uv = random_twine_coordinates(rng, clockwise)
+    x = rng.normal(size=(3, 3)) * 0.05
     return jnp.asarray(x), jnp.asarray(uv)
 
 
@@ -66,28 +67,28 @@ grad_alpha = jax.jit(jax.grad(lambda x, uv: opening.half_angle(x, uv)[0]))
 
 
 @pytest.mark.parametrize("delta", [0.3, -0.2, 0.01])
-def test_one_mesh_opened_by_delta_stores_2_H_delta_squared(delta):
+def test_one_mesh_opened_by_delta_stores_2_H_delta_squared(delta, rng):
     # one mesh = 2 knots; at each the couple H(α - α0) turns U by dα and V by -dα: work 2 H (α - α0) dα,
     # i.e. H δα² per knot once opened by δα, 2 H δα² for the mesh, whatever its orientation and side
     for side in (0.02, 0.07):
-        x = lattice_positions(ONE_MESH, ALPHA0 + delta, side, random_rotation())
+        x = lattice_positions(ONE_MESH, ALPHA0 + delta, side, random_rotation(rng))
         np.testing.assert_allclose(energy(x.ravel(), ONE_MESH), 2.0 * H * delta**2, rtol=1e-11)
 
 
 @pytest.mark.parametrize("clockwise", [False, True])
-def test_many_mesh_element_stores_H_delta_squared_per_knot(clockwise):
+def test_many_mesh_element_stores_H_delta_squared_per_knot(clockwise, rng):
     # book example of Figs 4.6/4.8: d = 38, 9.5 meshes, 19 knots: 19 H δα²
     uv = jnp.array([[0.0, 0.0], [2.0, -5.0], [6.0, 4.0]])
     if clockwise:
         uv = uv[jnp.array([0, 2, 1])]
     delta = -0.17
-    x = lattice_positions(uv, ALPHA0 + delta, 0.03, random_rotation())
+    x = lattice_positions(uv, ALPHA0 + delta, 0.03, random_rotation(rng))
     np.testing.assert_allclose(energy(x.ravel(), uv), 19.0 * H * delta**2, rtol=1e-11)
 
 
-def test_rest_angle_is_a_minimum_with_the_derived_curvature():
+def test_rest_angle_is_a_minimum_with_the_derived_curvature(rng):
     # at α0 the forces vanish; along the opening path E = 2 H (α - α0)², so d²E/dα² = 4 H
-    rotation = random_rotation()
+    rotation = random_rotation(rng)
     x0 = lattice_positions(ONE_MESH, ALPHA0, twist=rotation).ravel()
     f0 = force(x0, ONE_MESH)
     assert float(jnp.abs(f0).max()) < 1e-12
@@ -103,9 +104,9 @@ def test_rest_angle_is_a_minimum_with_the_derived_curvature():
     assert eigenvalues.min() > -1e-9 * eigenvalues.max() and eigenvalues.max() > 0
 
 
-def test_half_angle_is_half_the_acos_of_4211():
+def test_half_angle_is_half_the_acos_of_4211(rng):
     for _ in range(10):
-        x, uv = random_element(clockwise=bool(RNG.integers(2)))
+        x, uv = random_element(rng, clockwise=bool(rng.integers(2)))
         U, V, _ = geometry.twine_vectors(np.asarray(x), np.asarray(uv))
         book = 0.5 * np.arccos(np.dot(U, V) / (np.linalg.norm(U) * np.linalg.norm(V)))
         np.testing.assert_allclose(half_angle(x, uv), book, rtol=1e-10)
@@ -149,18 +150,18 @@ def test_half_angle_derivatives_by_hand_are_autodiffs_and_finite_differences():
         assert np.all(np.isfinite(hessian(w)))
     # and the gradient holds no pad (the transpose of a slice), which XLA ran once per slice, each time
     # recomputing the knot contact's derivative before it
-    U, V = RNG.normal(size=3), RNG.normal(size=3)
+    U, V = rng.normal(size=3), rng.normal(size=3)
     assert " pad[" not in str(jax.make_jaxpr(jax.grad(geometry.half_opening_angle, argnums=(0, 1)))(U, V))
     assert " pad[" in str(jax.make_jaxpr(jax.grad(_plain_half_angle, argnums=(0, 1)))(U, V))
 
 @pytest.mark.parametrize("closed", ["U+V", "U-V"])
-def test_closed_meshes_have_finite_energy_forces_and_stiffness(closed):
+def test_closed_meshes_have_finite_energy_forces_and_stiffness(closed, rng):
     # α -> 0 (U parallel to V) and α -> π/2 (U antiparallel to V): E = 2 H α0² resp. 2 H (π/2 - α0)²
     limit = 0.0 if closed == "U+V" else jnp.pi / 2
     expected = 2.0 * H * (limit - ALPHA0) ** 2
     side = 0.05
     exact = jnp.array([[0.0, 0.0, 0.0], [2 * side, 0.0, 0.0], [(1 if closed == "U+V" else -1) * 2 * side, 0.0, 0.0]])
-    rotation = random_rotation()
+    rotation = random_rotation(rng)
     configurations = [exact, lattice_positions(ONE_MESH, limit, side, rotation)]
     # and nearly closed (either side of closure, in a rotated plane): the kink is steep but finite
     configurations += [lattice_positions(ONE_MESH, limit + s, side, rotation) for s in (1e-7, -1e-7)]
@@ -190,9 +191,9 @@ def test_collapsed_element_carries_nothing_and_stays_finite():
 
 
 @pytest.mark.parametrize("clockwise", [False, True])
-def test_force_is_minus_gradient_by_finite_differences(clockwise):
+def test_force_is_minus_gradient_by_finite_differences(clockwise, rng):
     for _ in range(6):
-        x, uv = random_element(clockwise)
+        x, uv = random_element(rng, clockwise)
         x = np.asarray(x).ravel()
         h = 1e-7
         fd = -np.array([(energy(x + h * STEP[i], uv) - energy(x - h * STEP[i], uv)) / (2 * h) for i in range(9)])
@@ -205,9 +206,9 @@ def test_force_is_minus_gradient_by_finite_differences(clockwise):
 
 
 @pytest.mark.parametrize("clockwise", [False, True])
-def test_jacfwd_stiffness_equals_finite_differences_of_forces(clockwise):
+def test_jacfwd_stiffness_equals_finite_differences_of_forces(clockwise, rng):
     for _ in range(6):
-        x, uv = random_element(clockwise)
+        x, uv = random_element(rng, clockwise)
         x = np.asarray(x).ravel()
         K = stiffness(x, uv)  # -dF/dx (4.219)
         h = 1e-7
@@ -237,10 +238,10 @@ def book_dalpha(x, uv, sin_of, u_signs=CORRECT_U_SIGNS):
 
 
 @pytest.mark.parametrize("clockwise", [False, True])
-def test_book_4217_4218_once_corrected(clockwise):
+def test_book_4217_4218_once_corrected(clockwise, rng):
     # F_wi = -H (α - α0) |d| dα/dw_i with the corrected 4.218
     for _ in range(6):
-        x, uv = random_element(clockwise)
+        x, uv = random_element(rng, clockwise)
         d = geometry.twine_determinant(np.asarray(uv))
         exact = grad_alpha(x, uv)
         corrected = book_dalpha(x, uv, lambda a: 2 * a)
@@ -255,9 +256,9 @@ def test_book_4217_4218_once_corrected(clockwise):
             assert np.abs(w - exact).max() > 1e-3 * np.abs(exact).max()
 
 
-def test_book_4215_is_minus_the_determinant_of_47():
+def test_book_4215_is_minus_the_determinant_of_47(rng):
     for _ in range(5):
-        _, uv = random_element(clockwise=False)
+        _, uv = random_element(rng, clockwise=False)
         (U1, V1), (U2, V2), (U3, V3) = np.asarray(uv)
         printed = (U2 - U1) * (V1 - V3) - (U3 - U1) * (V1 - V2)
         np.testing.assert_allclose(printed, -geometry.twine_determinant(uv), rtol=1e-13)

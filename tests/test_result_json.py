@@ -1,6 +1,7 @@
 """result.json explains itself (docs/result.md): a quarter model's figures for the modelled part and for the whole
-net, ``load_N`` the non-hydrodynamic groups at the equilibrium (a free surface's weight too) so that the balance
-closes, the inputs, version and date recorded, the worst node with its position, and ``jaxnet run`` writing and
+net, ``load_N`` the non-hydrodynamic groups at the equilibrium (a free surface's weight too) and ``water_N`` the
+hydrodynamic ones so that the balance closes, the weight and buoyancy by what carries it, the inputs, version and
+date recorded, the worst node with its position, a line on each main figure, and ``jaxnet run`` writing and
 printing them."""
 
 import dataclasses
@@ -87,15 +88,14 @@ def test_load_is_the_non_hydrodynamic_groups_and_closes_the_balance(cage):
     assert forces["weight_and_buoyancy_N"][2] < -10.0 and forces["external_N"] == [0.0, 0.0, 10.0]
     np.testing.assert_allclose(load, np.sum([forces[g] for g in forces if g not in hydro], axis=0), rtol=1e-12)
     np.testing.assert_allclose(load, np.add(forces["weight_and_buoyancy_N"], forces["external_N"]), rtol=1e-12)
+    np.testing.assert_allclose(result["water_N"], np.sum([forces[g] for g in hydro], axis=0), rtol=1e-12)
     # the balance, to what the solve leaves on the free coordinates
     total = np.asarray(result["reaction_N"]) + load + np.sum([forces[g] for g in hydro], axis=0)
     largest = max(np.abs(result["reaction_N"]).max(), np.abs(load).max())
     assert np.abs(total).max() <= scene.n_dof * result["residual_N"] < 1e-4 * largest
-    # a whole net: its own whole net
-    assert result["modelled_part"] == "the whole net"
-    whole = result["whole_net"]
-    assert whole["copies"] == 1 and whole["reaction_N"] == result["reaction_N"] and whole["load_N"] == result["load_N"]
-    assert whole["enclosed_volume_m3"] == result["enclosed_volume_m3"] > 0
+    # a whole net: its figures are the top level's, not repeated in a whole_net
+    assert result["modelled_part"] == "the whole net" and "whole_net" not in result
+    assert result["enclosed_volume_m3"] > 0
 
 
 def test_the_inputs_version_and_date_are_recorded(quarter, cage):
@@ -155,7 +155,7 @@ def test_cli_writes_and_prints_the_whole_net(tmp_path, capsys):
     for key in ("jaxnet_version", "date", "inputs", "modelled_part", "whole_net", "worst_node", "reaction_N",
                 "load_N", "forces_N", "catch"):
         assert key in result
-    assert result["inputs"]["source"] is None and "cod-end" in result["inputs"]["label"]
+    assert result["inputs"]["source"] == "built-in scene 'codend'" and "cod-end" in result["inputs"]["label"]
     assert result["inputs"]["solver"]["max_iter"] == 300 and result["inputs"]["solver"]["verbose"] is False
     whole, catch = result["whole_net"], result["catch"]
     assert whole["copies"] == 4 and catch["volume_whole_net_m3"] == pytest.approx(0.002, rel=1e-6)
@@ -186,4 +186,45 @@ def test_cli_of_a_scene_file_names_it_and_prints_no_bar_tension_without_bars(tmp
     np.testing.assert_allclose(result["load_N"], [0.0, 0.0, -2.0], rtol=1e-12, atol=1e-15)
     assert result["n_bars"] == 0
     assert "max twine tension" in printed and "max bar tension" not in printed and "whole net" not in printed
-    assert not re.search(r"-0(?![.\de])", printed), printed
+    # no figure printed as "-0" (the files' paths, under a temporary folder such as pytest-0, left out)
+    figures_printed = printed.replace(str(tmp_path), "DIR")
+    assert not re.search(r"(?<![\w.])-0(?![.\de])", figures_printed), printed
+
+
+def test_weight_and_buoyancy_are_split_by_what_carries_them(cage):
+    """The cage's weight and buoyancy by carrier: the netting (its twines' immersed weight, which the free surface
+    leaves below it), each collar pipe (buoyant: it floats, its share of the surface energy), the sinkers (20 kg of
+    lead at the foot of each of the 8 seams, immersed: their weight less the water they displace); the carriers add
+    up to the group, and each figure is what its own term gives."""
+    scene, eq, result = cage
+    carriers = result["weight_and_buoyancy_by_carrier_N"]
+    names = list(carriers)
+    assert names[0] == "netting" and names[-1] == "sinkers" and "floats" not in names
+    assert [n for n in names if n.startswith("collar")] == [f"collar {k}" for k in range(8)]
+    np.testing.assert_allclose(np.sum(list(carriers.values()), axis=0), result["forces_N"]["weight_and_buoyancy_N"],
+                               rtol=1e-10, atol=1e-9)
+    env = scene.environment
+    lead = np.asarray(scene.nodes.mass) - float(env.water_density) * np.asarray(scene.nodes.volume)
+    sinkers = -float(env.gravity) * lead[lead > 0].sum()
+    assert sinkers < 0
+    assert lead[lead > 0].sum() == pytest.approx(8 * 20.0 * (1 - float(env.water_density) / 11340.0), rel=1e-12)
+    np.testing.assert_allclose(carriers["sinkers"], [0.0, 0.0, sinkers], rtol=1e-12, atol=1e-12)
+    assert all(carriers[f"collar {k}"][2] > 0 for k in range(8))   # the collar floats
+    assert carriers["netting"][2] < 0                                # polyamide is heavier than water
+
+
+def test_every_figure_is_explained_and_a_built_in_is_named(tmp_path):
+    """result.json's ``about`` has a line for each main figure it holds (the load and the water's forces among them:
+    the balance), and the source of a built-in scene names it."""
+    out = tmp_path / "panel"
+    assert cli.main(["run", "--scene", "hanging", "--set", "meshes=8", "--set", "step=0.05", "--out", str(out),
+                     "--quiet", "--no-cache", "--no-pictures"]) == 0
+    result = json.loads((out / "result.json").read_text())
+    assert result["inputs"]["source"] == "built-in scene 'hanging'"
+    about = result["about"]
+    for key in ("reaction_N", "load_N", "water_N", "forces_N", "weight_and_buoyancy_by_carrier_N", "residual_N"):
+        assert key in about and len(about[key]) > 20
+    assert "whole_net" not in about and "whole_net" not in result
+    assert "reaction_N + load_N + water_N = 0" in about["load_N"]
+    balance = np.add(np.add(result["reaction_N"], result["load_N"]), result["water_N"])
+    assert np.abs(balance).max() <= result["n_dof"] * result["residual_N"]

@@ -128,7 +128,7 @@ def rich_net():
     net.fix((6.5, 0.8, 0.0), axes="xz")
     net.attach(gill.corner(2), mass=1.0, volume=0.001, force=(0.0, 1.0, -2.0), drag_area=0.01, size=0.1)
     net.sinker(p.side(2), 2.0, density=7800.0)
-    net.float_(a.end, 30.0, mass=0.5, size=0.2, drag_area=0.02)
+    net.float(a.end, 30.0, mass=0.5, size=0.2, drag_area=0.02)
     net.attach(b.nodes, mass=0.25)
     net.body(p, (0.1, 0.1, -0.2), (1.0, 1.0, 0.5))
     net.body(p.nearest(2.4, 0.4, 0.0), (0.2, 0.2, 0.3), (1.2, 1.2, 1.2))

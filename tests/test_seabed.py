@@ -28,7 +28,6 @@ from jaxnet.terms import bottom
 from traced import traced_terms  # tests/traced.py
 
 RHO, G, LEAD = 1025.0, 9.81, 11340.0
-RNG = np.random.default_rng(7)
 
 
 def with_limits(scene, limit, sense, **environment):
@@ -86,12 +85,12 @@ grad_energy = jax.jit(jax.grad(bottom.contact_energy))
 hessian = jax.jit(jax.hessian(bottom.contact_energy))
 
 
-def test_contact_forces_and_stiffness_are_the_derivatives_of_its_energy():
+def test_contact_forces_and_stiffness_are_the_derivatives_of_its_energy(rng):
     k, b, h = 1e4, 1e-2, 1e-7
     for _ in range(6):
-        limit = RNG.normal(size=3)
-        sense = RNG.choice([-1, 0, 1], size=3)
-        x = limit - sense * RNG.uniform(-1.5 * b, 3 * b, size=3)  # outside, in the band and beyond
+        limit = rng.normal(size=3)
+        sense = rng.choice([-1, 0, 1], size=3)
+        x = limit - sense * rng.uniform(-1.5 * b, 3 * b, size=3)  # outside, in the band and beyond
         fd_grad = np.array([(energy(x + h * e, limit, sense, k, b) - energy(x - h * e, limit, sense, k, b)) / (2 * h)
                             for e in np.eye(3)])
         gr = np.asarray(grad_energy(x, limit, sense, k, b))
@@ -173,7 +172,7 @@ def sea_bed(with_net=True, **environment):
     net.fix(PRESSED["pushed"], axes="yz")
     net.sinker(PRESSED["heavy"], 1.0, LEAD)
     net.sinker(PRESSED["light"], 0.1, LEAD)
-    net.float_(PRESSED["float"], buoyancy_N=5.0)
+    net.float(PRESSED["float"], buoyancy_N=5.0)
     net.attach(PRESSED["pushed"], force=(7.0, 0.0, 0.0))
     net.cable("chain", start=(0.0, -1.0, -2.0), end=(LENGTH, -1.0, -2.0), rope=CHAIN, n_bars=N_BARS)
     net.fix((0.0, -1.0, -2.0))

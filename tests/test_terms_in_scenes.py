@@ -134,6 +134,14 @@ def hex_twine(**changes):
     return HexTwine(**{**dict(l0=HEX_TWINE, ea=1000.0, diameter=1e-3, density=RHO), **changes})
 
 
+def without_tension(scene, family):
+    """The scene with the traction and compression stiffnesses of ``family`` ("netting", "bars", "hexagonal")
+    zero: a scene no builder makes (a material of zero EA is refused), for the registry to drop the tension term."""
+    f = getattr(scene, family)
+    zero = np.zeros_like(np.asarray(f.ea_traction))
+    return dataclasses.replace(scene, **{family: dataclasses.replace(f, ea_traction=zero, ea_compression=zero)})
+
+
 def node_types(scene, environment=None, **fields):
     """The scene with FEMNET's per-node fields (one (3,) row for every node) and environment changes."""
     n = scene.n_nodes
@@ -146,8 +154,8 @@ SEA_BED = dict(limit=(0.0, 0.0, -10.0), limit_sense=(0, 0, 1))  # a floor 10 m d
 SINKER = dict(mass=1.0, volume=1.0 / 11340.0)  # 1 kg of lead
 #: per term: (scene with its parameters present and non-zero, the same scene with them zero or absent)
 ON_OFF = {
-    "netting_tension": (lambda: small_scene(), lambda: small_scene(twine(ea=0.0))),
-    "bar_tension": (lambda: small_scene(rope=rope()), lambda: small_scene(rope=rope(ea=0.0))),
+    "netting_tension": (lambda: small_scene(), lambda: without_tension(small_scene(), "netting")),
+    "bar_tension": (lambda: small_scene(rope=rope()), lambda: without_tension(small_scene(rope=rope()), "bars")),
     "netting_weight": (lambda: small_scene(twine(density=1140.0)), lambda: small_scene()),
     "bar_weight": (lambda: small_scene(rope=rope(density=1140.0)), lambda: small_scene(rope=rope())),
     "node_weight": (lambda: small_scene(**SINKER), lambda: small_scene()),
@@ -188,7 +196,7 @@ ON_OFF = {
     "node_gravity_at_surface": (lambda: small_scene(twine(diameter=0.0), surface=1.0, **SINKER),
                                 lambda: small_scene(twine(diameter=0.0), surface=1.0)),
     "hexagonal_tension": (lambda: small_scene(hexagonal=hex_twine()),
-                          lambda: small_scene(hexagonal=hex_twine(ea=0.0))),
+                          lambda: without_tension(small_scene(hexagonal=hex_twine()), "hexagonal")),
     "hexagonal_weight": (lambda: small_scene(hexagonal=hex_twine(density=1140.0)),
                          lambda: small_scene(hexagonal=hex_twine())),
     "hexagonal_gravity_at_surface": (lambda: small_scene(twine(diameter=0.0), hexagonal=hex_twine(), surface=1.0),

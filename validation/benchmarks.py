@@ -21,6 +21,8 @@ HERE = pathlib.Path(__file__).parent
 SCRIPTS = {
     "femnet_cases.py": ("FEMNET's cases: FEMNET's figures beside jaxnet's, iterations, cold and warm times",
                         ["--repeat", "1"], []),
+    "whole_process.py": ("`jaxnet run CASE.don` as a whole process, cold and with its programs on disk, against FEMNET",
+                         ["--repeat", "1", "--cases", "5catch/c2"], []),
     "compile_options.py": ("XLA's CPU options: compilation and run times of the solver's programs",
                            ["--runs", "10"], []),
     "superlu_memory.py": ("SuperLU's factors on the C heap: time and page faults per factorisation",

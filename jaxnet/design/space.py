@@ -20,7 +20,7 @@ reference design):
   ``hanging_ratio``  {mounting: ()}  E (dimensionless), see below.
   ``sinker_mass``    {sinker: ()}  per :meth:`Net.sinker <jaxnet.net.Net.sinker>` call (kg): its mass and its
                      displaced volume (mass / density of the lead) both follow.
-  ``buoyancy``       {float: ()}  per :meth:`Net.float_ <jaxnet.net.Net.float_>` call (N, net of its own
+  ``buoyancy``       {float: ()}  per :meth:`Net.float <jaxnet.net.Net.float>` call (N, net of its own
                      weight): its displaced volume follows.
   ``cable_length``   {cable: ()}  total rest length (m) of a cable not mounted on netting; its bars keep
                      their shares of the rope.

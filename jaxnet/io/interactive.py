@@ -1,5 +1,6 @@
-"""A 3D view of a net to turn with the mouse in a notebook (plotly): netting coloured by twine tension, cables
-by bar tension, the fixed nodes marked, the whole net drawn for a model with symmetry planes.
+"""A 3D view of a net to turn with the mouse in a notebook (plotly): netting coloured by twine tension (each
+triangle by the larger of its U and V twines' tensions, so that the colour bar's top is the largest twine
+tension), cables by bar tension, the fixed nodes marked, the whole net drawn for a model with symmetry planes.
 
 Why plotly: its figures are HTML and JavaScript that Jupyter (and any browser) shows without a server behind
 them, and its wheel is about 10 MB of pure Python; PyVista's static-HTML export needs VTK (a 140 MB wheel) and
@@ -7,7 +8,10 @@ trame. The view is for looking; the figures to read numbers off are in :mod:`jax
 files in :mod:`jaxnet.io.vtk`.
 
 plotly is an optional dependency (``pip install -e ".[notebooks]"``); importing this module does not need it,
-:func:`view` does and says so.
+:func:`view` does and says so. A figure's ``write_html`` embeds plotly.js (plotly's default); the notebooks'
+saved outputs load it from plotly's CDN (``notebooks/execute.py``: kilobytes per view instead of megabytes), and
+JupyterLab draws them from plotly's JSON without it. The page of a run that opens offline is net.html
+(:mod:`jaxnet.io.page`).
 """
 
 from __future__ import annotations
@@ -16,6 +20,9 @@ import numpy as np
 
 from jaxnet import figures
 from jaxnet.scene import mirrored
+
+#: the title of the netting's colour bar
+TWINE_LABEL = "twine tension, larger of U and V (N)"
 
 
 def _plotly():
@@ -34,13 +41,13 @@ def view(scene, x, twine_tension=None, bar_tension=None, title=None, whole=True)
       scene: the :class:`~jaxnet.scene.Scene`.
       x: node positions (N, 3), m.
       twine_tension: (E, 2) tensions (N) of the U and V twines of every triangle; default
-        :func:`jaxnet.figures.twine_tensions` at x. A triangle is coloured by their mean.
+        :func:`jaxnet.figures.twine_tensions` at x. A triangle is coloured by the larger of the two.
       bar_tension: (B,) tensions (N) of the cable bars; default :func:`jaxnet.figures.bar_tensions` at x.
       title: the figure's title.
       whole: draw the whole net of a model with symmetry planes (every mirrored copy), else the model only.
     Returns:
-      a ``plotly.graph_objects.Figure``: one Mesh3d of the triangles (cell intensity the mean twine tension,
-      its colour bar in N), one Scatter3d of the cables (coloured by bar tension), one of the fixed nodes;
+      a ``plotly.graph_objects.Figure``: one Mesh3d of the triangles (cell intensity the larger of the U and V
+      twine tensions, its colour bar in N), one Scatter3d of the cables (coloured by bar tension), one of the fixed nodes;
       equal scales on the three axes.
     """
     go = _plotly()
@@ -53,11 +60,11 @@ def view(scene, x, twine_tension=None, bar_tension=None, title=None, whole=True)
         n = x.shape[0]
         points = copies.reshape(-1, 3)
         faces = np.concatenate([tri + c * n for c in range(len(copies))])
-        intensity = np.tile(tw.mean(axis=1), len(copies))
+        intensity = np.tile(tw.max(axis=1), len(copies))
         traces.append(go.Mesh3d(x=points[:, 0], y=points[:, 1], z=points[:, 2], i=faces[:, 0], j=faces[:, 1],
                                 k=faces[:, 2], intensity=intensity, intensitymode="cell", colorscale="Viridis",
-                                colorbar={"title": {"text": "twine tension (N)"}}, flatshading=True,
-                                name="netting", hovertemplate="twine tension %{intensity:.3g} N<extra></extra>"))
+                                colorbar={"title": {"text": TWINE_LABEL}}, flatshading=True, name="netting",
+                                hovertemplate="larger twine tension %{intensity:.3g} N<extra></extra>"))
     if scene.bars is not None:
         bt = figures.bar_tensions(scene, x) if bar_tension is None else np.asarray(bar_tension, dtype=float)
         ends = np.asarray(scene.bars.ends)

@@ -59,7 +59,8 @@ import zlib
 
 import numpy as np
 
-from jaxnet import figures, scene as scene_lib
+from jaxnet import scene as scene_lib
+from jaxnet.figures import net_figures, nodal_forces_by_group, nodal_reactions
 
 #: ``node_type`` codes -> meaning (also in each file's field data)
 NODE_TYPES = {0: "free", 1: "held along some axis", 2: "held only across the symmetry planes it lies on"}
@@ -76,7 +77,8 @@ _BLOCK, _LEVEL = 1 << 15, 1
 _VTK_TYPES = {"f8": "Float64", "i1": "Int8", "i4": "Int32", "i8": "Int64", "u1": "UInt8"}
 
 
-def write_vtu(path, scene, x, residual=None, *, forces=True, point_data=None, write_whole=True):
+def write_vtu(path, scene, x, residual=None, *, forces=True, point_data=None, write_whole=True, figures=None,
+              force=None):
     """Write the net at positions x (N, 3) m to ``path`` (.vtu), with the data of the module docstring; for a
     model with symmetry planes also the whole net to ``NAME_whole.vtu`` beside it (``write_whole``). Returns
     the list of the paths written.
@@ -88,11 +90,17 @@ def write_vtu(path, scene, x, residual=None, *, forces=True, point_data=None, wr
       an instant of a dynamic run (where inertia joins it), so the time series leave them out.
     point_data: more point data, name -> (N,) or (N, 3) array (the time series' velocities); an (N, 3) float
       array is a vector (mirrored as one in the whole net).
+    figures: the :class:`jaxnet.figures.NetFigures` at x when already computed (a run hands the same to every
+      output), else computed here: the tensions, opening angles and nodal forces by group come from it.
+    force: (N, 3) the out-of-balance force (N) of every node at x, a solve's own (``Equilibrium.force``), whose
+      held coordinates give the reactions; None: the sum of every term's nodal forces at x
+      (:func:`jaxnet.figures.nodal_reactions`).
     """
     path = pathlib.Path(path)
     x = np.asarray(x, dtype=float)
-    cells, cell_data = _cells(scene, x)
-    points = _point_data(scene, x, residual, forces, point_data)
+    figures = net_figures(scene, x, forces=forces) if figures is None else figures
+    cells, cell_data = _cells(scene, figures)
+    points = _point_data(scene, x, residual, forces, point_data, figures, force)
     field = _field_data(scene)
     _write(path, x, cells, points, cell_data, field)
     written = [path]
@@ -117,25 +125,26 @@ def node_types(scene) -> np.ndarray:
 # -- the data -----------------------------------------------------------------------------------------------
 
 
-def _cells(scene, x):
+def _cells(scene, figures):
     """[(VTK cell type, (E, k) node indices)] of the diamond triangles, the hexagonal ones and the bars, in that
-    order, and the cell data over all of them, name -> (cells,) array."""
+    order, and the cell data over all of them, name -> (cells,) array (``figures``: the net's
+    :class:`~jaxnet.figures.NetFigures`)."""
     blocks, rows = [], []  # rows: per block, the arrays it has
     net, hexagonal, bars = scene.netting, scene.hexagonal, scene.bars
     if net is not None:
-        tw = figures.twine_tensions(scene, x)
+        tw = figures.twine_tension
         blocks.append((_TRIANGLE, np.asarray(net.vertices)))
         rows.append({"twine_tension_U_N": tw[:, 0], "twine_tension_V_N": tw[:, 1],
-                     "mesh_opening_angle_deg": np.degrees(figures.mesh_opening_angles(scene, x)),
+                     "mesh_opening_angle_deg": np.degrees(figures.opening_angle),
                      "panel_id": np.asarray(net.panel)})
     if hexagonal is not None:
-        tw = figures.hexagonal_twine_tensions(scene, x)
+        tw = figures.hexagonal_tension
         blocks.append((_TRIANGLE, np.asarray(hexagonal.vertices)))
         rows.append({"twine_tension_l_N": tw[:, 0], "twine_tension_m_N": tw[:, 1], "twine_tension_n_N": tw[:, 2],
                      "panel_id": np.asarray(hexagonal.panel)})
     if bars is not None:
         blocks.append((_LINE, np.asarray(bars.ends)))
-        rows.append({"bar_tension_N": figures.bar_tensions(scene, x), "cable_id": np.asarray(bars.cable)})
+        rows.append({"bar_tension_N": figures.bar_tension, "cable_id": np.asarray(bars.cable)})
     names = ["twine_tension_U_N", "twine_tension_V_N", "mesh_opening_angle_deg"]
     if hexagonal is not None:
         names += ["twine_tension_l_N", "twine_tension_m_N", "twine_tension_n_N"]
@@ -150,7 +159,7 @@ def _cells(scene, x):
     return blocks, data
 
 
-def _point_data(scene, x, residual, forces, extra):
+def _point_data(scene, x, residual, forces, extra, figures, force):
     nodes = scene.nodes
     fixed = np.asarray(nodes.fixed, dtype=bool)
     out = {"displacement_m": x - np.asarray(nodes.position, dtype=float)}
@@ -159,9 +168,9 @@ def _point_data(scene, x, residual, forces, extra):
     out["node_type"] = node_types(scene)
     out["mass_kg"] = np.asarray(nodes.mass, dtype=float)
     if forces:
-        by_term = figures.nodal_forces_by_term(scene, x)
-        out.update(figures.nodal_forces_by_group(scene, x, by_term))
-        out["reaction_N"] = figures.nodal_reactions(scene, x, by_term)
+        out.update(nodal_forces_by_group(scene, x, figures.nodal_forces))
+        out["reaction_N"] = (nodal_reactions(scene, x) if force is None else
+                             np.where(fixed, -np.asarray(force, dtype=float), 0.0))
     if residual is not None:
         out["residual_N"] = np.where(fixed, 0.0, np.asarray(residual, dtype=float))
     for name, values in (extra or {}).items():

@@ -127,3 +127,14 @@ def cage_in_waves(wave_height: float = 2.0, wave_period: float = 6.0, water_dept
     return Case(scene=scene, time=time, net=net,
                 label=f"the cage in {wave_height:g} m, {wave_period:g} s regular waves and a {current:g} m/s current, its "
                       f"collar heaving; {end_time:g} s")
+
+
+def cage_in_waves_coarse(wave_height: float = 2.0, wave_period: float = 6.0, water_depth: float = 50.0,
+                         current: float = 0.2, end_time: float = 12.0, time_step: float = 0.01, record_every: float = 0.1,
+                         radius: float = 5.0, depth: float = 5.0, step: float = 1.6) -> Case:
+    """:func:`cage_in_waves` meshed coarsely by default (339 unknowns: the size of FEMNET's dynamic cage benchmark,
+    351 unknowns), the built-in ``cage_waves`` of ``jaxnet run --dynamic``; its keyword arguments are the numbers
+    ``--set`` may change."""
+    return cage_in_waves(wave_height=wave_height, wave_period=wave_period, water_depth=water_depth, current=current,
+                         end_time=end_time, time_step=time_step, record_every=record_every, radius=radius, depth=depth,
+                         step=step)

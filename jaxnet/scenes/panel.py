@@ -1,6 +1,6 @@
 """Built-in scenes: square diamond-mesh panels under weight, from a flat, stress-free start.
 
-:func:`hanging_panel` (the default scene of ``jaxnet run``): a panel hanging from a top rope, with a sinker
+:func:`hanging_panel` (the default scene of ``jaxnet run``): a panel hanging from a headline, with a sinker
 bar along its bottom. :func:`framed_panel`: a horizontal panel held along its four sides, sagging under its
 own weight and a sinker at its centre (the benchmark and Newton-test scene: its start has no out-of-plane
 stiffness at all, and with slack twines its equilibrium is still well posed).
@@ -58,7 +58,7 @@ def hanging_panel(meshes: int = 40, l0: float = 0.025, step: float = 0.1, twine:
                                                            bending_stiffness=sinker_bending_stiffness))
     net.fix(panel.corner(2))
     net.fix(panel.corner(3))
-    return from_net(net, label=f"square panel of {meshes} x {meshes} meshes hanging from a top rope with a sinker "
+    return from_net(net, label=f"square panel of {meshes} x {meshes} meshes hanging from a headline with a sinker "
                                "bar, still water")
 
 

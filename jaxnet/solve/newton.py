@@ -53,8 +53,21 @@ from jaxnet.solve.options import Newton
 from jaxnet.solve.results import CONVERGED, MAX_ITERATIONS, NON_FINITE, RUNNING, STALLED, Equilibrium
 
 
+#: what the columns of :func:`progress` and the continuation's lines mean, printed once above them
+LEGEND = ("  (one line per Newton iteration. residual: the largest out-of-balance force on a node (N), converged below "
+          "tol; damping: the fictitious prestrain mu that steadies a slack net's step, vanishing near the answer; "
+          "step: the fraction of the damped step the energy line search took, 0 when it took none; "
+          "\"stiffness x s\": stiffness continuation, the net solved at s times its stiffness, then stiffened)")
+
+
+def legend():
+    """Print :data:`LEGEND` (``Newton.verbose``), once before a solve's first :func:`progress` line."""
+    print(LEGEND)
+
+
 def progress(it, res, damping, step):
-    """Print one iteration's line (``Newton.verbose``): residual (N), damping and the step taken (0: none)."""
+    """Print one iteration's line (``Newton.verbose``): residual (N), damping and the step taken (0: none);
+    :data:`LEGEND` says what they are."""
     print(f"  newton {int(it):4d}  residual {float(res):11.4e} N  damping {float(damping):8.1e}  step {float(step):6.3f}")
 
 

@@ -243,6 +243,8 @@ def host_loop(start, scene, pattern, model, solver: Newton, pieces=None, step=No
     unknown = pieces["states"] if "states" in pieces else _unknown_states(scene, pattern, model)
     e_stored, force, f_nc, _, state = run(x, np.zeros_like(load), unknown)
     f = force.ravel()[free]
+    if solver.verbose:
+        newton.legend()
     hist = np.full(solver.max_iter + 1, np.nan)
     res = nodal(f).max()
     hist[0] = res

@@ -107,7 +107,7 @@ Conventions established from the files (see ``tests/test_femnet.py``):
   weight, Cd 0.6. FEMNET's laws fold them into the cable (``chargement_don.c``): its diameter, volumic mass and
   normal Cd become those of cable and spheres together (:func:`~.mapping.spheres_folded`); jaxnet's make them
   floats of COUNT B newtons and drag area COUNT 0.6 pi D²/4 shared equally by the cable's nodes
-  (:func:`~.mapping.spheres`, ``Net.float_``).
+  (:func:`~.mapping.spheres`, ``Net.float``).
 * **Node re-typing** (``input type_noeud_XYZ_SUPINF MODE BOUNDS... TYPE``): the nodes whose start position
   lies strictly inside FEMNET's window (modes 1-13: one bound, an interval on one, two or three axes) take
   the type. **Translations** (``input add_{x,y,z}_{ele,pan} D FIRST LAST``) move cables or panels FIRST to
@@ -126,8 +126,10 @@ Conventions established from the files (see ``tests/test_femnet.py``):
   axis, tension of a cable at an end, position of a node), each with its comment: read into
   ``info["text_outputs"]``; :func:`text_output_figures` computes them at an equilibrium, naming nodes by
   FEMNET's global numbers (the joined points in the order of their first corner or end, as its ``.mdg`` lists
-  them first: ``info["global_nodes"]``). ``output NAME ...`` commands (prints and drawings) are read and listed in
-  ``info["outputs"]``; they change nothing.
+  them first: ``info["global_nodes"]``). A distance from a node to itself ("#PELAGIC TRAWL# no global 1: 1 no
+  global 2: 1", always 0 m) is how FEMNET's cases print a title: it is a heading there, not a figure.
+  ``output NAME ...`` commands (prints and drawings) are read and listed in ``info["outputs"]``; they change
+  nothing.
 * **Commands of the tail.** ``input wave_model N`` picks the waves' theory (1 Airy, 2 Stokes second order:
   :class:`jaxnet.waves.Stokes2`; 3 is refused); ``input speed_type_node2`` (towing speeds, its time table on
   the next lines) moves the nodes of its type in a dynamic run (:func:`.mapping.towing_of`). FEMNET's winches

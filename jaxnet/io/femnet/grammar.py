@@ -165,8 +165,9 @@ HEADINGS = {
 
 # -- materials (prefixed by the part's name: "panel 1: ", "hexagonal panel 1: ", "cable 1: ") ----------------
 PANEL_CORNERS = field("corners", "number of nodes around", r"number of nodes around", r"nombre de points du contour", integer=True, minimum=3)
+#: a traction stiffness of 0 leaves the twines or the cable holding nothing (a mechanism): refused at its line
 TRACTION_STIFFNESS = field("ea", "traction stiffness", r"traction stiffness( \(n\))?", r"kt( \(n\))?", r"rt",
-                           r"raideur traction( \(n\))?", check=">=0")
+                           r"raideur traction( \(n\))?", check=">0")
 COMPRESSION_STIFFNESS = field("eac", "compression stiffness", r"compression stiffness( \(n\))?", r"kc( \(n\))?",
                               r"rc", r"raideur compression( \(n\))?", check=">=0")
 OPENING_STIFFNESS = field("opening", "mesh opening stiffness", r"mesh opening stiffness( \(n\.m/rad\))?",
@@ -194,7 +195,7 @@ PANEL_MATERIAL = (TRACTION_STIFFNESS, COMPRESSION_STIFFNESS, OPENING_STIFFNESS, 
 #: a hexagonal panel's material, after its corners and one skipped line: three values (twine families l, m, n)
 #: for the stiffnesses, lengths and diameters; no opening stiffness, no knot size
 HEXAGONAL_PANEL_MATERIAL = (
-    field("ea", "traction stiffness l m n", r"traction stiffness( l,? ?m,? ?n)?( \(n\))?", r"kt", check=">=0",
+    field("ea", "traction stiffness l m n", r"traction stiffness( l,? ?m,? ?n)?( \(n\))?", r"kt", check=">0",
           values=LMN),
     field("eac", "compression stiffness l m n", r"compression stiffness( l,? ?m,? ?n)?( \(n\))?", r"kc", check=">=0",
           values=LMN),

@@ -264,7 +264,7 @@ def spheres(case: DonFile, net: Net):
     drag area COUNT 0.6 pi D²/4 shared equally by the nodes (each carries COUNT / (bars + 1) spheres), a sphere's
     drag acting along the flow whatever the cable's direction."""
     for k, count, diameter, buoyancy, _, _ in _sphere_lines(case):
-        net.float_(CableRef(f"cable {k + 1}").nodes, buoyancy_N=count * buoyancy,
+        net.float(CableRef(f"cable {k + 1}").nodes, buoyancy_N=count * buoyancy,
                    drag_area=count * SPHERE_CD * math.pi * diameter ** 2 / 4.0)
 
 

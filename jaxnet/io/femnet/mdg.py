@@ -161,6 +161,8 @@ def read_mdg(path, don=None, femnet_laws=True):
     scene = Scene(nodes=nodes, netting=netting, bars=bars, environment=env, catch=catch,
                   panel_catches=panel_catches_of(case, planes, len(case.panels)),
                   panel_names=tuple(f"panel {k + 1}" for k in range(len(case.panels))),
+                  # the mirror planes its .don declares, as on jaxnet's own mesh: the whole net's figures and files
+                  symmetry_planes=tuple((axis, at) for axis, at in sorted(planes.items())),
                   cable_names=tuple(f"cable {k + 1}" for k in range(len(case.cables))) + twine_names)
     scene = with_added_masses(case, femnet_panel_catch_sides(scene), node_type, share)
     validate(scene)

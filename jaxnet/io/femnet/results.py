@@ -9,7 +9,7 @@ import pathlib
 import numpy as np
 
 
-def femnet_figures(scene, eq, symmetry_axes=(), fixity=None):
+def femnet_figures(scene, eq, symmetry_axes=(), fixity=None, groups=None):
     """FEMNET's summary figures of an equilibrium (N, m, m³), computed by jaxnet.
 
     drag_netting_N, drag_cables_N, catch_drag_N: x components (along the current when it is along x) and
@@ -19,10 +19,12 @@ def femnet_figures(scene, eq, symmetry_axes=(), fixity=None):
     types hold by "Displacement" and not by a symmetry plane, the reader's ``info["fixity"]``), or else at every held coordinate less the
     ``symmetry_axes`` (FEMNET gives no reaction at a node held by a symmetry plane);
     catch: thickness, largest diameter, volume of the modelled part (FEMNET's convention).
+    groups: jaxnet's force groups at the equilibrium (:func:`jaxnet.figures.force_breakdown`, result.json's
+    ``forces_N``) when already computed.
     """
     from jaxnet import figures
 
-    groups = figures.force_breakdown(scene, eq.x)
+    groups = figures.force_breakdown(scene, eq.x) if groups is None else groups
     if fixity is not None:
         # FEMNET's sum: the reactions at the coordinates its node types hold by "Displacement" only
         held = np.zeros(np.asarray(scene.nodes.fixed).shape, bool)
@@ -113,6 +115,14 @@ def global_node(case, k) -> int:
     return int(nodes[int(k) - 1])
 
 
+def is_heading(kind, values) -> bool:
+    """Whether a text output of FEMNET (its ``kind`` and ``values``, :class:`~.grammar.TextOutput`'s) is a heading:
+    a distance from a node to itself ("Distance: 1 comment: #PELAGIC TRAWL# no global 1: 1 no global 2: 1"), which
+    is 0 m whatever the net does. FEMNET's cases use it to print their comment as a title above the figures that
+    follow (the manual: "is zero m because the two nodes are the same")."""
+    return kind == "distances" and values.get("node_1") is not None and values["node_1"] == values.get("node_2")
+
+
 def text_output_figures(scene, eq, info):
     """FEMNET's text outputs of a case (its ``Distances``, ``Forces``, ``Tensions``, ``Positions`` lists: the
     figures it prints after its solve, with their comments), computed by jaxnet at the equilibrium ``eq``:
@@ -124,6 +134,9 @@ def text_output_figures(scene, eq, info):
       coordinate is what the net exerts on its fixing (FEMNET's sum of the forces on the node);
     * tension of cable k at its end at global node a (N): that of the cable's bar at that node;
     * position of a global node along an axis (m).
+
+    A distance from a node to itself is a heading (:func:`is_heading`), not a measurement:
+    ``{"kind": "heading", "comment": "PELAGIC TRAWL", "value": None, "unit": None}``, to be shown as a title.
     """
     from jaxnet import figures
 
@@ -138,6 +151,9 @@ def text_output_figures(scene, eq, info):
         def node(k):
             return nodes[k - 1] if 1 <= k <= len(nodes) else None
 
+        if is_heading(kind, v):
+            out.append({"kind": "heading", "comment": t["comment"], "value": None, "unit": None})
+            continue
         value = None
         if kind == "distances" and node(v["node_1"]) is not None and node(v["node_2"]) is not None:
             value = float(np.linalg.norm(x[node(v["node_1"])] - x[node(v["node_2"])]))
