@@ -1,0 +1,165 @@
+"""How many Newton steps a barrier method on the tension form takes, with the rods' unknowns eliminated rod by rod
+so that each step's linear system is the node-sparse one jaxnet factorises today: the question a solver of this
+kind (issue 45) must answer before it is built into jaxnet's statics.
+
+    python validation/interior_point.py [--steps 0.1 0.05 0.025] [--shrink 0.1]
+
+The net is the cone program of :mod:`cone_reference` (tension-only twines and bars, constant loads, still water):
+minimise sum_r w_r s_r² - f·x subject to |U_r(x)| <= l0_r + s_r. Each cone gets the logarithmic barrier
+-mu log((l0_r + s_r)² - |U_r|²) (its degree is 2), and for a decreasing sequence of mu the barrier problem, smooth
+and strictly convex, is minimised by Newton's method (Boyd and Vandenberghe, Convex Optimization, 2004, 11.3):
+each step eliminates the rod's stretch s_r from its own 4 x 4 block (a Schur complement on its 1 x 1 s-block),
+which leaves a 3 x 3 stiffness on the rod's twine vector U_r, assembled on its nodes exactly as a twine's
+stiffness is: the same sparsity as jaxnet's tangent. A step is cut to stay inside every cone (fraction to the
+boundary, 0.99) and then backtracked on the barrier objective (Armijo). mu is multiplied by ``--shrink`` once the
+Newton decrement of the barrier problem is below mu / 4 (near its centre), from mu0 = the largest nodal load x the
+mean rest length, and the run stops when the barrier's gap 2 m mu (m cones) is below 1e-10 J and the largest
+out-of-balance force of the rods' tensions (2 w_r max(0, |U_r| - l0_r) along U_r) and the loads is below 1e-6 N.
+The answer is compared with Clarabel's (:func:`cone_reference.solve_cone`) by jaxnet's own residual and potential
+energy.
+
+This is a primal barrier method, the simplest of the kind; validation/REPORT.md has what it measured and why the
+solver to build must be primal-dual instead.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from cone_reference import _rods, balance, check_convex, solve_cone, wall_in_still_water
+
+
+def barrier_solve(scene, shrink=0.1, max_newton=500, force_tol=1e-6, verbose=False):
+    """The equilibrium of a tension-only ``scene`` in still water by the barrier method of the module docstring.
+    Returns (x (N, 3), Newton steps, stages of mu, wall s)."""
+    from jaxnet import assemble, model as model_lib
+
+    model = model_lib.active_terms(scene)
+    check_convex(scene, model)
+    t_start = time.perf_counter()
+    f = np.asarray(assemble.loads(scene, model), dtype=float).ravel()
+    x = np.asarray(scene.nodes.position, dtype=float).ravel().copy()
+    free = np.flatnonzero(~np.asarray(scene.nodes.fixed, dtype=bool).ravel())
+    c, nodes, l0, w = _rods(scene)
+    m, k = c.shape
+    dof = 3 * nodes[:, :, None] + np.arange(3)                          # (m, k, 3) global coordinates of each rod
+
+    def twine_vectors(x):
+        return np.einsum("rj,rjc->rc", c, x[dof])
+
+    U = twine_vectors(x)
+    s = np.linalg.norm(U, axis=1) - l0 + 0.1 * l0                        # strictly inside every cone
+    mu = float(np.abs(f).max() * l0.mean())
+    # the sparsity of the node stiffness: every pair of a rod's coordinates
+    rows = np.broadcast_to(dof.reshape(m, -1)[:, :, None], (m, 3 * k, 3 * k)).ravel()
+    cols = np.broadcast_to(dof.reshape(m, -1)[:, None, :], (m, 3 * k, 3 * k)).ravel()
+    position = np.full(x.size, -1)
+    position[free] = np.arange(free.size)
+
+    def objective(x, s, mu):
+        U = twine_vectors(x)
+        t = l0 + s
+        D = t**2 - np.einsum("rc,rc->r", U, U)
+        if np.any(D <= 0.0) or np.any(t <= 0.0):
+            return np.inf
+        return float(np.sum(w * s**2) - f @ x - mu * np.sum(np.log(D)))
+
+    def residual(x):
+        U = twine_vectors(x)
+        length = np.linalg.norm(U, axis=1)
+        tension = 2.0 * w * np.maximum(length - l0, 0.0)                   # the n twines' force together (N)
+        along = tension[:, None] * U / np.maximum(length, 1e-300)[:, None]
+        force = f.copy()
+        np.add.at(force, dof.reshape(-1), -(c[:, :, None] * along[:, None, :]).reshape(-1))
+        return float(np.abs(force[free]).max())
+
+    steps = stages = 0
+    scale = float(np.abs(f).sum() * l0.mean())                            # an energy scale (J)
+    while steps < max_newton:
+        U = twine_vectors(x)
+        t = l0 + s
+        D = t**2 - np.einsum("rc,rc->r", U, U)
+        # the rod's barrier -log D: gradient and Hessian in (t, U)
+        phi_t, phi_U = -2.0 * t / D, 2.0 * U / D[:, None]
+        phi_tt = -2.0 / D + 4.0 * t**2 / D**2
+        phi_tU = -4.0 * t[:, None] * U / D[:, None] ** 2
+        phi_UU = 2.0 * np.eye(3) / D[:, None, None] + 4.0 * U[:, :, None] * U[:, None, :] / D[:, None, None] ** 2
+        g_s, g_U = 2.0 * w * s + mu * phi_t, mu * phi_U
+        H_ss, H_sU, H_UU = 2.0 * w + mu * phi_tt, mu * phi_tU, mu * phi_UU
+        # eliminate s: the reduced stiffness and gradient on U
+        K_U = H_UU - H_sU[:, :, None] * H_sU[:, None, :] / H_ss[:, None, None]
+        g_red = g_U - H_sU * (g_s / H_ss)[:, None]
+        blocks = np.einsum("rj,rk,rab->rjakb", c, c, K_U).reshape(m, 3 * k, 3 * k)
+        gradient = -f.copy()
+        np.add.at(gradient, dof.reshape(-1), (c[:, :, None] * g_red[:, None, :]).reshape(-1))
+        keep = (position[rows] >= 0) & (position[cols] >= 0)
+        K = sp.csc_matrix((blocks.ravel()[keep], (position[rows[keep]], position[cols[keep]])),
+                          shape=(free.size, free.size))
+        dx = np.zeros_like(x)
+        dx[free] = spla.spsolve(K, -gradient[free])
+        dU = twine_vectors(dx)
+        ds = -(g_s + np.einsum("rc,rc->r", H_sU, dU)) / H_ss
+        decrement = float(-(gradient[free] @ dx[free]) - g_s @ ds)       # the Newton decrement squared
+        steps += 1
+        if decrement < 0.25 * mu or decrement < 1e-14 * scale:   # near the centre: lambda² of (E / mu + barrier) < 1/4
+            if 2.0 * m * mu < 1e-10 and residual(x) < force_tol:
+                break
+            mu *= shrink
+            stages += 1
+            continue
+        # fraction to the boundary: the largest step that keeps every cone strictly inside, times 0.99: the
+        # first positive root of (t + a ds)² - |U + a dU|², a quadratic in a, and of t + a ds
+        qa = ds**2 - np.einsum("rc,rc->r", dU, dU)
+        qb = 2.0 * (t * ds - np.einsum("rc,rc->r", U, dU))
+        alpha_max = np.full(m, np.inf)
+        linear = np.abs(qa) < 1e-300
+        alpha_max[linear & (qb < 0)] = -D[linear & (qb < 0)] / qb[linear & (qb < 0)]
+        disc = qb**2 - 4.0 * qa * D
+        quad = ~linear & (disc >= 0.0)
+        roots = np.stack([(-qb[quad] - np.sqrt(disc[quad])) / (2.0 * qa[quad]),
+                          (-qb[quad] + np.sqrt(disc[quad])) / (2.0 * qa[quad])])
+        roots[roots <= 0.0] = np.inf
+        alpha_max[quad] = roots.min(axis=0)
+        behind = ds < 0.0
+        alpha_max[behind] = np.minimum(alpha_max[behind], -t[behind] / ds[behind])
+        alpha = min(1.0, 0.99 * float(alpha_max.min()))
+        base = objective(x, s, mu)
+        while objective(x + alpha * dx, s + alpha * ds, mu) > base - 1e-4 * alpha * decrement and alpha > 1e-12:
+            alpha *= 0.5
+        x, s = x + alpha * dx, s + alpha * ds
+        if verbose:
+            print(f"  {steps:4d} mu {mu:.2e} decrement {decrement:.2e} step {alpha:.3f} residual {residual(x):.2e}")
+    return x.reshape(-1, 3), steps, stages, time.perf_counter() - t_start
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--steps", type=float, nargs="*", default=[0.1, 0.05, 0.025])
+    parser.add_argument("--shrink", type=float, default=0.1)
+    parser.add_argument("--verbose", action="store_true")
+    args = parser.parse_args()
+    header = (f"{'step m':>7s} {'nodes':>6s} | {'barrier Newton steps':>20s} {'mu stages':>9s} {'wall s':>7s} "
+              f"{'residual N':>10s} | {'Clarabel its':>12s} {'residual N':>10s} | {'energy diff J':>13s} "
+              f"{'max |dx| m':>10s}")
+    print(f"The wall of cone_reference.py in still water: a primal barrier method (mu x {args.shrink:g} per stage) "
+          "against Clarabel\n")
+    print(header)
+    print("-" * len(header))
+    for step in args.steps:
+        scene = wall_in_still_water(step)
+        x, steps, stages, wall = barrier_solve(scene, shrink=args.shrink, verbose=args.verbose)
+        cone = solve_cone(scene)
+        ours_residual, ours_energy = balance(scene, x)
+        cone_residual, cone_energy = balance(scene, cone.x)
+        print(f"{step:7.3f} {scene.n_nodes:6d} | {steps:20d} {stages:9d} {wall:7.2f} {ours_residual:10.2e} | "
+              f"{cone.iterations:12d} {cone_residual:10.2e} | {ours_energy - cone_energy:13.2e} "
+              f"{np.abs(x - cone.x).max():10.2e}")
+
+
+if __name__ == "__main__":
+    main()
