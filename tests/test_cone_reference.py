@@ -3,6 +3,8 @@
 of a convex program, both answers balance, reach the same minimum of the potential energy, and the cones'
 multipliers are the twines' and bars' tensions."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -50,9 +52,8 @@ def test_the_newton_equilibrium_is_the_cone_programs_minimum(name):
 
 
 def test_what_is_not_convex_is_refused_by_name():
-    current = cone_reference.wall_in_still_water(0.1, meshes=10)
-    moving = current.__class__(**{**{f: getattr(current, f) for f in current.__dataclass_fields__},
-                                  "environment": jn.Environment(current_speed=0.5)})
+    still = cone_reference.wall_in_still_water(0.1, meshes=10)
+    moving = dataclasses.replace(still, environment=jn.Environment(current_speed=0.5))
     with pytest.raises(ValueError, match="netting_drag"):
         cone_reference.solve_cone(moving)
     stiff = framed_panel(meshes=4, step=0.1, twine=Twine(l0=0.025, ea=2000.0, diameter=1.5e-3,

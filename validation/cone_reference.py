@@ -56,17 +56,19 @@ class ConeSolution:
     wall_s: float
 
 
-def _rods(scene):
+def rods(scene):
     """The rods of ``scene`` as (coefficients (R, k), nodes (R, k), rest length (R,), weight w (R,)): the twine
     vector of rod r is sum_j coefficients[r, j] x[nodes[r, j]] (k = 3 for a twine of a triangle, padded for a
     bar, whose ends take -1 and +1)."""
+    import jax
+
     from jaxnet import geometry
 
     parts = []
     net, bars = scene.netting, scene.bars
     if net is not None:
         uv = np.asarray(net.uv, dtype=float)
-        a, b, d = (np.asarray(v) for v in _coefficients(uv, geometry))
+        a, b, d = (np.asarray(v) for v in jax.vmap(geometry.twine_coefficients)(uv))
         vertices = np.asarray(net.vertices)
         count = np.abs(d) / 2.0
         stiff = count * np.asarray(net.ea_traction, dtype=float) / (2.0 * np.asarray(net.l0, dtype=float))
@@ -79,12 +81,6 @@ def _rods(scene):
         nodes = np.column_stack([ends, ends[:, 0]])
         parts.append((coefficients, nodes, rest, np.asarray(bars.ea_traction, dtype=float) / (2.0 * rest)))
     return tuple(np.concatenate([p[i] for p in parts]) for i in range(4))
-
-
-def _coefficients(uv, geometry):
-    import jax
-
-    return jax.vmap(geometry.twine_coefficients)(uv)
 
 
 def check_convex(scene, model):
@@ -116,7 +112,7 @@ def solve_cone(scene, tol=1e-9, max_iter=200) -> ConeSolution:
     free = np.flatnonzero(~fixed)
     column = np.full(x0.size, -1)
     column[free] = np.arange(free.size)
-    coefficients, nodes, rest, stiff = _rods(scene)
+    coefficients, nodes, rest, stiff = rods(scene)
     n_rods, n_free = len(rest), free.size
     # rows of rod r: 4 r (l0 + s_r), 4 r + 1 + c (component c of its twine vector); b - A z in the cone
     rows, cols, vals = [], [], []

@@ -31,7 +31,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from cone_reference import _rods, balance, check_convex, solve_cone, wall_in_still_water
+from cone_reference import rods, balance, check_convex, solve_cone, wall_in_still_water
 
 
 def barrier_solve(scene, shrink=0.1, max_newton=500, force_tol=1e-6, verbose=False):
@@ -45,7 +45,7 @@ def barrier_solve(scene, shrink=0.1, max_newton=500, force_tol=1e-6, verbose=Fal
     f = np.asarray(assemble.loads(scene, model), dtype=float).ravel()
     x = np.asarray(scene.nodes.position, dtype=float).ravel().copy()
     free = np.flatnonzero(~np.asarray(scene.nodes.fixed, dtype=bool).ravel())
-    c, nodes, l0, w = _rods(scene)
+    c, nodes, l0, w = rods(scene)
     m, k = c.shape
     dof = 3 * nodes[:, :, None] + np.arange(3)                          # (m, k, 3) global coordinates of each rod
 
