@@ -1,25 +1,27 @@
-"""How many Newton steps a barrier method on the tension form takes, with the rods' unknowns eliminated rod by rod
-so that each step's linear system is the node-sparse one jaxnet factorises today: the question a solver of this
-kind (issue 45) must answer before it is built into jaxnet's statics.
+"""How many Newton steps an interior method on the tension form takes, with the rods' unknowns eliminated rod by
+rod so that each step's linear system is the node-sparse one jaxnet factorises today: the question a solver of
+this kind (issue 45) must answer before it is built into jaxnet's statics.
 
-    python validation/interior_point.py [--steps 0.1 0.05 0.025] [--shrink 0.1]
+    python validation/interior_point.py [--steps 0.1 0.05 0.025] [--method primal-dual|barrier] [--sigma 0.3]
+                                        [--shrink 0.1] [--verbose]
 
 The net is the cone program of :mod:`cone_reference` (tension-only twines and bars, constant loads, still water):
-minimise sum_r w_r s_r² - f·x subject to |U_r(x)| <= l0_r + s_r. Each cone gets the logarithmic barrier
--mu log((l0_r + s_r)² - |U_r|²) (its degree is 2), and for a decreasing sequence of mu the barrier problem, smooth
-and strictly convex, is minimised by Newton's method (Boyd and Vandenberghe, Convex Optimization, 2004, 11.3):
-each step eliminates the rod's stretch s_r from its own 4 x 4 block (a Schur complement on its 1 x 1 s-block),
-which leaves a 3 x 3 stiffness on the rod's twine vector U_r, assembled on its nodes exactly as a twine's
-stiffness is: the same sparsity as jaxnet's tangent. A step is cut to stay inside every cone (fraction to the
-boundary, 0.99) and then backtracked on the barrier objective (Armijo). mu is multiplied by ``--shrink`` once the
-Newton decrement of the barrier problem is below mu / 4 (near its centre), from mu0 = the largest nodal load x the
-mean rest length, and the run stops when the barrier's gap 2 m mu (m cones) is below 1e-10 J and the largest
-out-of-balance force of the rods' tensions (2 w_r max(0, |U_r| - l0_r) along U_r) and the loads is below 1e-6 N.
-The answer is compared with Clarabel's (:func:`cone_reference.solve_cone`) by jaxnet's own residual and potential
-energy.
+minimise sum_r w_r s_r² - f·x subject to |U_r(x)| <= l0_r + s_r. Two methods, each compared with Clarabel's answer
+(:func:`cone_reference.solve_cone`) by jaxnet's own residual and potential energy:
 
-This is a primal barrier method, the simplest of the kind; validation/REPORT.md has what it measured and why the
-solver to build must be primal-dual instead.
+* ``primal-dual`` (:func:`primal_dual_solve`): each rod's tension and gap are unknowns, their product relaxed to
+  mu; the Newton step's rod unknowns are eliminated into today's tangent with an effective axial stiffness.
+* ``barrier`` (:func:`barrier_solve`): the primal log-barrier path following. Each cone gets the barrier
+  -mu log((l0_r + s_r)² - |U_r|²) (its degree is 2), and for a decreasing sequence of mu the barrier problem is
+  minimised by Newton's method (Boyd and Vandenberghe, Convex Optimization, 2004, 11.3): each step eliminates the
+  rod's stretch s_r from its own 4 x 4 block (a Schur complement on its 1 x 1 s-block), which leaves a 3 x 3
+  stiffness on U_r, assembled on its nodes as a twine's stiffness is. A step is cut to stay inside every cone
+  (fraction to the boundary, 0.99) and backtracked on the barrier objective (Armijo); mu is multiplied by
+  ``--shrink`` once the Newton decrement of the barrier problem is below mu / 4, from mu0 = the largest nodal
+  load x the mean rest length; the run stops when the gap 2 m mu (m cones) is below 1e-10 J and the largest
+  out-of-balance force is below 1e-6 N.
+
+validation/REPORT.md has what each measured.
 """
 
 from __future__ import annotations
@@ -31,7 +33,10 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from cone_reference import rods, balance, check_convex, solve_cone, wall_in_still_water
+try:  # run as a script (validation/ on the path) or imported from the repository root
+    from cone_reference import balance, check_convex, rods, solve_cone, wall_in_still_water
+except ImportError:
+    from validation.cone_reference import balance, check_convex, rods, solve_cone, wall_in_still_water
 
 
 def barrier_solve(scene, shrink=0.1, max_newton=500, force_tol=1e-6, verbose=False):
@@ -137,28 +142,119 @@ def barrier_solve(scene, shrink=0.1, max_newton=500, force_tol=1e-6, verbose=Fal
     return x.reshape(-1, 3), steps, stages, time.perf_counter() - t_start
 
 
+def primal_dual_solve(scene, sigma=0.3, max_newton=300, force_tol=1e-6, verbose=False):
+    """The same equilibrium by a primal-dual interior method on the tension form: each rod's tension T_r >= 0 and
+    gap g_r >= 0 (how far it is from taut) are unknowns beside x, with
+
+        sum_r T_r grad L_r(x) = f,   L_r(x) - l0_r - T_r / k_r + g_r = 0,   T_r g_r = mu,
+
+    L_r = |U_r| its length and k_r = 2 w_r its axial stiffness (N/m). Newton's step eliminates dT_r and dg_r rod by
+    rod: dT_r = c_r (grad L_r . dx + rho_r), c_r = k_r T_r / (T_r + k_r g_r), which leaves on the nodes
+
+        sum_r (T_r hess L_r + c_r grad L_r grad L_r^T) dx = -(sum_r T_r grad L_r - f) - sum_r c_r rho_r grad L_r,
+
+    today's tangent with each rod's axial stiffness k_r replaced by c_r, between k_r (taut: g_r -> 0) and 0 (slack:
+    T_r -> 0): the same sparsity and no barrier Hessian to blow up. mu = sigma x the mean T_r g_r at each step;
+    a step is cut by the fraction to the boundary (0.995) of T and g, without line search. Returns (x (N, 3),
+    Newton steps, wall s)."""
+    from jaxnet import assemble, model as model_lib
+
+    model = model_lib.active_terms(scene)
+    check_convex(scene, model)
+    t_start = time.perf_counter()
+    f = np.asarray(assemble.loads(scene, model), dtype=float).ravel()
+    x = np.asarray(scene.nodes.position, dtype=float).ravel().copy()
+    free = np.flatnonzero(~np.asarray(scene.nodes.fixed, dtype=bool).ravel())
+    c, nodes, l0, w = rods(scene)
+    k_axial = 2.0 * w
+    m, k = c.shape
+    dof = 3 * nodes[:, :, None] + np.arange(3)
+    rows = np.broadcast_to(dof.reshape(m, -1)[:, :, None], (m, 3 * k, 3 * k)).ravel()
+    cols = np.broadcast_to(dof.reshape(m, -1)[:, None, :], (m, 3 * k, 3 * k)).ravel()
+    position = np.full(x.size, -1)
+    position[free] = np.arange(free.size)
+    keep = (position[rows] >= 0) & (position[cols] >= 0)
+
+    def geometry_of(x):
+        U = np.einsum("rj,rjc->rc", c, x[dof])
+        L = np.linalg.norm(U, axis=1)
+        return U, L, U / L[:, None]
+
+    def on_nodes(per_rod):                 # (m, 3) force along each rod's U -> (3N,) on its nodes
+        out = np.zeros_like(x)
+        np.add.at(out, dof.reshape(-1), (c[:, :, None] * per_rod[:, None, :]).reshape(-1))
+        return out
+
+    U, L, unit = geometry_of(x)
+    scale_T = float(np.abs(f).max())
+    T = np.maximum(k_axial * (L - l0), scale_T)
+    g = np.maximum(l0 - L, 0.01 * l0)
+    steps = 0
+    while steps < max_newton:
+        R1 = on_nodes(T[:, None] * unit) - f
+        r2 = L - l0 - T / k_axial + g
+        gap = float(np.mean(T * g))
+        force = float(np.abs(R1[free]).max())
+        if verbose:
+            print(f"  {steps:4d} force {force:.2e} N  length {np.abs(r2).max():.2e} m  mean T g {gap:.2e}")
+        if force < force_tol and np.abs(r2).max() < 1e-12 and gap < 1e-14:
+            break
+        mu = sigma * gap
+        rho = r2 + (mu - T * g) / T
+        cr = k_axial * T / (T + k_axial * g)
+        # the rod's stiffness on its twine vector: T hess L + c unit unit^T, hess L = (I - unit unit^T) / L
+        K_U = (T / L)[:, None, None] * (np.eye(3) - unit[:, :, None] * unit[:, None, :]) \
+            + cr[:, None, None] * unit[:, :, None] * unit[:, None, :]
+        blocks = np.einsum("rj,rk,rab->rjakb", c, c, K_U).reshape(m, 3 * k, 3 * k)
+        K = sp.csc_matrix((blocks.ravel()[keep], (position[rows[keep]], position[cols[keep]])),
+                          shape=(free.size, free.size))
+        rhs = -R1 - on_nodes((cr * rho)[:, None] * unit)
+        dx = np.zeros_like(x)
+        dx[free] = spla.spsolve(K, rhs[free])
+        dL = np.einsum("rc,rc->r", unit, np.einsum("rj,rjc->rc", c, dx[dof]))
+        dT = cr * (dL + rho)
+        dg = (mu - T * g - g * dT) / T
+        alpha = 1.0
+        for value, change in ((T, dT), (g, dg)):
+            shrinking = change < 0.0
+            if shrinking.any():
+                alpha = min(alpha, 0.995 * float(np.min(-value[shrinking] / change[shrinking])))
+        x, T, g = x + alpha * dx, T + alpha * dT, g + alpha * dg
+        U, L, unit = geometry_of(x)
+        steps += 1
+    return x.reshape(-1, 3), steps, time.perf_counter() - t_start
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--steps", type=float, nargs="*", default=[0.1, 0.05, 0.025])
-    parser.add_argument("--shrink", type=float, default=0.1)
+    parser.add_argument("--method", choices=("primal-dual", "barrier"), default="primal-dual")
+    parser.add_argument("--shrink", type=float, default=0.1, help="barrier: mu's factor per stage")
+    parser.add_argument("--sigma", type=float, default=0.3, help="primal-dual: mu = sigma x the mean T g")
     parser.add_argument("--verbose", action="store_true")
     args = parser.parse_args()
-    header = (f"{'step m':>7s} {'nodes':>6s} | {'barrier Newton steps':>20s} {'mu stages':>9s} {'wall s':>7s} "
-              f"{'residual N':>10s} | {'Clarabel its':>12s} {'residual N':>10s} | {'energy diff J':>13s} "
-              f"{'max |dx| m':>10s}")
-    print(f"The wall of cone_reference.py in still water: a primal barrier method (mu x {args.shrink:g} per stage) "
-          "against Clarabel\n")
+    header = (f"{'step m':>7s} {'nodes':>6s} | {'Newton steps':>12s} {'wall s':>7s} {'residual N':>10s} | "
+              f"{'Clarabel its':>12s} {'residual N':>10s} | {'energy diff J':>13s} {'max |dx| m':>10s}")
+    how = (f"a primal-dual method on the tension form (mu = {args.sigma:g} x mean T g)" if args.method == "primal-dual"
+           else f"a primal barrier method (mu x {args.shrink:g} per stage)")
+    print(f"The wall of cone_reference.py in still water: {how}, against Clarabel\n")
     print(header)
     print("-" * len(header))
     for step in args.steps:
         scene = wall_in_still_water(step)
-        x, steps, stages, wall = barrier_solve(scene, shrink=args.shrink, verbose=args.verbose)
+        if args.method == "primal-dual":
+            x, steps, wall = primal_dual_solve(scene, sigma=args.sigma, verbose=args.verbose)
+        else:
+            x, steps, _, wall = barrier_solve(scene, shrink=args.shrink, verbose=args.verbose)
         cone = solve_cone(scene)
         ours_residual, ours_energy = balance(scene, x)
         cone_residual, cone_energy = balance(scene, cone.x)
-        print(f"{step:7.3f} {scene.n_nodes:6d} | {steps:20d} {stages:9d} {wall:7.2f} {ours_residual:10.2e} | "
+        print(f"{step:7.3f} {scene.n_nodes:6d} | {steps:12d} {wall:7.2f} {ours_residual:10.2e} | "
               f"{cone.iterations:12d} {cone_residual:10.2e} | {ours_energy - cone_energy:13.2e} "
               f"{np.abs(x - cone.x).max():10.2e}")
+    print("\nresidual: the largest out-of-balance force on a free coordinate by jaxnet's residual at each answer; "
+          "energy diff: jaxnet's potential energy at this answer less at Clarabel's; wall: the method's own "
+          "time (NumPy and SciPy's SuperLU)")
 
 
 if __name__ == "__main__":
