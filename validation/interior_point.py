@@ -2,7 +2,7 @@
 rod so that each step's linear system is the node-sparse one jaxnet factorises today: the question a solver of
 this kind (issue 45) must answer before it is built into jaxnet's statics.
 
-    python validation/interior_point.py [--steps 0.1 0.05 0.025] [--method primal-dual|barrier] [--sigma 0.3]
+    python validation/interior_point.py [--steps 0.1 0.05 0.025] [--method primal-dual|barrier] [--sigma S]
                                         [--shrink 0.1] [--verbose]
 
 The net is the cone program of :mod:`cone_reference` (tension-only twines and bars, constant loads, still water):
@@ -10,7 +10,8 @@ minimise sum_r w_r s_r² - f·x subject to |U_r(x)| <= l0_r + s_r. Two methods, 
 (:func:`cone_reference.solve_cone`) by jaxnet's own residual and potential energy:
 
 * ``primal-dual`` (:func:`primal_dual_solve`): each rod's tension and gap are unknowns, their product relaxed to
-  mu; the Newton step's rod unknowns are eliminated into today's tangent with an effective axial stiffness.
+  mu (Mehrotra's predictor-corrector, or a fixed fraction ``--sigma`` of the mean product); the Newton step's
+  rod unknowns are eliminated into today's tangent with an effective axial stiffness.
 * ``barrier`` (:func:`barrier_solve`): the primal log-barrier path following. Each cone gets the barrier
   -mu log((l0_r + s_r)² - |U_r|²) (its degree is 2), and for a decreasing sequence of mu the barrier problem is
   minimised by Newton's method (Boyd and Vandenberghe, Convex Optimization, 2004, 11.3): each step eliminates the
@@ -142,7 +143,7 @@ def barrier_solve(scene, shrink=0.1, max_newton=500, force_tol=1e-6, verbose=Fal
     return x.reshape(-1, 3), steps, stages, time.perf_counter() - t_start
 
 
-def primal_dual_solve(scene, sigma=0.3, max_newton=300, force_tol=1e-6, verbose=False):
+def primal_dual_solve(scene, sigma=None, max_newton=300, force_tol=1e-6, verbose=False):
     """The same equilibrium by a primal-dual interior method on the tension form: each rod's tension T_r >= 0 and
     gap g_r >= 0 (how far it is from taut) are unknowns beside x, with
 
@@ -154,9 +155,11 @@ def primal_dual_solve(scene, sigma=0.3, max_newton=300, force_tol=1e-6, verbose=
         sum_r (T_r hess L_r + c_r grad L_r grad L_r^T) dx = -(sum_r T_r grad L_r - f) - sum_r c_r rho_r grad L_r,
 
     today's tangent with each rod's axial stiffness k_r replaced by c_r, between k_r (taut: g_r -> 0) and 0 (slack:
-    T_r -> 0): the same sparsity and no barrier Hessian to blow up. mu = sigma x the mean T_r g_r at each step;
-    a step is cut by the fraction to the boundary (0.995) of T and g, without line search. Returns (x (N, 3),
-    Newton steps, wall s)."""
+    T_r -> 0): the same sparsity and no barrier Hessian to blow up. mu: with ``sigma`` None, Mehrotra's
+    predictor-corrector (Mehrotra, SIAM J. Optim. 2, 1992): a predictor step towards mu = 0 on the same
+    factorisation, sigma = (the mean T g it would leave / the mean now)³ and its second-order term dT dg in the
+    corrector; else mu = sigma x the mean T_r g_r at each step. A step is cut by the fraction to the boundary
+    (0.995) of T and g, without line search. Returns (x (N, 3), Newton steps, wall s)."""
     from jaxnet import assemble, model as model_lib
 
     model = model_lib.active_terms(scene)
@@ -199,26 +202,40 @@ def primal_dual_solve(scene, sigma=0.3, max_newton=300, force_tol=1e-6, verbose=
             print(f"  {steps:4d} force {force:.2e} N  length {np.abs(r2).max():.2e} m  mean T g {gap:.2e}")
         if force < force_tol and np.abs(r2).max() < 1e-12 and gap < 1e-14:
             break
-        mu = sigma * gap
-        rho = r2 + (mu - T * g) / T
         cr = k_axial * T / (T + k_axial * g)
         # the rod's stiffness on its twine vector: T hess L + c unit unit^T, hess L = (I - unit unit^T) / L
         K_U = (T / L)[:, None, None] * (np.eye(3) - unit[:, :, None] * unit[:, None, :]) \
             + cr[:, None, None] * unit[:, :, None] * unit[:, None, :]
         blocks = np.einsum("rj,rk,rab->rjakb", c, c, K_U).reshape(m, 3 * k, 3 * k)
-        K = sp.csc_matrix((blocks.ravel()[keep], (position[rows[keep]], position[cols[keep]])),
-                          shape=(free.size, free.size))
-        rhs = -R1 - on_nodes((cr * rho)[:, None] * unit)
-        dx = np.zeros_like(x)
-        dx[free] = spla.spsolve(K, rhs[free])
-        dL = np.einsum("rc,rc->r", unit, np.einsum("rj,rjc->rc", c, dx[dof]))
-        dT = cr * (dL + rho)
-        dg = (mu - T * g - g * dT) / T
-        alpha = 1.0
-        for value, change in ((T, dT), (g, dg)):
-            shrinking = change < 0.0
-            if shrinking.any():
-                alpha = min(alpha, 0.995 * float(np.min(-value[shrinking] / change[shrinking])))
+        K = spla.splu(sp.csc_matrix((blocks.ravel()[keep], (position[rows[keep]], position[cols[keep]])),
+                                    shape=(free.size, free.size)))
+
+        def direction(target):
+            """The Newton direction (dx, dT, dg) towards T g = target (per rod, N m)."""
+            rho = r2 + (target - T * g) / T
+            dx = np.zeros_like(x)
+            dx[free] = K.solve((-R1 - on_nodes((cr * rho)[:, None] * unit))[free])
+            dT = cr * (np.einsum("rc,rc->r", unit, np.einsum("rj,rjc->rc", c, dx[dof])) + rho)
+            return dx, dT, (target - T * g - g * dT) / T
+
+        def step_to_boundary(dT, dg):
+            alpha = 1.0
+            for value, change in ((T, dT), (g, dg)):
+                shrinking = change < 0.0
+                if shrinking.any():
+                    alpha = min(alpha, float(np.min(-value[shrinking] / change[shrinking])))
+            return alpha
+
+        if sigma is None:
+            # predictor: towards T g = 0; its reach sets sigma = (mean T g it would leave / now)³, and its
+            # second-order term dT dg corrects the complementarity of the step taken
+            _, dT_a, dg_a = direction(np.zeros(m))
+            a = step_to_boundary(dT_a, dg_a)
+            centring = (float(np.mean((T + a * dT_a) * (g + a * dg_a))) / gap) ** 3
+            dx, dT, dg = direction(centring * gap - dT_a * dg_a)
+        else:
+            dx, dT, dg = direction(np.full(m, sigma * gap))
+        alpha = min(1.0, 0.995 * step_to_boundary(dT, dg))
         x, T, g = x + alpha * dx, T + alpha * dT, g + alpha * dg
         U, L, unit = geometry_of(x)
         steps += 1
@@ -230,12 +247,14 @@ def main():
     parser.add_argument("--steps", type=float, nargs="*", default=[0.1, 0.05, 0.025])
     parser.add_argument("--method", choices=("primal-dual", "barrier"), default="primal-dual")
     parser.add_argument("--shrink", type=float, default=0.1, help="barrier: mu's factor per stage")
-    parser.add_argument("--sigma", type=float, default=0.3, help="primal-dual: mu = sigma x the mean T g")
+    parser.add_argument("--sigma", type=float, help="primal-dual: mu = sigma x the mean T g at every step, instead "
+                                                    "of Mehrotra's predictor-corrector")
     parser.add_argument("--verbose", action="store_true")
     args = parser.parse_args()
     header = (f"{'step m':>7s} {'nodes':>6s} | {'Newton steps':>12s} {'wall s':>7s} {'residual N':>10s} | "
               f"{'Clarabel its':>12s} {'residual N':>10s} | {'energy diff J':>13s} {'max |dx| m':>10s}")
-    how = (f"a primal-dual method on the tension form (mu = {args.sigma:g} x mean T g)" if args.method == "primal-dual"
+    centring = "Mehrotra's predictor-corrector" if args.sigma is None else f"mu = {args.sigma:g} x mean T g"
+    how = (f"a primal-dual method on the tension form ({centring})" if args.method == "primal-dual"
            else f"a primal barrier method (mu x {args.shrink:g} per stage)")
     print(f"The wall of cone_reference.py in still water: {how}, against Clarabel\n")
     print(header)
