@@ -40,32 +40,58 @@ except ImportError:
     from validation.cone_reference import balance, check_convex, rods, solve_cone, wall_in_still_water
 
 
+class RodSystem:
+    """What both methods share: a tension-only ``scene`` in still water as its rods (:func:`cone_reference.rods`:
+    coefficients c (m, k), rest lengths l0, weights w), its constant loads f (3N,) (N), start positions x0 (3N,)
+    (m) and free coordinates, and the node-sparse assembly of a per-rod 3 x 3 stiffness on its twine vector U."""
+
+    def __init__(self, scene):
+        from jaxnet import assemble, model as model_lib
+
+        model = model_lib.active_terms(scene)
+        check_convex(scene, model)
+        self.f = np.asarray(assemble.loads(scene, model), dtype=float).ravel()
+        self.x0 = np.asarray(scene.nodes.position, dtype=float).ravel().copy()
+        self.free = np.flatnonzero(~np.asarray(scene.nodes.fixed, dtype=bool).ravel())
+        self.c, nodes, self.l0, self.w = rods(scene)
+        self.m, k = self.c.shape
+        self.dof = 3 * nodes[:, :, None] + np.arange(3)                  # (m, k, 3) global coordinates of each rod
+        # the sparsity of the node stiffness: every pair of a rod's coordinates, on the free ones only
+        rows = np.broadcast_to(self.dof.reshape(self.m, -1)[:, :, None], (self.m, 3 * k, 3 * k)).ravel()
+        cols = np.broadcast_to(self.dof.reshape(self.m, -1)[:, None, :], (self.m, 3 * k, 3 * k)).ravel()
+        position = np.full(self.x0.size, -1)
+        position[self.free] = np.arange(self.free.size)
+        self._keep = (position[rows] >= 0) & (position[cols] >= 0)
+        self._rows, self._cols = position[rows[self._keep]], position[cols[self._keep]]
+
+    def twine_vectors(self, x):
+        """(m, 3) each rod's twine vector U at positions x (3N,) (m)."""
+        return np.einsum("rj,rjc->rc", self.c, x[self.dof])
+
+    def on_nodes(self, per_rod):
+        """(3N,) the rods' (m, 3) vectors along their U taken onto their nodes (a force on U to nodal forces)."""
+        out = np.zeros_like(self.x0)
+        np.add.at(out, self.dof.reshape(-1), (self.c[:, :, None] * per_rod[:, None, :]).reshape(-1))
+        return out
+
+    def stiffness(self, K_U):
+        """The (free, free) CSC node matrix of per-rod (m, 3, 3) stiffnesses on U."""
+        size = 3 * self.c.shape[1]
+        blocks = np.einsum("rj,rk,rab->rjakb", self.c, self.c, K_U).reshape(self.m, size, size)
+        return sp.csc_matrix((blocks.ravel()[self._keep], (self._rows, self._cols)),
+                             shape=(self.free.size, self.free.size))
+
+
 def barrier_solve(scene, shrink=0.1, max_newton=500, force_tol=1e-6, verbose=False):
     """The equilibrium of a tension-only ``scene`` in still water by the barrier method of the module docstring.
     Returns (x (N, 3), Newton steps, stages of mu, wall s)."""
-    from jaxnet import assemble, model as model_lib
-
-    model = model_lib.active_terms(scene)
-    check_convex(scene, model)
     t_start = time.perf_counter()
-    f = np.asarray(assemble.loads(scene, model), dtype=float).ravel()
-    x = np.asarray(scene.nodes.position, dtype=float).ravel().copy()
-    free = np.flatnonzero(~np.asarray(scene.nodes.fixed, dtype=bool).ravel())
-    c, nodes, l0, w = rods(scene)
-    m, k = c.shape
-    dof = 3 * nodes[:, :, None] + np.arange(3)                          # (m, k, 3) global coordinates of each rod
-
-    def twine_vectors(x):
-        return np.einsum("rj,rjc->rc", c, x[dof])
-
+    system = RodSystem(scene)
+    f, x, free, l0, w, m = system.f, system.x0, system.free, system.l0, system.w, system.m
+    twine_vectors = system.twine_vectors
     U = twine_vectors(x)
     s = np.linalg.norm(U, axis=1) - l0 + 0.1 * l0                        # strictly inside every cone
     mu = float(np.abs(f).max() * l0.mean())
-    # the sparsity of the node stiffness: every pair of a rod's coordinates
-    rows = np.broadcast_to(dof.reshape(m, -1)[:, :, None], (m, 3 * k, 3 * k)).ravel()
-    cols = np.broadcast_to(dof.reshape(m, -1)[:, None, :], (m, 3 * k, 3 * k)).ravel()
-    position = np.full(x.size, -1)
-    position[free] = np.arange(free.size)
 
     def objective(x, s, mu):
         U = twine_vectors(x)
@@ -80,9 +106,7 @@ def barrier_solve(scene, shrink=0.1, max_newton=500, force_tol=1e-6, verbose=Fal
         length = np.linalg.norm(U, axis=1)
         tension = 2.0 * w * np.maximum(length - l0, 0.0)                   # the n twines' force together (N)
         along = tension[:, None] * U / np.maximum(length, 1e-300)[:, None]
-        force = f.copy()
-        np.add.at(force, dof.reshape(-1), -(c[:, :, None] * along[:, None, :]).reshape(-1))
-        return float(np.abs(force[free]).max())
+        return float(np.abs((f - system.on_nodes(along))[free]).max())
 
     steps = stages = 0
     scale = float(np.abs(f).sum() * l0.mean())                            # an energy scale (J)
@@ -100,12 +124,8 @@ def barrier_solve(scene, shrink=0.1, max_newton=500, force_tol=1e-6, verbose=Fal
         # eliminate s: the reduced stiffness and gradient on U
         K_U = H_UU - H_sU[:, :, None] * H_sU[:, None, :] / H_ss[:, None, None]
         g_red = g_U - H_sU * (g_s / H_ss)[:, None]
-        blocks = np.einsum("rj,rk,rab->rjakb", c, c, K_U).reshape(m, 3 * k, 3 * k)
-        gradient = -f.copy()
-        np.add.at(gradient, dof.reshape(-1), (c[:, :, None] * g_red[:, None, :]).reshape(-1))
-        keep = (position[rows] >= 0) & (position[cols] >= 0)
-        K = sp.csc_matrix((blocks.ravel()[keep], (position[rows[keep]], position[cols[keep]])),
-                          shape=(free.size, free.size))
+        gradient = system.on_nodes(g_red) - f
+        K = system.stiffness(K_U)
         dx = np.zeros_like(x)
         dx[free] = spla.spsolve(K, -gradient[free])
         dU = twine_vectors(dx)
@@ -160,33 +180,16 @@ def primal_dual_solve(scene, sigma=None, max_newton=300, force_tol=1e-6, verbose
     factorisation, sigma = (the mean T g it would leave / the mean now)³ and its second-order term dT dg in the
     corrector; else mu = sigma x the mean T_r g_r at each step. A step is cut by the fraction to the boundary
     (0.995) of T and g, without line search. Returns (x (N, 3), Newton steps, wall s)."""
-    from jaxnet import assemble, model as model_lib
-
-    model = model_lib.active_terms(scene)
-    check_convex(scene, model)
     t_start = time.perf_counter()
-    f = np.asarray(assemble.loads(scene, model), dtype=float).ravel()
-    x = np.asarray(scene.nodes.position, dtype=float).ravel().copy()
-    free = np.flatnonzero(~np.asarray(scene.nodes.fixed, dtype=bool).ravel())
-    c, nodes, l0, w = rods(scene)
-    k_axial = 2.0 * w
-    m, k = c.shape
-    dof = 3 * nodes[:, :, None] + np.arange(3)
-    rows = np.broadcast_to(dof.reshape(m, -1)[:, :, None], (m, 3 * k, 3 * k)).ravel()
-    cols = np.broadcast_to(dof.reshape(m, -1)[:, None, :], (m, 3 * k, 3 * k)).ravel()
-    position = np.full(x.size, -1)
-    position[free] = np.arange(free.size)
-    keep = (position[rows] >= 0) & (position[cols] >= 0)
+    system = RodSystem(scene)
+    f, x, free, l0, m = system.f, system.x0, system.free, system.l0, system.m
+    k_axial = 2.0 * system.w
+    on_nodes = system.on_nodes
 
     def geometry_of(x):
-        U = np.einsum("rj,rjc->rc", c, x[dof])
+        U = system.twine_vectors(x)
         L = np.linalg.norm(U, axis=1)
         return U, L, U / L[:, None]
-
-    def on_nodes(per_rod):                 # (m, 3) force along each rod's U -> (3N,) on its nodes
-        out = np.zeros_like(x)
-        np.add.at(out, dof.reshape(-1), (c[:, :, None] * per_rod[:, None, :]).reshape(-1))
-        return out
 
     U, L, unit = geometry_of(x)
     scale_T = float(np.abs(f).max())
@@ -206,16 +209,14 @@ def primal_dual_solve(scene, sigma=None, max_newton=300, force_tol=1e-6, verbose
         # the rod's stiffness on its twine vector: T hess L + c unit unit^T, hess L = (I - unit unit^T) / L
         K_U = (T / L)[:, None, None] * (np.eye(3) - unit[:, :, None] * unit[:, None, :]) \
             + cr[:, None, None] * unit[:, :, None] * unit[:, None, :]
-        blocks = np.einsum("rj,rk,rab->rjakb", c, c, K_U).reshape(m, 3 * k, 3 * k)
-        K = spla.splu(sp.csc_matrix((blocks.ravel()[keep], (position[rows[keep]], position[cols[keep]])),
-                                    shape=(free.size, free.size)))
+        K = spla.splu(system.stiffness(K_U))
 
         def direction(target):
             """The Newton direction (dx, dT, dg) towards T g = target (per rod, N m)."""
             rho = r2 + (target - T * g) / T
             dx = np.zeros_like(x)
             dx[free] = K.solve((-R1 - on_nodes((cr * rho)[:, None] * unit))[free])
-            dT = cr * (np.einsum("rc,rc->r", unit, np.einsum("rj,rjc->rc", c, dx[dof])) + rho)
+            dT = cr * (np.einsum("rc,rc->r", unit, system.twine_vectors(dx)) + rho)
             return dx, dT, (target - T * g - g * dT) / T
 
         def step_to_boundary(dT, dg):
