@@ -32,7 +32,7 @@ series.pvd + net_NNNNN.vtu for ParaView, checkpoint.npz; ``--resume`` continues 
 record; run.png at the end: the reactions and largest tensions against time), its progress a bar on a terminal
 and plain lines in a log (:mod:`jaxnet.io.progress`). A FEMNET case takes its own time settings, towing tables,
 winches and numerics (its threshold, iterations and displacement limit, for the static start and for every time
-step); ``--tol``, ``--max-iter`` and ``--stiffness`` apply to both as in a static run. The built-in
+step); ``--tol``, ``--max-iter``, ``--stiffness`` and ``--method`` apply to both as in a static run. The built-in
 ``cage_waves`` (the default with ``--dynamic``) is the cage in regular waves, its collar heaving.
 
 Compiled programs are kept on disk (in ``--cache DIR``, default ``$XDG_CACHE_HOME/jaxnet`` or
@@ -272,10 +272,10 @@ def built_in_arguments(make, name, settings):
 
 
 def _overrides(args):
-    """The Newton options the command line sets (``--tol``, ``--max-iter``, ``--stiffness``): for the static solve,
-    and in a run in time for its start and for every time step."""
-    return {k: v for k, v in (("tol", args.tol), ("max_iter", args.max_iter), ("stiffness", args.stiffness))
-            if v is not None}
+    """The Newton options the command line sets (``--tol``, ``--max-iter``, ``--stiffness``, ``--method``): for the
+    static solve, and in a run in time for its start and for every time step."""
+    return {k: v for k, v in (("tol", args.tol), ("max_iter", args.max_iter), ("stiffness", args.stiffness),
+                              ("method", args.method)) if v is not None}
 
 
 def time_stepping(case, args):
@@ -588,6 +588,11 @@ def argument_parser() -> argparse.ArgumentParser:
                      help="the tangent's path: closed_form (the default: the book's hand-derived stiffness where a "
                           "term has one; docs/errata.md) or autodiff (jax.jacfwd of every term, the reference); the "
                           "same matrix either way")
+    # jaxnet.solve.options.METHODS, written here so that the command line starts without importing the solver
+    run.add_argument("--method", choices=("damped", "primal-dual"),
+                     help="the static iteration: damped (Newton on the energy, damped, with a stiffness continuation) "
+                          "or primal-dual (an interior-point Newton with each tension-only twine's and bar's tension "
+                          "as an unknown); default the library's")
     run.add_argument("--jaxnet-laws", action="store_true", dest="jaxnet_laws",
                      help="with a FEMNET case: jaxnet's own laws (the book's, corrected) where FEMNET's differ (knot "
                           "contact, netting drag with a catch: docs/errata.md), instead of FEMNET's")

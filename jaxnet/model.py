@@ -80,6 +80,15 @@ class ActiveTerm:
             return False
         return closed.covers is None or bool(closed.covers(self.kwargs()))
 
+    def has_rods(self) -> bool:
+        """Whether the term is, with its options, a sum of tension-only rods (:class:`jaxnet.terms.term.Rods`)."""
+        rods = self.term.rods
+        return rods is not None and (rods.covers is None or bool(rods.covers(self.kwargs())))
+
+    def rods(self, x, p, env):
+        """The element's rods: (length (r,) m, rest length (r,) m, axial stiffness (r,) N/m)."""
+        return self.term.rods.form(x, **self.arguments(p, env))
+
     def stiffness(self, x, p, env, state=None, velocity=None, time_step=None):
         """The (3k, 3k) closed-form element matrix K = -dF/dx (N/m), vertex-major; for a force term ``state``
         is held fixed, and a moving drag takes ``velocity`` (m/s) and ``time_step`` (s)."""

@@ -23,9 +23,9 @@ CASES = {
 
 
 @pytest.mark.parametrize("name", sorted(CASES))
-def test_the_newton_equilibrium_is_the_cone_programs_minimum(name):
+def test_the_damped_newton_equilibrium_is_the_cone_programs_minimum(name):
     scene = CASES[name]()
-    solver = jn.Newton()
+    solver = jn.Newton(method="damped")
     eq = jn.solve_static(scene, solver)
     cone = cone_reference.solve_cone(scene)
     assert cone.status == "Solved"
@@ -63,17 +63,13 @@ def test_what_is_not_convex_is_refused_by_name():
 
 
 @pytest.mark.parametrize("name", sorted(CASES))
-def test_the_primal_dual_tension_form_reaches_the_cone_programs_minimum(name):
-    """validation/interior_point.py's primal-dual method (the rods' tensions and gaps eliminated into the node
-    system) balances the net far below the Newton tolerance and reaches Clarabel's minimum of the potential."""
-    from validation import interior_point
-
+def test_the_primal_dual_method_reaches_the_cone_programs_minimum(name):
+    """jaxnet's primal-dual method (jaxnet.solve.interior: the rods' tensions and gaps eliminated into the node
+    system) balances the net to the tolerance and reaches Clarabel's minimum of the potential, at its positions."""
     scene = CASES[name]()
-    x, steps, _ = interior_point.primal_dual_solve(scene)
+    eq = jn.solve_static(scene, jn.Newton(method="primal-dual"))
     cone = cone_reference.solve_cone(scene)
-    residual, energy = cone_reference.balance(scene, x)
-    # balanced by jaxnet's residual to 1e-4 N (measured: 2e-5 N; its own residual, tensions from the complementarity,
-    # 1e-12 N); the same minimum as the cone program, and the same positions
-    assert steps < 300 and residual < 1e-4
+    residual, energy = cone_reference.balance(scene, eq.x)
+    assert residual <= jn.Newton().tol
     assert energy == pytest.approx(cone_reference.balance(scene, cone.x)[1], rel=1e-9)
-    assert np.abs(x - cone.x).max() < 1e-4
+    assert np.abs(np.asarray(eq.x) - cone.x).max() < 1e-4

@@ -218,7 +218,7 @@ def test_c2_on_femnet_mesh_with_femnet_laws_gives_femnet_answer():
 
 
 def test_c2_iterations_without_a_step_reuse_their_tangent(monkeypatch, capsys):
-    """c2's solve has iterations whose direction the line search cannot use (at the start of a softened
+    """c2's damped solve has iterations whose direction the line search cannot use (at the start of a softened
     stage): x stays, so the next iteration's tangent is the same matrix and is not computed again. One
     tangent per iteration, less one per iteration that took no step (its progress line says "step 0.000"),
     and the same equilibrium as FEMNET's."""
@@ -241,7 +241,7 @@ def test_c2_iterations_without_a_step_reuse_their_tangent(monkeypatch, capsys):
     monkeypatch.setattr(statics, "compile_pieces", counting)
     case = femnet.read_mdg(DATA / "c2.mdg", DATA / "c2.don")
     scene, solver = case.scene, case.solver
-    eq = solve(scene, solver, verbose=True)
+    eq = solve(scene, solver, verbose=True, method="damped")
     steps = [float(line.split("step")[1]) for line in capsys.readouterr().out.splitlines() if "newton" in line]
     assert len(steps) == int(eq.iterations) and eq.converged
     no_step = sum(step == 0.0 for step in steps[:-1])

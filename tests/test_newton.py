@@ -1,4 +1,4 @@
-"""The static Newton: convergence from the flat stress-free start, its rate, and how it fails."""
+"""The damped static Newton (method="damped"): convergence from the flat stress-free start, its rate and its failures."""
 
 import numpy as np
 import pytest
@@ -19,7 +19,7 @@ def test_flat_start_of_a_2000_node_panel_with_slack_twines_converges_in_20_itera
     # stress-free start has no out-of-plane stiffness at all, and the twines have EA_c = 0.
     scene = framed_panel(meshes=80, step=0.06, sinker_kg=20.0).scene
     assert scene.n_nodes >= 2000 and not np.any(np.asarray(scene.netting.ea_compression))
-    eq = jn.solve_static(scene, tol=1e-3, max_iter=20)
+    eq = jn.solve_static(scene, method="damped", tol=1e-3, max_iter=20)
     assert eq.converged and float(eq.residual_N) <= 1e-3
     assert float(np.asarray(eq.x)[:, 2].min()) < -0.1  # it really sagged (about 0.23 m)
     np.testing.assert_allclose(balance(scene, eq), 0.0, atol=scene.n_nodes * 1e-3)
@@ -28,7 +28,7 @@ def test_flat_start_of_a_2000_node_panel_with_slack_twines_converges_in_20_itera
 def test_flat_start_of_the_2000_node_default_scene_converges_in_20_iterations():
     scene = hanging_panel(meshes=80, step=0.06).scene
     assert scene.n_nodes >= 2000
-    eq = jn.solve_static(scene, tol=1e-3, max_iter=20)
+    eq = jn.solve_static(scene, method="damped", tol=1e-3, max_iter=20)
     assert eq.converged
     np.testing.assert_allclose(balance(scene, eq), 0.0, atol=scene.n_nodes * 1e-3)
 
@@ -38,10 +38,10 @@ def test_badly_crumpled_start_reaches_the_same_equilibrium():
     # unique: from a crumpled start (every free node moved at random by up to three twine lengths,
     # many triangles turned inside out) Newton must find the flat start's answer.
     scene = framed_panel(meshes=20, step=0.08, sinker_kg=2.0).scene
-    flat = jn.solve_static(scene, tol=1e-8)
+    flat = jn.solve_static(scene, method="damped", tol=1e-8)
     rng = np.random.default_rng(0)
     x0 = np.asarray(scene.nodes.position) + rng.uniform(-0.075, 0.075, (scene.n_nodes, 3))
-    crumpled = jn.solve_static(scene, x0=x0, tol=1e-8)
+    crumpled = jn.solve_static(scene, method="damped", x0=x0, tol=1e-8)
     np.testing.assert_allclose(np.asarray(crumpled.x), np.asarray(flat.x), atol=1e-7)
 
 
@@ -50,14 +50,14 @@ def test_slack_curtain_converges_even_though_slowly():
     # converges linearly there, but it must converge, and balance the weight.
     slack = Twine(l0=0.025, ea=2000.0, diameter=1.5e-3, ea_compression=0.0)
     scene = hanging_panel(meshes=40, step=0.1, twine=slack).scene
-    eq = jn.solve_static(scene, tol=1e-3, max_iter=500)
+    eq = jn.solve_static(scene, method="damped", tol=1e-3, max_iter=500)
     assert eq.converged
     np.testing.assert_allclose(balance(scene, eq), 0.0, atol=scene.n_nodes * 1e-3)
 
 
 def test_quadratic_convergence_near_the_solution():
     scene = framed_panel(meshes=20, step=0.08, sinker_kg=2.0).scene
-    eq = jn.solve_static(scene, tol=1e-9, max_iter=60)
+    eq = jn.solve_static(scene, method="damped", tol=1e-9, max_iter=60)
     hist = np.asarray(eq.history)
     hist = hist[np.isfinite(hist)]
     r1, r2 = hist[-2:]
@@ -70,8 +70,8 @@ def test_quadratic_convergence_near_the_solution():
 def test_failed_solve_names_the_reason_and_the_node():
     scene = hanging_panel(meshes=20, step=0.08).scene
     with pytest.raises(jn.SolveError, match=r"after 2 iterations: maximum number of iterations reached; largest residual .* N at node \d+"):
-        jn.solve_static(scene, max_iter=2)
-    eq = jn.solve_static(scene, max_iter=2, throw=False)
+        jn.solve_static(scene, method="damped", max_iter=2)
+    eq = jn.solve_static(scene, method="damped", max_iter=2, throw=False)
     assert not eq.converged and eq.reason == "maximum number of iterations reached"
     assert np.all(np.isfinite(np.asarray(eq.x)))
     worst = int(eq.worst_node)
@@ -112,7 +112,7 @@ def test_host_loop_and_jitted_loop_are_the_same_iteration():
     from jaxnet.solve import newton
 
     scene = framed_panel(meshes=12, step=0.1, sinker_kg=2.0).scene
-    host = jn.solve_static(scene, tol=1e-8)
+    host = jn.solve_static(scene, method="damped", tol=1e-8)
     model = model_lib.active_terms(scene)
     pattern = assemble.build_pattern(scene, model)
     start = np.asarray(scene.nodes.position).ravel()[np.asarray(pattern.free)]
@@ -171,8 +171,8 @@ def test_stiffness_continuation_changes_the_path_not_the_equilibrium(capsys):
     # The continuation solves softer nets first; its last stage is the net as it is, so it must land on
     # plain Newton's equilibrium (unique here: EA_c = 0 makes the energy convex, all twines taut).
     scene = framed_panel(meshes=16, step=0.08, sinker_kg=2.0).scene
-    plain = jn.solve_static(scene, tol=1e-8, stall_window=None)
-    softened = jn.solve_static(scene, tol=1e-8, stall_window=0, verbose=True)
+    plain = jn.solve_static(scene, method="damped", tol=1e-8, stall_window=None)
+    softened = jn.solve_static(scene, method="damped", tol=1e-8, stall_window=0, verbose=True)
     printed = capsys.readouterr().out
     assert [line.split()[-1] for line in printed.splitlines() if line.startswith("  stiffness x")] == ["0.01", "0.0316", "0.1", "0.316", "1"]
     assert softened.converged and int(softened.iterations) > int(plain.iterations)
@@ -249,9 +249,9 @@ def test_a_continuation_that_cannot_finish_gives_way_to_plain_newton(capsys):
     # as it is by then (or a softened net stalls), plain Newton resumes from where the continuation began,
     # so a misjudged start of the continuation costs iterations, never the solve.
     scene = framed_panel(meshes=16, step=0.08, sinker_kg=2.0).scene
-    plain = jn.solve_static(scene, tol=1e-8, stall_window=None)
+    plain = jn.solve_static(scene, method="damped", tol=1e-8, stall_window=None)
     n = int(plain.iterations)
-    rescued = jn.solve_static(scene, tol=1e-8, stall_window=0, max_iter=2 * n + 2, verbose=True)
+    rescued = jn.solve_static(scene, method="damped", tol=1e-8, stall_window=0, max_iter=2 * n + 2, verbose=True)
     assert "stiffness continuation abandoned" in capsys.readouterr().out
     assert rescued.converged and int(rescued.iterations) == (2 * n + 2) // 2 + n
     np.testing.assert_allclose(np.asarray(rescued.x), np.asarray(plain.x), atol=1e-7)

@@ -2,6 +2,7 @@
 
     python validation/bench_statics.py [--scene framed|hanging|cage|trawl|femnet] [--sizes 100 1000 10000 100000]
                                        [--ea-compression EA_C] [--current U] [--max-iter N]
+                                       [--methods damped primal-dual]
 
 Scenes:
 
@@ -73,13 +74,15 @@ def build(scene_name, size, ea_compression, current, trawl=TRAWL):
     return hanging_panel(meshes=meshes, l0=l0, step=step, twine=twine)
 
 
-def one(size, scene_name, ea_compression, current, max_iter, trawl=TRAWL):
-    """Solve one scene in this process; its row (a dict)."""
+def one(size, scene_name, ea_compression, current, max_iter, trawl=TRAWL, method=None):
+    """Solve one scene in this process; its row (a dict). ``method``: the static method (None: the library's
+    default, or the case's)."""
     import jaxnet as jn
 
     case = build(scene_name, size, ea_compression, current, trawl)
     scene = case.scene
-    eq = jn.solve_static(case, throw=False, max_iter=max_iter)  # FEMNET's threshold for its cases
+    chosen = {} if method is None else {"method": method}
+    eq = jn.solve_static(case, throw=False, max_iter=max_iter, **chosen)  # FEMNET's threshold for its cases
     t = eq.timing
     from jaxnet import assemble, model
 
@@ -89,7 +92,8 @@ def one(size, scene_name, ea_compression, current, max_iter, trawl=TRAWL):
     factor = t.factorisation_each_s
     run_s = t.wall_s - t.compile_s
     return {
-        "case": pathlib.Path(size).stem if scene_name == "femnet" else f"{scene_name} {size}",
+        "case": (pathlib.Path(size).stem if scene_name == "femnet" else f"{scene_name} {size}")
+                + ("" if method is None else f" {method}"),
         "nodes": scene.n_nodes,
         "dof": scene.n_dof,
         "nnz": int(pattern.nnz),
@@ -117,10 +121,14 @@ def main():
     parser.add_argument("--ea-compression", type=float, default=None, help="panels' twine EA_c (N); default per scene")
     parser.add_argument("--current", type=float, default=0.5, help="the cage's current (m/s)")
     parser.add_argument("--max-iter", type=int, default=500, help="Newton iterations at most")
+    parser.add_argument("--methods", nargs="*", default=[None],
+                        help="the static methods, each size solved by each in turn (default: the library's)")
+    parser.add_argument("--method", help=argparse.SUPPRESS)
     parser.add_argument("--one", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.one:
-        print(json.dumps(one(args.one, args.scene, args.ea_compression, args.current, args.max_iter, args.trawl)))
+        print(json.dumps(one(args.one, args.scene, args.ea_compression, args.current, args.max_iter, args.trawl,
+                             args.method)))
         return
     import numpy as np
 
@@ -142,8 +150,9 @@ def main():
             f"{linalg.solver_choice()} (JAXNET_SPARSE_SOLVER)\n")
     print("| " + " | ".join(columns) + " |\n|" + "---|" * len(columns))
     sizes = args.cases if args.scene == "femnet" else [str(n) for n in args.sizes]
-    for size in sizes:
+    for size, method in ((size, method) for size in sizes for method in args.methods):
         extra = [] if args.ea_compression is None else ["--ea-compression", str(args.ea_compression)]
+        extra += [] if method is None else ["--method", method]
         out = subprocess.run([sys.executable, __file__, "--one", size, "--scene", args.scene, "--current",
                               str(args.current), "--max-iter", str(args.max_iter), "--trawl", args.trawl, *extra],
                              capture_output=True, text=True)
@@ -157,7 +166,7 @@ def main():
               f"{r['iterations']} | "
               f"{r['factorisations']} | {r['assembly_s']:.4f} | {r['factor_s']:.4f} | {r['iteration_s']:.4f} | "
               f"{r['per_iteration']:.2f} | {r['ratio']:.2f} | {r['residual_N']:.2e} | {r['peak_MB']:.0f} |", flush=True)
-    if len(rows) >= 2 and args.scene != "femnet":
+    if len(rows) >= 2 and args.scene != "femnet" and len(args.methods) == 1:
         n = np.log([r["nodes"] for r in rows])
         print()
         for key in ("assembly_s", "factor_s", "iteration_s", "run_s", "compile_s", "peak_MB"):

@@ -23,7 +23,8 @@ SCRIPTS = {
                         ["--repeat", "1"], []),
     "whole_process.py": ("`jaxnet run CASE.don` as a whole process, cold and with its programs on disk, against FEMNET",
                          ["--repeat", "1", "--cases", "5catch/c2"], []),
-    "cone_reference.py": ("A wall in still water: jaxnet's Newton against Clarabel's interior point on the cone program",
+    "cone_reference.py": ("A wall in still water: jaxnet's two static methods against Clarabel's interior point on "
+                          "the cone program",
                           ["--steps", "0.1", "0.05"], ["--steps", "0.1", "0.05", "0.025"]),
     "compile_options.py": ("XLA's CPU options: compilation and run times of the solver's programs",
                            ["--runs", "10"], []),

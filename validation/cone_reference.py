@@ -191,25 +191,28 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--steps", type=float, nargs="*", default=[0.1, 0.05, 0.025])
     parser.add_argument("--max-iter", type=int, default=3000, help="jaxnet's Newton iterations at most")
+    parser.add_argument("--methods", nargs="*", default=["primal-dual", "damped"],
+                        help="jaxnet's static methods to run (default both, side by side)")
     args = parser.parse_args()
-    header = (f"{'step m':>7s} {'nodes':>6s} | {'jaxnet its':>10s} {'wall s':>7s} {'residual N':>10s} | "
+    header = (f"{'step m':>7s} {'nodes':>6s} | {'jaxnet method':>13s} {'its':>5s} {'wall s':>7s} {'residual N':>10s} | "
               f"{'Clarabel its':>12s} {'wall s':>7s} {'residual N':>10s} {'status':>8s} | {'energy diff J':>13s} "
               f"{'max |dx| m':>10s}")
     print("A wall in still water (40 x 40 meshes, tension-only twines, 2 kg of lead along its foot): jaxnet's "
-          "Newton against Clarabel\n")
+          "static methods against Clarabel\n")
     print(header)
     print("-" * len(header))
     for step in args.steps:
         scene = wall_in_still_water(step)
-        t = time.perf_counter()
-        eq = jn.solve_static(scene, max_iter=args.max_iter, throw=False)
-        ours_wall = time.perf_counter() - t
         cone = solve_cone(scene)
-        ours_residual, ours_energy = balance(scene, eq.x)
         cone_residual, cone_energy = balance(scene, cone.x)
-        print(f"{step:7.3f} {scene.n_nodes:6d} | {int(eq.iterations):10d} {ours_wall:7.2f} {ours_residual:10.2e} | "
-              f"{cone.iterations:12d} {cone.wall_s:7.2f} {cone_residual:10.2e} {cone.status:>8s} | "
-              f"{ours_energy - cone_energy:13.2e} {np.abs(np.asarray(eq.x) - cone.x).max():10.2e}")
+        for method in args.methods:
+            t = time.perf_counter()
+            eq = jn.solve_static(scene, max_iter=args.max_iter, method=method, throw=False)
+            ours_wall = time.perf_counter() - t
+            ours_residual, ours_energy = balance(scene, eq.x)
+            print(f"{step:7.3f} {scene.n_nodes:6d} | {method:>13s} {int(eq.iterations):5d} {ours_wall:7.2f} "
+                  f"{ours_residual:10.2e} | {cone.iterations:12d} {cone.wall_s:7.2f} {cone_residual:10.2e} "
+                  f"{cone.status:>8s} | {ours_energy - cone_energy:13.2e} {np.abs(np.asarray(eq.x) - cone.x).max():10.2e}")
     print("\njaxnet's wall time includes its compilation; residual: the largest out-of-balance force on a free "
           "coordinate, by jaxnet's residual at each answer; energy diff: jaxnet's potential energy at its answer "
           "less at Clarabel's.")

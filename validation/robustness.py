@@ -368,11 +368,17 @@ def peak_memory_mb(reset):
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, "ru_maxrss (the process's peak so far)"
 
 
+#: the static method every case is solved with (``--method``; None: each case's own, the library's default)
+METHOD = None
+
+
 def newton_options(setup):
-    """The case's Newton options (the library's where it has none) with the set's tolerance and cap."""
+    """The case's Newton options (the library's where it has none) with the set's tolerance and cap (and the
+    method of ``--method``, where given)."""
     from jaxnet.solve.options import STATIC, TOL_N
 
-    return dataclasses.replace(setup.newton or STATIC, tol=TOL_N, max_iter=MAX_ITERATIONS)
+    method = {} if METHOD is None else {"method": METHOD}
+    return dataclasses.replace(setup.newton or STATIC, tol=TOL_N, max_iter=MAX_ITERATIONS, **method)
 
 
 def _first_line(error):
@@ -696,6 +702,8 @@ def main(argv=None):
     parser.add_argument("--out", default=str(DEFAULT_OUT), help="the records, JSON lines (default %(default)s)")
     parser.add_argument("--resume", action="store_true", help="skip the cases already in --out")
     parser.add_argument("--list", action="store_true", help="print the cases' names and stop")
+    parser.add_argument("--method", choices=("damped", "primal-dual"),
+                        help="the static method of every case (default: the library's, or the case's own)")
     parser.add_argument("--compare", nargs="+", metavar="JSON",
                         help="OLD.json [NEW.json]: compare two runs' records (NEW default: --out) and stop")
     args = parser.parse_args(argv)
@@ -709,6 +717,8 @@ def main(argv=None):
 
     import jaxnet  # noqa: F401  (float64 on)
 
+    global METHOD
+    METHOD = args.method
     chosen = [c for c in cases(args.size) if matches(c.name, args.only)]
     if args.list:
         print("\n".join(f"{c.family:10s} {c.name}" for c in chosen))

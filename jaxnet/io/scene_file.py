@@ -297,7 +297,7 @@ def _solver(spec):
         if key == "stall_window" and value is False:   # TOML has no null: false says None (never)
             spec[key] = None
             continue
-        if key in ("stiffness", "verbose") or (key == "stall_window" and value is None):
+        if key in ("stiffness", "verbose", "method") or (key == "stall_window" and value is None):
             continue
         integer = key in ("max_iter", "line_search", "stall_window")
         spec[key] = _integer(value, where / key) if integer else _number(value, where / key)

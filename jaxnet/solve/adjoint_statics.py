@@ -181,7 +181,7 @@ class Adjoint:
         signature = (treedef, tuple((np.shape(v), str(getattr(v, "dtype", type(v)))) for v in leaves))
         if signature not in self._programs:
             self._programs[signature] = statics.compile_pieces(start, scene, self._pattern, self.model,
-                                                               self.solver.stiffness)
+                                                               self.solver.stiffness, method=self.solver.method)
         return self._programs[signature]
 
     def solve(self, scene, x0=None) -> Equilibrium:

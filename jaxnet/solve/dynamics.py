@@ -406,7 +406,7 @@ class Stepper:
             x_guess = (x + h * v).ravel()[self.free]
             if self._pieces is None:
                 self._pieces = statics.compile_pieces(x_guess, scene_t, self.pattern, self.model,
-                                                      newton_options.stiffness, step)
+                                                      newton_options.stiffness, step, newton_options.method)
             eq = statics.host_loop(x_guess, scene_t, self.pattern, self.model, newton_options, self._pieces, step)
             ok = int(eq.status) == results.CONVERGED
             its = int(eq.iterations)

@@ -5,11 +5,11 @@ static solve (:func:`jaxnet.solve.statics.solve`), each implicit time step (:cla
 :mod:`jaxnet.solve.dynamics`) and the differentiable equilibrium (:mod:`jaxnet.solve.implicit`). These
 differ in what they need from it, hence three presets:
 
-* :data:`STATIC`: the static solve from a drawn (often flat, stress-free) net: damped, with the stiffness
-  continuation, converged to FEMNET's threshold :data:`TOL_N`.
+* :data:`STATIC`: the static solve from a drawn (often flat, stress-free) net: the primal-dual method, the
+  damped one with its stiffness continuation where it stops short, converged to FEMNET's threshold :data:`TOL_N`.
 * :data:`TIME_STEP`: one implicit time step: the inertia (M + M_a)/Δt² on the tangent's diagonal makes it
-  regular, and the step starts at the constant-velocity prediction, close to its answer: nearly undamped,
-  no continuation, few iterations (a step that needs more is better halved).
+  regular, and the step starts at the constant-velocity prediction, close to its answer: the damped method,
+  nearly undamped, no continuation, few iterations (a step that needs more is better halved).
 * :data:`DIFFERENTIABLE`: the forward solve of a differentiable equilibrium: pure Newton steps near the
   root (no continuation: it is the jittable iteration), converged far below :data:`TOL_N`, because the
   derivative by the implicit function theorem is only as good as the root.
@@ -27,6 +27,11 @@ import dataclasses
 import numpy as np
 
 from jaxnet.model import STIFFNESS_PATHS
+
+#: the static iterations (:attr:`Newton.method`): ``"damped"``, the damped Newton on the energy
+#: (:mod:`jaxnet.solve.newton`); ``"primal-dual"``, the interior-point Newton on the tension form of the tension-only
+#: rods (:mod:`jaxnet.solve.interior`)
+METHODS = ("damped", "primal-dual")
 
 #: FEMNET's convergence threshold (N): the largest nodal out-of-balance force over the free coordinates
 #: at which a static solve or a time step has converged (:attr:`Newton.tol`'s default)
@@ -60,9 +65,17 @@ class Newton:
       because they are cheaper to compile and to run (``validation/femnet_cases.py`` times whole solves
       with either, ``validation/stiffness_cost.py`` the element matrices).
     verbose: print one line per iteration.
+    method: the static iteration, one of :data:`METHODS`: ``"primal-dual"`` (the default: the tension and gap of
+      every tension-only twine and bar as unknowns, an interior-point Newton, :mod:`jaxnet.solve.interior`; where
+      it has not converged after its budget, the damped method from the start; a scene without such rods, or
+      with a catch, is solved by the damped method: :func:`jaxnet.solve.interior.suits`) or ``"damped"``
+      (Levenberg-Marquardt damping, the energy line search and the stiffness continuation,
+      :mod:`jaxnet.solve.newton`). The damping and continuation fields are the damped method's; ``tol``,
+      ``max_iter`` (each method's own), ``line_search`` and ``max_step`` serve both.
 
     The jittable iteration (:func:`jaxnet.solve.newton.newton_loop`: time steps, the differentiable
-    equilibrium) has no stiffness continuation: there the continuation's fields are unused.
+    equilibrium) is the damped one whatever ``method`` says, without the stiffness continuation: there the
+    continuation's fields are unused.
     """
 
     tol: float = TOL_N
@@ -79,8 +92,11 @@ class Newton:
     stage_rtol: float = 1e-2
     stiffness: str = "closed_form"
     verbose: bool = False
+    method: str = "primal-dual"
 
     def __post_init__(self):
+        if self.method not in METHODS:
+            raise ValueError(f"Newton: method must be one of {METHODS}, not {self.method!r}")
         if self.stiffness not in STIFFNESS_PATHS:
             raise ValueError(f"Newton: stiffness must be one of {STIFFNESS_PATHS}, not {self.stiffness!r}")
         # refused here, before anything compiles: tol <= 0 would run to max_iter and report a failure that is
@@ -109,11 +125,11 @@ STATIC = Newton()
 #: computed once per vertex) most of it; the drag, which depends on the velocities here, takes its closed
 #: form where the assembly hands it the vertices' velocities (:meth:`jaxnet.model.ActiveTerm.has_closed_form`).
 #: ``validation/dynamics_cost.py`` measures both paths.
-TIME_STEP = Newton(tol=TOL_N, max_iter=30, damping=1e-12, stall_window=None, line_search=20)
+TIME_STEP = Newton(tol=TOL_N, max_iter=30, damping=1e-12, stall_window=None, line_search=20, method="damped")
 
 #: the differentiable equilibrium's forward solve (:func:`jaxnet.solve.implicit.equilibrium`, the design
 #: studies, :mod:`jaxnet.solve.adjoint_dynamics`): pure Newton steps near the root, converged to 1e-8 N
-DIFFERENTIABLE = Newton(tol=1e-8, max_iter=200, damping=1e-6, stall_window=None, line_search=30)
+DIFFERENTIABLE = Newton(tol=1e-8, max_iter=200, damping=1e-6, stall_window=None, line_search=30, method="damped")
 
 
 #: who drives a run's time steps (:attr:`Implicit.loop`)

@@ -59,12 +59,12 @@ import numpy as np
 from jaxnet import assemble, checks, linalg, model as model_lib
 from jaxnet.case import Case
 from jaxnet.memo import Memo
-from jaxnet.solve import diagnosis, kernel, newton, programs
+from jaxnet.solve import diagnosis, interior, kernel, newton, programs
 from jaxnet.solve.options import STATIC, Newton
 from jaxnet.solve.results import (CONVERGED, MAX_ITERATIONS, NON_FINITE, REASONS, RUNNING, STALLED,  # noqa: F401
                                   Equilibrium, SolveError, Timing)
 
-__all__ = ["solve", "host_loop", "compile_pieces", "start_coordinates", "constant_loads", "Newton", "Equilibrium",
+__all__ = ["solve", "host_loop", "damped_loop", "compile_pieces", "damped_pieces", "start_coordinates", "constant_loads", "Newton", "Equilibrium",
            "SolveError", "Timing",
            "REASONS", "RUNNING", "CONVERGED", "MAX_ITERATIONS", "NON_FINITE", "STALLED"]
 
@@ -111,7 +111,16 @@ def _unknown_states(scene, pattern, model):
     return kernel.placeholders(_STATE_SHAPES.get_or_make(key, lambda: kernel.state_shapes(scene, pattern, model)))
 
 
-def compile_pieces(start, scene, pattern, model, stiffness="autodiff", step=None):
+def compile_pieces(start, scene, pattern, model, stiffness="autodiff", step=None, method="damped"):
+    """The programs of :func:`host_loop` for ``method`` (:data:`jaxnet.solve.options.METHODS`): for the
+    primal-dual method on a scene with tension-only rods, :func:`jaxnet.solve.interior.compile_pieces`; else
+    :func:`damped_pieces`."""
+    if method == "primal-dual" and interior.suits(model):
+        return interior.compile_pieces(start, scene, pattern, model, stiffness, step)
+    return damped_pieces(start, scene, pattern, model, stiffness, step)
+
+
+def damped_pieces(start, scene, pattern, model, stiffness="autodiff", step=None):
     """The evaluation, the tangent's element matrices ("tangent"), their sum into the pattern ("scatter",
     :func:`jaxnet.solve.kernel.tangent_blocks` says why apart), the spring network and the loads, compiled
     for this scene's shape and terms (and for a time step, given one of its shape: ``step``, a
@@ -170,6 +179,38 @@ def compile_pieces(start, scene, pattern, model, stiffness="autodiff", step=None
 
 
 def host_loop(start, scene, pattern, model, solver: Newton, pieces=None, step=None):
+    """The static iteration of ``solver.method`` from free coordinates ``start`` (m), driven from the host:
+    :func:`damped_loop`, or for ``"primal-dual"`` on a scene it suits (:func:`jaxnet.solve.interior.suits`)
+    :func:`jaxnet.solve.interior.host_loop` (at most :data:`jaxnet.solve.interior.BUDGET` iterations, or half of
+    ``max_iter``), and where that stops short of convergence, :func:`damped_loop` from ``start`` with ``max_iter``
+    iterations of its own: the damped method's own path from the same start, so that a net the damped method
+    solves is solved, to its answer (bit for bit), at the cost of the primal-dual's iterations before it.
+    ``pieces``: :func:`compile_pieces` of the same method. Returns an :class:`Equilibrium`, its iterations both
+    methods', its history the primal-dual's residuals then the damped method's, its timing both (the damped
+    method's compilation, when it runs, in ``timing.wall_s``)."""
+    if not (solver.method == "primal-dual" and interior.suits(model)):
+        return damped_loop(start, scene, pattern, model, solver, pieces, step)
+    if pieces is None:
+        pieces = interior.compile_pieces(np.asarray(start, dtype=float), scene, pattern, model, solver.stiffness, step)
+    first = interior.host_loop(start, scene, pattern, model, solver, pieces, step)
+    used = int(first.iterations)
+    if first.converged:
+        return first
+    if solver.verbose:
+        print(f"  primal-dual: {first.reason} after {used} iterations; the damped method from the start")
+    if "damped" not in pieces:
+        pieces["damped"] = damped_pieces(np.asarray(start, dtype=float), scene, pattern, model, solver.stiffness, step)
+    second = damped_loop(start, scene, pattern, model, solver, pieces["damped"], step)
+    history = np.concatenate([np.asarray(first.history)[:used + 1], np.asarray(second.history)[1:]])
+    a, b = first.timing, second.timing
+    timing = Timing(compile_s=a.compile_s + b.compile_s, wall_s=a.wall_s + b.wall_s, fallbacks=a.fallbacks + b.fallbacks,
+                    **{name: getattr(a, name) + getattr(b, name) for name in
+                       ("assembly_s", "factorisation_s", "evaluation_s", "factorisations", "evaluations")})
+    return dataclasses.replace(second, iterations=second.iterations + used, history=jax.device_put(history),
+                               timing=timing)
+
+
+def damped_loop(start, scene, pattern, model, solver: Newton, pieces=None, step=None):
     """The Newton iteration of :func:`jaxnet.solve.newton.newton_loop` with the stiffness continuation,
     driven from Python: each iteration calls the compiled tangent once, factorises on the host and
     calls the compiled evaluation once per line-search trial. Same rules (shared functions), same result;
@@ -181,7 +222,7 @@ def host_loop(start, scene, pattern, model, solver: Newton, pieces=None, step=No
     the compilation)."""
     t_start = time.perf_counter()
     if pieces is None:
-        pieces = compile_pieces(np.asarray(start, dtype=float), scene, pattern, model, solver.stiffness, step)
+        pieces = damped_pieces(np.asarray(start, dtype=float), scene, pattern, model, solver.stiffness, step)
     evaluate, tangent, scatter = pieces["evaluate"], pieces["tangent"], pieces["scatter"]
     n_nodes = scene.n_nodes
     free = np.asarray(pattern.free)
@@ -375,7 +416,7 @@ def solve(scene, solver: Newton | None = None, x0=None, throw: bool = True, **op
     pattern = assemble.build_pattern(scene, model)
     start = start_coordinates(scene, pattern.free, x0)
     t0 = time.perf_counter()
-    pieces = compile_pieces(start, scene, pattern, model, solver.stiffness)
+    pieces = compile_pieces(start, scene, pattern, model, solver.stiffness, method=solver.method)
     t1 = time.perf_counter()
     eq = host_loop(start, scene, pattern, model, solver, pieces)
     eq = dataclasses.replace(eq, timing=dataclasses.replace(eq.timing, compile_s=t1 - t0,

@@ -22,7 +22,7 @@ import jax
 import jax.numpy as jnp
 
 from jaxnet import geometry
-from jaxnet.terms.term import ENERGY, ClosedForm, Term, any_nonzero, register
+from jaxnet.terms.term import ENERGY, ClosedForm, Rods, Term, any_nonzero, register
 
 
 def elastic_energy(length, rest_length, ea_traction, ea_compression=None):
@@ -79,6 +79,20 @@ def netting_tensions(x, uv, l0, ea_traction, ea_compression=None):
     )
 
 
+def netting_rods(x, uv, l0, ea_traction, ea_compression=None):
+    """The triangle's twines as two rods (:class:`jaxnet.terms.term.Rods`): its U and its V twines, each family
+    the |d|/2 parallel twines of one twine vector (4.25-4.26), so of length |U| (|V|), rest length l0 and axial
+    stiffness |d|/2 EA / l0 (N/m). Their energies sum to :func:`netting_energy` without compression."""
+    U, V, d = geometry.twine_vectors(x, uv)
+    k = geometry.twine_count(d) * ea_traction / l0
+    return jnp.stack([geometry.safe_norm(U), geometry.safe_norm(V)]), jnp.stack([l0, l0]), jnp.stack([k, k])
+
+
+def tension_only(options):
+    """Whether a tension term's options leave it tension-only (no compression stiffness): its rods then cover it."""
+    return not options.get("compression")
+
+
 def tension_activity(family):
     """The activity rule of a family's twine or bar tension: present where any stiffness is not zero, with the
     compressive branch traced only where some element has a compression stiffness (option ``compression``)."""
@@ -100,4 +114,5 @@ def _arguments(p, env, compression):
 NETTING_TENSION = register(Term(
     name="netting_tension", family="netting", kind=ENERGY, element=netting_energy, arguments=_arguments,
     active=tension_activity("netting"), elastic=True,
-    closed_form=ClosedForm("jaxnet.closed_form.tension:netting_stiffness")))
+    closed_form=ClosedForm("jaxnet.closed_form.tension:netting_stiffness"),
+    rods=Rods(netting_rods, tension_only)))

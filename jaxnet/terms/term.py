@@ -29,7 +29,10 @@ Each module of :mod:`jaxnet.terms` declares its terms once, at its end: ``regist
   x (N, 3) computed once per evaluation and handed to its elements (the catch front); ``previous`` is its
   value at nearby positions, a start for its solution, or None. Terms sharing a state function share its
   value. Like a closed form it may be named ``"module:name"``: the catch front is solved by
-  :mod:`jaxnet.catch`, which is built on the catch pressure's element functions.
+  :mod:`jaxnet.catch`, which is built on the catch pressure's element functions;
+* ``rods``: for an elastic energy that is a sum of tension-only rods (:class:`Rods`), their lengths, rest lengths
+  and axial stiffnesses: the tension form the primal-dual static solver gives unknowns of their own
+  (:mod:`jaxnet.solve.interior`).
 
 The registry (:func:`registered`) holds the terms module by module in the order of the package's table of
 contents (:data:`jaxnet.terms.CONTENTS`), each module's terms in the order it declares them: the order in
@@ -108,6 +111,25 @@ class ClosedForm:
 
 
 @dataclasses.dataclass(frozen=True)
+class Rods:
+    """A term's energy written as tension-only rods: E = sum_r (k_r / 2) max(0, L_r - l0_r)², each rod r of an
+    element a straight twine (or the n parallel twines a twine vector stands for) of length L_r(x).
+
+    form: ``form(x, **args) -> (length (r,), rest_length (r,), stiffness (r,))``, the element's signature: each
+      rod's length L_r (m), rest length l0_r (m) and axial stiffness k_r = n_r EA_r / l0_r (N/m, n_r its number of
+      twines), so that its tension is k_r max(0, L_r - l0_r) (N).
+    covers: ``covers(options) -> bool``: False for static options where the energy is not of that form (a
+      compression stiffness); None: every option.
+
+    The primal-dual solver (:mod:`jaxnet.solve.interior`) gives each rod its tension and its gap as unknowns
+    instead of differentiating the energy's kink; the test of the terms checks that the form sums to the
+    element's energy."""
+
+    form: Callable
+    covers: Callable | None = None
+
+
+@dataclasses.dataclass(frozen=True)
 class Term:
     """One physical term, declared once (module docstring)."""
 
@@ -122,6 +144,7 @@ class Term:
     elastic: bool = False
     moving: bool = False
     state: Callable | str | None = None
+    rods: Rods | None = None
 
     def __post_init__(self):
         if self.family not in FAMILIES:
@@ -132,6 +155,8 @@ class Term:
             raise ValueError(f"term {self.name!r}: only a force term has a state")
         if self.closed_form is not None and self.kind == LOAD:
             raise ValueError(f"term {self.name!r}: a load has no stiffness, so no closed form")
+        if self.rods is not None and self.kind != ENERGY:
+            raise ValueError(f"term {self.name!r}: only an energy is a sum of rods")
 
 
 _REGISTRY: dict[str, tuple[str, int, Term]] = {}  # name -> (declaring module, registration count, term)
