@@ -103,13 +103,15 @@ BUDGET, SHARE = 100, 0.5
 
 def suits(model) -> bool:
     """Whether the primal-dual method solves a net of these active terms: one with tension-only rods
-    (:func:`split`) and without a catch (a force term with a global state, the catch front). The catch's
-    pressure gives a cod-end more than one balanced shape (one turned inside out balances too); the method's merit,
-    the out-of-balance force, does not tell a stable one from an unstable one, and on jaxnet's small cod-ends it
-    converged to the inverted one where the damped method, which descends the energy, finds the cod-end filled
-    (validation/REPORT.md); a net with a catch is left to the damped method."""
+    (:func:`split`) and without a catch (a force term with a global state, the catch front, other than the drag's,
+    which only reads where a catch's front is). The catch's pressure gives a cod-end more than one balanced shape
+    (one turned inside out balances too); the method's merit, the out-of-balance force, does not tell a stable one
+    from an unstable one, and on jaxnet's small cod-ends it converged to the inverted one where the damped method,
+    which descends the energy, finds the cod-end filled (validation/REPORT.md); a net with a catch is left to the
+    damped method."""
     rods, rest = split(model)
-    return bool(rods) and not any(t.term.kind == "force" and t.term.state is not None for t in rest)
+    return bool(rods) and not any(t.term.kind == "force" and t.term.state is not None and not t.term.moving
+                                  for t in rest)
 
 
 def split(model):
