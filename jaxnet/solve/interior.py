@@ -58,7 +58,8 @@ different points of it, both balanced.
 The iteration starts with T_r = max(k_r (L_r - l0_r), T_s) and g_r = max(l0_r - L_r, l0_r / 100), T_s the largest
 out-of-balance force at the start (N): every rod strictly inside, taut ones near their tension.
 
-Where it is used. ``Newton(method="primal-dual")``, the static solve's default (:data:`jaxnet.solve.options.STATIC`);
+Where it is used. ``Newton(method="primal-dual")``, the static solve's default (:data:`jaxnet.solve.options.STATIC`),
+but not for FEMNET's cases, whose reader asks for the damped method (:mod:`jaxnet.io.femnet.mapping` says why);
 an implicit time step keeps the damped method (:data:`jaxnet.solve.options.TIME_STEP`: a step starts next to its
 answer, where the damped method takes a few iterations and an interior method, which must centre its tensions
 again, several times more; validation/REPORT.md measures both), as does the jittable iteration

@@ -215,9 +215,13 @@ def node_type_fields(case: DonFile, position, node_type):
 
 def _solver(case: DonFile) -> Newton:
     """FEMNET's numerics as jaxnet's Newton options (the threshold as tol: see the package's docstring,
-    "Convergence")."""
+    "Convergence"), with the damped method: FEMNET's cases start from flat drawings far from their shape (trawls,
+    seines, a gill net), where the damped method's stiffness continuation does better than the primal-dual method,
+    which solves only 10 of FEMNET's 87 read cases within its budget (validation/REPORT.md, the robustness set's
+    FEMNET family); ``jaxnet run CASE.don --method primal-dual`` chooses it."""
     n = case.numeric
-    return Newton(tol=n["threshold"].value, max_iter=int(n["max_iter"].value), max_step=n["max_step"].value)
+    return Newton(tol=n["threshold"].value, max_iter=int(n["max_iter"].value), max_step=n["max_step"].value,
+                  method="damped")
 
 
 def check_types(case: DonFile):
