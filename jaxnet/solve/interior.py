@@ -97,8 +97,9 @@ LOWER, RAISE, REFUSED, SHORT = 3.0, 2.0, 10.0, 0.1
 REFUSED_FROM = 1e-9
 #: the method stops (MAX_ITERATIONS) after BUDGET iterations, or SHARE x ``max_iter`` if fewer: the damped method
 #: then solves the net from the start (:func:`jaxnet.solve.statics.host_loop`). On the robustness set
-#: (``validation/robustness.py``) the method converges in at most 100 iterations in 4 cases of 5 where it converges
-#: at all (validation/REPORT.md): a net it has not solved by then is better left to the damped method
+#: (``validation/robustness.py``), run without a budget, the method converged within 100 iterations in 4 cases of 5
+#: where it converged at all (validation/REPORT.md): a net it has not solved by then is better left to the damped
+#: method
 BUDGET, SHARE = 100, 0.5
 
 
@@ -176,7 +177,8 @@ def blocks(x, T, c, scene, pattern, rods):
     out, start = {}, 0
     for t, rows, conn in _rod_rows(rods, scene):
         n_elements, k = conn.shape
-        r = jax.eval_shape(lambda xe, p, t=t: t.rods(xe, p, env)[0], X[conn][0], jax.tree.map(lambda a: a[0], rows)).shape[0]
+        first_row = jax.tree.map(lambda a: a[0], rows)
+        r = jax.eval_shape(lambda xe, p, t=t: t.rods(xe, p, env)[0], X[conn][0], first_row).shape[0]
         size = n_elements * r
         Te, ce = T[start:start + size].reshape(n_elements, r), c[start:start + size].reshape(n_elements, r)
         start += size
@@ -208,9 +210,10 @@ def count(scene, rods):
 
 
 def compile_pieces(start, scene, pattern, model, stiffness="closed_form", step=None):
-    """The programs of :func:`host_loop`: the other terms' (:func:`jaxnet.solve.statics.compile_pieces` of the
-    model less its rods) and the rods' (measure, pull, stretch rate, element matrices and their sum into the
-    pattern), from memory, disk or compiled (:mod:`jaxnet.solve.programs`)."""
+    """The programs of :func:`host_loop`: the other terms' (:func:`jaxnet.solve.statics.damped_pieces` of the
+    model less its rods), the rods' (measure, pull, stretch rate, element matrices and their sum into the pattern)
+    and the spring network of the whole model (the damping's metric, as an array under "metric"), from memory,
+    disk or compiled (:mod:`jaxnet.solve.programs`)."""
     from jaxnet.solve import statics  # the other terms' programs are the damped Newton's own
 
     rods, rest = split(model)

@@ -64,8 +64,8 @@ from jaxnet.solve.options import STATIC, Newton
 from jaxnet.solve.results import (CONVERGED, MAX_ITERATIONS, NON_FINITE, REASONS, RUNNING, STALLED,  # noqa: F401
                                   Equilibrium, SolveError, Timing)
 
-__all__ = ["solve", "host_loop", "damped_loop", "compile_pieces", "damped_pieces", "start_coordinates", "constant_loads", "Newton", "Equilibrium",
-           "SolveError", "Timing",
+__all__ = ["solve", "host_loop", "damped_loop", "compile_pieces", "damped_pieces", "start_coordinates",
+           "constant_loads", "Newton", "Equilibrium", "SolveError", "Timing",
            "REASONS", "RUNNING", "CONVERGED", "MAX_ITERATIONS", "NON_FINITE", "STALLED"]
 
 
@@ -113,8 +113,8 @@ def _unknown_states(scene, pattern, model):
 
 def compile_pieces(start, scene, pattern, model, stiffness="autodiff", step=None, method="damped"):
     """The programs of :func:`host_loop` for ``method`` (:data:`jaxnet.solve.options.METHODS`): for the
-    primal-dual method on a scene with tension-only rods, :func:`jaxnet.solve.interior.compile_pieces`; else
-    :func:`damped_pieces`."""
+    primal-dual method on a scene it suits (:func:`jaxnet.solve.interior.suits`),
+    :func:`jaxnet.solve.interior.compile_pieces`; else :func:`damped_pieces`."""
     if method == "primal-dual" and interior.suits(model):
         return interior.compile_pieces(start, scene, pattern, model, stiffness, step)
     return damped_pieces(start, scene, pattern, model, stiffness, step)
