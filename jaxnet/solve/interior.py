@@ -266,6 +266,8 @@ def host_loop(start, scene, pattern, model, solver: Newton, pieces=None, step=No
     corrector). Same arguments and result as :func:`jaxnet.solve.statics.host_loop` (``step``: an implicit time
     step's past and masses, whose inertia joins the other terms); the stiffness continuation of the damped
     Newton has no part here."""
+    from jaxnet.solve import statics  # the host loops' shared parts (statics imports this module)
+
     t_start = time.perf_counter()
     rods, rest = split(model)
     if pieces is None or "rod_measure" not in pieces:
@@ -278,24 +280,10 @@ def host_loop(start, scene, pattern, model, solver: Newton, pieces=None, step=No
     spent = dict(assembly_s=0.0, factorisation_s=0.0, evaluation_s=0.0, factorisations=0, evaluations=0)
     on_host = any(isinstance(leaf, np.ndarray) for leaf in jax.tree.leaves((scene, pattern)))
     scene_d, pattern_d = jax.device_put((scene, pattern)) if on_host else (scene, pattern)
-    load_device = pieces["loads"](scene_d)
-    inertia = None
-    if step is not None:
-        load_device = load_device + step.water_load
-        inertia = (np.asarray(step.mass) / float(step.time_step) ** 2).ravel()[free]
-        diagonal = np.asarray(pattern.diagonal)
+    load_device, inertia, diagonal = statics.step_loads(pieces["loads"](scene_d), pattern, step)
     load = np.asarray(load_device)
-    X0 = np.asarray(scene.nodes.position, dtype=float).ravel()
-
-    def nodal(v):
-        full = np.zeros(3 * n_nodes)
-        full[free] = v
-        return np.sqrt(np.sum(full.reshape(-1, 3) ** 2, axis=1))
-
-    def positions(x):
-        X = X0.copy()
-        X[free] = x
-        return X.reshape(-1, 3)
+    host = statics.FreeCoordinates(scene, pattern)
+    nodal, positions = host.nodal, host.positions
 
     def run(x, T, previous):
         """Everything at (x, T): the other terms' evaluation and the rods' measure."""

@@ -65,7 +65,7 @@ from jaxnet.solve.results import (CONVERGED, MAX_ITERATIONS, NON_FINITE, REASONS
                                   Equilibrium, SolveError, Timing)
 
 __all__ = ["solve", "host_loop", "damped_loop", "compile_pieces", "damped_pieces", "start_coordinates",
-           "constant_loads", "Newton", "Equilibrium", "SolveError", "Timing",
+           "FreeCoordinates", "step_loads", "constant_loads", "Newton", "Equilibrium", "SolveError", "Timing",
            "REASONS", "RUNNING", "CONVERGED", "MAX_ITERATIONS", "NON_FINITE", "STALLED"]
 
 
@@ -210,6 +210,38 @@ def host_loop(start, scene, pattern, model, solver: Newton, pieces=None, step=No
                                timing=timing)
 
 
+class FreeCoordinates:
+    """A scene's free coordinates on the host (numpy), for the host loops: ``nodal(v)``, the norm per node (N,) of a
+    vector on them (zero at fixed coordinates); ``positions(x)``, the (N, 3) positions (m) they give, the fixed
+    coordinates the scene's."""
+
+    def __init__(self, scene, pattern):
+        self.free = np.asarray(pattern.free)
+        self.n_nodes = scene.n_nodes
+        self.start = np.asarray(scene.nodes.position, dtype=float).ravel()
+
+    def nodal(self, v):
+        full = np.zeros(3 * self.n_nodes)
+        full[self.free] = v
+        return np.sqrt(np.sum(full.reshape(-1, 3) ** 2, axis=1))
+
+    def positions(self, x):
+        X = self.start.copy()
+        X[self.free] = x
+        return X.reshape(-1, 3)
+
+
+def step_loads(load_device, pattern, step):
+    """(load, inertia, diagonal) of a host loop: the constant loads ``load_device`` (N, 3) (N), in a time step plus
+    the water's inertia (M_a + ρV) γ_h (as :func:`jaxnet.solve.kernel.loads` adds it); in a time step the inertia's
+    stiffness (M + M_a)/Δt² (N/m) on the free coordinates and the positions of the diagonal in the CSR entries (as
+    :func:`jaxnet.solve.kernel.tangent` adds it), else None and None."""
+    if step is None:
+        return load_device, None, None
+    inertia = (np.asarray(step.mass) / float(step.time_step) ** 2).ravel()[np.asarray(pattern.free)]
+    return load_device + step.water_load, inertia, np.asarray(pattern.diagonal)
+
+
 def damped_loop(start, scene, pattern, model, solver: Newton, pieces=None, step=None):
     """The Newton iteration of :func:`jaxnet.solve.newton.newton_loop` with the stiffness continuation,
     driven from Python: each iteration calls the compiled tangent once, factorises on the host and
@@ -224,7 +256,6 @@ def damped_loop(start, scene, pattern, model, solver: Newton, pieces=None, step=
     if pieces is None:
         pieces = damped_pieces(np.asarray(start, dtype=float), scene, pattern, model, solver.stiffness, step)
     evaluate, tangent, scatter = pieces["evaluate"], pieces["tangent"], pieces["scatter"]
-    n_nodes = scene.n_nodes
     free = np.asarray(pattern.free)
     indptr, indices = np.asarray(pattern.indptr), np.asarray(pattern.indices)
     factor = linalg.direct_solver(indptr, indices)
@@ -243,24 +274,10 @@ def damped_loop(start, scene, pattern, model, solver: Newton, pieces=None, step=
     scene_on_device, pattern_on_device = jax.device_put((scene, pattern)) if on_host else (scene, pattern)
     springs = np.asarray(pieces["springs"](scene_on_device, pattern_on_device))
     load_device = pieces["loads"](scene_on_device)  # constant: computed once, passed to every evaluation
-    inertia = None
-    if step is not None:
-        load_device = load_device + step.water_load  # the water's inertia (M_a + ρV) γ_h, as kernel.loads adds
-        # the inertia's stiffness (M + M_a)/Δt² on the diagonal, as kernel.tangent adds it
-        inertia = (np.asarray(step.mass) / float(step.time_step) ** 2).ravel()[free]
-        diagonal = np.asarray(pattern.diagonal)
+    load_device, inertia, diagonal = step_loads(load_device, pattern, step)
     load = np.asarray(load_device)
-    X0 = np.asarray(scene.nodes.position, dtype=float).ravel()
-
-    def nodal(v):
-        full = np.zeros(3 * n_nodes)
-        full[free] = v
-        return np.sqrt(np.sum(full.reshape(-1, 3) ** 2, axis=1))
-
-    def positions(x):
-        X = X0.copy()
-        X[free] = x
-        return X.reshape(-1, 3)
+    host = FreeCoordinates(scene, pattern)
+    nodal, positions = host.nodal, host.positions
 
     def matvec(data, v):
         return linalg.host_matvec(data, indptr, indices, v)
