@@ -294,8 +294,8 @@ def host_loop(start, scene, pattern, model, solver: Newton, pieces=None, step=No
         (e, force, f_nc), (L, l0, k, pull_T, pull_own, e_rods) = jax.device_get(((e, force, f_nc), measured))
         spent["evaluation_s"] += time.perf_counter() - t
         spent["evaluations"] += 1
-        return dict(e=float(e) + float(e_rods), e_rest=float(e), force=force, f_nc=f_nc, state=state, L=L, l0=l0, k=k,
-                    R=(force - pull_T).ravel()[free], own=(force - pull_own), x=x)
+        return dict(e=float(e) + float(e_rods), force=force, f_nc=f_nc, state=state, L=L, l0=l0, k=k,
+                    R=(force - pull_T).ravel()[free], own=(force - pull_own))
 
     x = np.asarray(start, dtype=float)
     unknown = pieces.get("states")
@@ -331,7 +331,6 @@ def host_loop(start, scene, pattern, model, solver: Newton, pieces=None, step=No
             st = MAX_ITERATIONS
         if st != RUNNING:
             break
-        L = at["L"]
         c = k * T / (T + k * g)
         t = time.perf_counter()
         rest_blocks = tangent(x, at["state"], 1.0, scene_d, pattern_d, step)
