@@ -81,7 +81,7 @@ def _reactions(scene, eq):
 @pytest.mark.parametrize("speed", [0.0, 0.5])
 def test_both_methods_reach_the_same_equilibrium(speed):
     """The hanging panel (its sinker bar bends: not a cone program) in still water and in a current: both methods
-    converge, and the forces on the fixings agree to 0.1 % (the issue's criterion; measured: ...)."""
+    converge, and the forces on the fixings agree to 0.1 % (the issue's criterion; measured: 2.2e-6 of the force, in still water and in 0.5 m/s)."""
     rod = math.sqrt(4.0 * 1.0 / (math.pi * 11340.0))  # the diameter (m) of a lead rod of 1 kg/m
     net = hanging_panel(meshes=12, step=0.1, twine=jn.Twine(l0=0.025, ea=2000.0, diameter=1.5e-3),
                         sinker_bending_stiffness=rod_bending_stiffness(rod)).net
