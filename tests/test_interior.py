@@ -24,15 +24,18 @@ def test_the_rods_of_a_triangle_and_a_bar_sum_to_their_energy(rng, compression):
     is given (stretched, slack and mixed twines), and a term with one is not covered."""
     uv = np.array([[0.0, 0.0], [4.0, 0.0], [0.0, 6.0]])
     for trial in range(6):
-        x = np.array([[0.0, 0.0, 0.0], [4 * 0.025, 0.0, 0.0], [0.0, 6 * 0.025, 0.0]]) * rng.uniform(0.6, 1.4, 3)[:, None]
+        drawn = np.array([[0.0, 0.0, 0.0], [4 * 0.025, 0.0, 0.0], [0.0, 6 * 0.025, 0.0]])
+        x = drawn * rng.uniform(0.6, 1.4, 3)[:, None]
         x = x + rng.normal(scale=0.01, size=(3, 3))
         L, l0, k = tension.netting_rods(x, uv, 0.025, 2000.0)
         expected = tension.netting_energy(x, uv, 0.025, 2000.0)
-        assert float(np.sum(0.5 * k * np.maximum(L - l0, 0.0) ** 2)) == pytest.approx(float(expected), rel=1e-12, abs=1e-300)
+        rods_energy = float(np.sum(0.5 * k * np.maximum(L - l0, 0.0) ** 2))
+        assert rods_energy == pytest.approx(float(expected), rel=1e-12, abs=1e-300)
         ends = rng.normal(size=(2, 3))
         L, l0, k = cable.bar_rods(ends, 1.3, 5e4)
         expected = cable.bar_energy(ends, 1.3, 5e4)
-        assert float(np.sum(0.5 * k * np.maximum(L - l0, 0.0) ** 2)) == pytest.approx(float(expected), rel=1e-12, abs=1e-300)
+        rods_energy = float(np.sum(0.5 * k * np.maximum(L - l0, 0.0) ** 2))
+        assert rods_energy == pytest.approx(float(expected), rel=1e-12, abs=1e-300)
     twine = jn.Twine(l0=0.025, ea=2000.0, diameter=1.5e-3, ea_compression=200.0 if compression else 0.0)
     scene = framed_panel(meshes=4, step=0.1, twine=twine).scene
     rods, rest = interior.split(model_lib.active_terms(scene))
@@ -81,7 +84,8 @@ def _reactions(scene, eq):
 @pytest.mark.parametrize("speed", [0.0, 0.5])
 def test_both_methods_reach_the_same_equilibrium(speed):
     """The hanging panel (its sinker bar bends: not a cone program) in still water and in a current: both methods
-    converge, and the forces on the fixings agree to 0.1 % (the issue's criterion; measured: 2.2e-6 of the force, in still water and in 0.5 m/s)."""
+    converge, and the forces on the fixings agree to 0.1 % (the issue's criterion; measured: 2.2e-6 of the force, in
+    still water and in 0.5 m/s)."""
     rod = math.sqrt(4.0 * 1.0 / (math.pi * 11340.0))  # the diameter (m) of a lead rod of 1 kg/m
     net = hanging_panel(meshes=12, step=0.1, twine=jn.Twine(l0=0.025, ea=2000.0, diameter=1.5e-3),
                         sinker_bending_stiffness=rod_bending_stiffness(rod)).net
