@@ -18,10 +18,10 @@ import numpy as np
 import pytest
 
 import jaxnet  # noqa: F401  (float64)
-from jaxnet.net import Twine
 from jaxnet.scene import Environment
 from jaxnet.scenes.panel import hanging_panel
 from jaxnet.solve import adjoint_statics, implicit, programs, statics
+from panels import SMOOTH  # tests/panels.py
 
 NEWTON = statics.Newton(tol=1e-10, max_iter=100, damping=1e-6, stall_window=None, line_search=30)
 
@@ -34,8 +34,7 @@ class Deflection(eqx.Module):
 
 
 def panel_in_current():
-    twine = Twine(l0=0.025, ea=2000.0, diameter=1.5e-3, density=1140.0, ea_compression=2000.0)
-    net = hanging_panel(meshes=4, step=0.05, twine=twine).net
+    net = hanging_panel(meshes=4, step=0.05, **SMOOTH).net
     net.environment = Environment(current_speed=0.4, current_direction=np.array([0.0, 1.0, 0.0]))
     # the current speed as an array: a float array of the scene, so a gradient in it (a Python number is not)
     scene = eqx.tree_at(lambda s: s.environment.current_speed, net.build(), jnp.asarray(0.4))

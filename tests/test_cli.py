@@ -83,8 +83,8 @@ def test_scene_file_and_bad_scene_file(tmp_path, capsys):
 
 
 def test_compiled_programs_are_kept_on_disk_and_reused(tmp_path):
-    """The solver's compiled programs (evaluation, tangent, scatter, spring network, loads) and the one of the
-    result's figures (tensions, opening angles, forces by term: :func:`jaxnet.figures.net_figures`) are kept on
+    """The solver's compiled programs (evaluation, tangent, scatter, spring network, loads, and the primal-dual
+    method's rod programs with their own scatter and spring metric) and the one of the result's figures (tensions, opening angles, forces by term: :func:`jaxnet.figures.net_figures`) are kept on
     disk whole
     (:mod:`jaxnet.solve.programs`): a second process solving the same scene loads them, compiles nothing
     (no new program, none rewritten, no new entry in JAX's own cache) and gives the same answer; a damaged
@@ -101,8 +101,9 @@ def test_compiled_programs_are_kept_on_disk_and_reused(tmp_path):
                 {p.name: p.stat().st_mtime_ns for p in programs.iterdir()}, set(p.name for p in cache.iterdir()))
 
     first, kept, entries = run("a")
-    assert sorted(name.split("-")[0] for name in kept) == ["evaluate", "loads", "net_figures", "scatter", "springs",
-                                                           "tangent"]
+    assert sorted(name.split("-")[0] for name in kept) == [
+        "evaluate", "loads", "net_figures", "rod_blocks", "rod_measure", "rod_pull", "rod_rate", "scatter", "scatter",
+        "springs", "springs", "tangent"]
     second, kept_after, entries_after = run("b")
     assert kept_after == kept and entries_after == entries  # loaded: nothing compiled, nothing written
     assert second["iterations"] == first["iterations"]
@@ -495,7 +496,7 @@ def test_options_that_do_not_apply_are_refused_before_anything_runs(tmp_path, ca
 
 def test_help_and_version_import_no_jax_and_the_iterations_have_a_legend(tmp_path, capsys):
     """``jaxnet --version`` and ``jaxnet run --help`` answer without importing JAX or the physics (a fresh process
-    is asked what it imported); a run prints once what the columns of its iteration lines are."""
+    is asked what it imported); a run prints once what the columns of its iteration lines are, each method's."""
     probe = ("import sys\nfrom jaxnet import cli\nfor argv in (['--version'], ['run', '--help']):\n"
              "    try:\n        cli.main(argv)\n    except SystemExit:\n        pass\n"
              "print('IMPORTED', sorted(m for m in sys.modules if m == 'jax' or m.startswith(('jax.', 'jaxnet.'))))\n")
@@ -503,9 +504,12 @@ def test_help_and_version_import_no_jax_and_the_iterations_have_a_legend(tmp_pat
     imported = done.stdout.rsplit("IMPORTED", 1)[1]
     assert "'jax'" not in imported and "jaxnet.scene'" not in imported and "jaxnet.cli" in imported, imported
     assert "Built-in scenes (cage by default)" in done.stdout and "jaxnet " in done.stdout
-    assert cli.main(["run", "--scene", "hanging", "--set", "meshes=4", "--set", "step=0.05", "--no-cache",
-                     "--no-pictures", "--out", str(tmp_path)]) == 0
-    printed = capsys.readouterr().out
-    legend = [line for line in printed.splitlines() if "one line per Newton iteration" in line]
-    assert len(legend) == 1 and all(w in legend[0] for w in ("residual:", "damping:", "step:", "stiffness x"))
-    assert printed.index(legend[0]) < printed.index("  newton    1")
+    for method, columns in (("primal-dual", ("residual:", "damping:", "step:", "mean T g:")),
+                            ("damped", ("residual:", "damping:", "step:", "stiffness x"))):
+        assert cli.main(["run", "--scene", "hanging", "--set", "meshes=4", "--set", "step=0.05", "--no-cache",
+                         "--method", method, "--no-pictures", "--out", str(tmp_path / method)]) == 0
+        printed = capsys.readouterr().out
+        legend = [line for line in printed.splitlines() if "one line per Newton iteration" in line]
+        assert len(legend) == 1 and legend[0].lstrip().startswith(f"({method}:"), legend
+        assert all(w in legend[0] for w in columns), (method, legend[0])
+        assert printed.index(legend[0]) < printed.index("  newton    1")

@@ -206,7 +206,7 @@ def test_jitted_newton_loop_runs_on_the_closed_form():
     """The one-program Newton (``newton.newton_loop``, for traced callers) takes the switch too, and is the
     same iteration as the host loop."""
     scene = hanging_panel(meshes=6, step=0.05).scene
-    solver = jn.Newton(stiffness="closed_form", stall_window=None)
+    solver = jn.Newton(stiffness="closed_form", stall_window=None, method="damped")
     host = statics.solve(scene, solver)
     m = model.active_terms(scene)
     pattern = assemble.build_pattern(scene, m)

@@ -31,6 +31,7 @@ from jaxnet.design import batch, objectives
 from jaxnet.design.space import DesignSpace
 from jaxnet.scenes.panel import hanging_panel
 from jaxnet.solve import implicit, statics
+from panels import SMOOTH  # tests/panels.py
 
 #: converged far below options.DIFFERENTIABLE's 1e-8 N, for the differences of the figure
 NEWTON = statics.Newton(tol=1e-10, max_iter=100, damping=1e-6, stall_window=None, line_search=30)
@@ -64,7 +65,7 @@ def starts(space):
 
 @pytest.fixture(scope="module")
 def panel():
-    space = DesignSpace(hanging_panel(meshes=4, step=0.05))
+    space = DesignSpace(hanging_panel(meshes=4, step=0.05, **SMOOTH))
     return space, implicit.structure_of(space.reference), np.asarray(space.reference.nodes.position)
 
 
@@ -132,10 +133,10 @@ SHARDED = textwrap.dedent("""
     from jaxnet.scenes.panel import hanging_panel
     from jaxnet.solve import implicit
     sys.path.insert(0, os.path.dirname(sys.argv[2]))
-    from test_design_batch import NEWTON, depth, designs, starts
+    from test_design_batch import NEWTON, SMOOTH, depth, designs, starts
 
     assert jax.device_count() == 5, jax.devices()
-    space = DesignSpace(hanging_panel(meshes=4, step=0.05))
+    space = DesignSpace(hanging_panel(meshes=4, step=0.05, **SMOOTH))
     structure = implicit.structure_of(space.reference)
     results, layouts = {}, {}
     for method in ("vmap", "map"):

@@ -217,13 +217,16 @@ def test_vmap_over_designs_equals_one_by_one(panel_space):
 # -- materials and gear parameters against a net rebuilt with them ----------------------------------------------
 
 
-def test_materials_equal_the_net_rebuilt_with_them(panel_space):
+def test_materials_equal_the_net_rebuilt_with_them():
     """EA (compression following), diameter and mesh side given to θ give the scene of the same net built
     with that twine (the step scaled with l0, so that the mesh is the same in twine coordinates): every array
-    but the free start positions, ropes included (sewn at the reference hanging ratio)."""
+    but the free start positions, ropes included (sewn at the reference hanging ratio). The twines resist
+    compression (EA_c = EA), so that EA_c's following EA is seen."""
+    stiff = Twine(l0=0.025, ea=2000.0, diameter=1.5e-3, density=1140.0, ea_compression=2000.0)
+    space = DesignSpace(hanging_panel(meshes=6, step=0.1, twine=stiff))
     twine = Twine(l0=0.03, ea=3000.0, diameter=2e-3, density=1140.0, ea_compression=3000.0)
     rebuilt = hanging_panel(meshes=6, step=0.12, l0=0.03, twine=twine).scene
-    scene = panel_space.scene({"mesh_side": {"netting": 0.03}, "ea": {"netting": 3000.0},
+    scene = space.scene({"mesh_side": {"netting": 0.03}, "ea": {"netting": 3000.0},
                                "twine_diameter": {"netting": 2e-3}})
     assert_same_scene(scene.netting, rebuilt.netting)
     assert_same_scene(scene.bars, rebuilt.bars)

@@ -18,6 +18,7 @@ import jaxnet  # noqa: F401  (float64)
 from jaxnet import forcing, model as model_lib
 from jaxnet.scene import Bars, Environment, Nodes, Scene
 from jaxnet.solve import dynamics, reference, statics
+from panels import SMOOTH  # tests/panels.py
 
 G = 9.81
 SAVES = 41  # every spring/pendulum run saves this many times: one compiled program for all
@@ -152,7 +153,7 @@ def _net_in_a_current(meshes=4):
     0.7 m/s rising over 0.1 s (half-cosine ramp: the drag comes on smoothly)."""
     from jaxnet.scenes.panel import hanging_panel
 
-    net = hanging_panel(meshes=meshes, step=0.05).net
+    net = hanging_panel(meshes=meshes, step=0.05, **SMOOTH).net
     net.environment = Environment(current_speed=0.0, current_direction=np.array([1.0, 0.2, 0.0]))
     rest = statics.solve(net.build(), tol=1e-10)
     net.environment = Environment(current_speed=0.7, current_direction=np.array([1.0, 0.2, 0.0]))

@@ -31,8 +31,9 @@ from jaxnet.solve import adjoint_statics, statics
 from jaxnet.solve.options import DIFFERENTIABLE
 
 from distributed import get_task_stream
+from panels import SMOOTH  # tests/panels.py
 
-RECIPE = (hanging_panel, {"meshes": 8, "step": 0.05})
+RECIPE = (hanging_panel, {"meshes": 8, "step": 0.05, **SMOOTH})
 #: 20 pure Newton steps at most: the 40 mm design needs 73
 SOLVER = dataclasses.replace(DIFFERENTIABLE, max_iter=20)
 FIGURES = {"tension": objectives.max_tension(), "area": objectives.netting_area(deployed=True)}

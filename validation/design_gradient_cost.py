@@ -24,6 +24,7 @@ import numpy as np
 
 import jaxnet  # noqa: F401
 from jaxnet.design import objectives, space as space_lib
+from jaxnet.net import Twine
 from jaxnet.scene import Environment
 from jaxnet.scenes import cage, panel
 from jaxnet.solve import implicit
@@ -33,7 +34,9 @@ REPEATS = 5
 
 def scenes(quick):
     def curtain(meshes, step):
-        net = panel.hanging_panel(meshes=meshes, step=step).net
+        # twines that resist compression and a hinged sinker bar: the smooth equilibrium of the design studies
+        stiff = Twine(l0=0.025, ea=2000.0, diameter=1.5e-3, density=1140.0, ea_compression=2000.0)
+        net = panel.hanging_panel(meshes=meshes, step=step, twine=stiff, sinker_bending_stiffness=0.0).net
         net.environment = Environment(current_speed=0.4, current_direction=np.array([0.0, 1.0, 0.0]))
         return net
 

@@ -22,7 +22,8 @@ worker processes.
 The scene: ``cage``, the fish cage meshed at 1.6 m (:func:`jaxnet.scenes.fish_cage`, 137 nodes, current
 0.5 m/s), the designs scaling every panel's mesh side by 0.985-1.015 and the twine diameter by 0.8-1.2;
 ``cage:STEP``, the cage meshed at STEP m (465 nodes at 0.8 m); ``panel``, the hanging panel of 8 x 8 meshes
-(51 nodes, still water), mesh side 23-25 mm. The machine's cores and load average are printed: on a shared
+(51 nodes, still water; its twines resisting compression as traction and its sinker bar hinged, the smooth
+equilibrium that the design studies' jitted Newton reaches quadratically), mesh side 23-25 mm. The machine's cores and load average are printed: on a shared
 machine the columns are comparable only within one run.
 """
 
@@ -46,8 +47,13 @@ def _recipe(scene):
     at STEP m)."""
     import importlib
 
+    from jaxnet.net import Twine
+
     scene, _, step = scene.partition(":")
     module, name, kwargs = SCENES[scene]
+    if scene == "panel":
+        kwargs = {**kwargs, "twine": Twine(l0=0.025, ea=2000.0, diameter=1.5e-3, density=1140.0, ea_compression=2000.0),
+                  "sinker_bending_stiffness": 0.0}
     return getattr(importlib.import_module(module), name), {**kwargs, **({"step": float(step)} if step else {})}
 
 

@@ -1,6 +1,6 @@
 """Built-in scenes: square diamond-mesh panels under weight, from a flat, stress-free start.
 
-:func:`hanging_panel` (the default scene of ``jaxnet run``): a panel hanging from a headline, with a sinker
+:func:`hanging_panel` (``jaxnet run --scene hanging``): a panel hanging from a headline, with a sinker
 bar along its bottom. :func:`framed_panel`: a horizontal panel held along its four sides, sagging under its
 own weight and a sinker at its centre (the benchmark and Newton-test scene: its start has no out-of-plane
 stiffness at all, and with slack twines its equilibrium is still well posed).
@@ -12,16 +12,15 @@ U = u + v, V = v - u, book eqs 4.12-4.13), drawn with square meshes (half openin
 vertical x-z plane. The headline is sewn along the top border and held at both ends; the sinker bar (a
 heavy rope) is sewn along the bottom border. Polyamide netting in sea water, no current.
 
-The sinker bar resists compression (EA_c = EA), so the bottom keeps its width; its joints are hinges unless
-it is given a bending stiffness (``sinker_bending_stiffness``, a lead rod's by
-:func:`jaxnet.materials.rod_bending_stiffness`): a chain of hinged struts pushed together buckles (folds), so
-with slack twines, whose netting gathers and pushes the bar's ends together, it needs one. The default
-twine also has a compression stiffness equal to its traction stiffness. Real twines go slack (EA_c = 0,
-FEMNET's usual setting; pass ``twine=`` to choose), and then the free sides of this curtain gather: their
-meshes close and large regions of netting go slack. That equilibrium is degenerate (the energy is flat over
-every arrangement of the slack netting, and the last loads hang on twines a few 1e-7 in strain from their
-slack kink), and Newton converges on it only linearly, in a few hundred iterations: a poor first
-impression, so the default scene keeps the stiff twine.
+The sinker bar resists compression (EA_c = EA) and bends like the lead rod it is (EI of its diameter by
+:func:`jaxnet.materials.rod_bending_stiffness`, unless ``sinker_bending_stiffness`` says otherwise): a chain
+of hinged struts pushed together buckles (folds), and the netting, whose twines go slack and gather, pushes
+the bar's ends together. The twine is polyamide netting that goes slack (EA_c = 0, FEMNET's usual setting;
+pass ``twine=`` to choose): the free sides of the curtain gather, their meshes close and large regions of
+netting carry no tension. That equilibrium is degenerate (the energy is flat over every arrangement of the
+slack netting); the primal-dual static method (:mod:`jaxnet.solve.interior`) treats each twine's tension and
+slack as unknowns and converges on it in a few tens of iterations, where the damped method, which meets the
+slack kink twine by twine, converges only linearly (``docs/solvers.md``).
 """
 
 from __future__ import annotations
@@ -29,17 +28,19 @@ from __future__ import annotations
 import numpy as np
 
 from jaxnet.case import Case, from_net
+from jaxnet.materials import rod_bending_stiffness
 from jaxnet.net import Net, Rope, Twine
 
 
 def hanging_panel(meshes: int = 40, l0: float = 0.025, step: float = 0.1, twine: Twine | None = None,
-                  sinker_kg_per_m: float = 1.0, sinker_bending_stiffness: float = 0.0) -> Case:
+                  sinker_kg_per_m: float = 1.0, sinker_bending_stiffness: float | None = None) -> Case:
     """The hanging panel (see module docstring), as a :class:`~jaxnet.case.Case` (its ``net`` the
     description). l0: mesh side (m); step: meshing step (m); sinker_kg_per_m: mass of the sinker bar per metre
-    (kg/m, lead); sinker_bending_stiffness: its flexural stiffness EI (N·m²): 0, a chain of hinges, which
-    buckles if the netting pushes its ends together (slack twines that gather: :mod:`jaxnet.solve.diagnosis`);
-    :func:`jaxnet.materials.rod_bending_stiffness` of its diameter for a lead rod."""
-    twine = twine or Twine(l0=l0, ea=2000.0, diameter=1.5e-3, density=1140.0, ea_compression=2000.0)
+    (kg/m, lead); sinker_bending_stiffness: its flexural stiffness EI (N·m²), by default a lead rod's
+    (:func:`jaxnet.materials.rod_bending_stiffness` of its diameter); 0 makes it a chain of hinges, which
+    buckles if the netting pushes its ends together (:mod:`jaxnet.solve.diagnosis`). twine: by default
+    polyamide (EA = 2000 N, EA_c = 0, diameter 1.5 mm)."""
+    twine = twine or Twine(l0=l0, ea=2000.0, diameter=1.5e-3, density=1140.0)
     width = meshes * l0 * np.sqrt(2.0)  # a square mesh of side l0 is l0*sqrt(2) across
     n = meshes
     corners = [  # x, y, z, U, V  (u, v) = (0, 0), (n, 0), (n, n), (0, n)
@@ -54,6 +55,8 @@ def hanging_panel(meshes: int = 40, l0: float = 0.025, step: float = 0.1, twine:
     # lead rope: diameter from the mass per metre (kg/m = density * pi D²/4)
     lead = 11340.0
     diameter = float(np.sqrt(4.0 * sinker_kg_per_m / (np.pi * lead)))
+    if sinker_bending_stiffness is None:
+        sinker_bending_stiffness = rod_bending_stiffness(diameter)
     net.cable("sinker bar", along=panel.side(0), rope=Rope(ea=1e5, diameter=diameter, density=lead, ea_compression=1e5,
                                                            bending_stiffness=sinker_bending_stiffness))
     net.fix(panel.corner(2))

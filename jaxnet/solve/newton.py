@@ -54,8 +54,8 @@ from jaxnet.solve.results import CONVERGED, MAX_ITERATIONS, NON_FINITE, RUNNING,
 
 
 #: what the columns of :func:`progress` and the continuation's lines mean, printed once above them
-LEGEND = ("  (one line per Newton iteration. residual: the largest out-of-balance force on a node (N), converged below "
-          "tol; damping: the fictitious prestrain mu that steadies a slack net's step, vanishing near the answer; "
+LEGEND = ("  (damped: one line per Newton iteration. residual: the largest out-of-balance force on a node (N), "
+          "converged below tol; damping: the fictitious prestrain mu that steadies a slack net's step, vanishing near the answer; "
           "step: the fraction of the damped step the energy line search took, 0 when it took none; "
           "\"stiffness x s\": stiffness continuation, the net solved at s times its stiffness, then stiffened)")
 
