@@ -74,9 +74,9 @@ _PUBLIC = {
     "validate": "jaxnet.checks",
     "Newton": "jaxnet.solve.options", "Implicit": "jaxnet.solve.options",
     "Equilibrium": "jaxnet.solve.results", "SolveError": "jaxnet.solve.results",
-    "solve_static": "jaxnet.solve.statics:solve",
+    "solve_static": "jaxnet.run",
     "Trajectory": "jaxnet.solve.dynamics", "DynamicsError": "jaxnet.solve.dynamics",
-    "simulate": "jaxnet.solve.dynamics",
+    "simulate": "jaxnet.run",
 }
 
 __all__ = [

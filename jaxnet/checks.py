@@ -330,6 +330,9 @@ def validate(scene: Scene, dynamic: bool = False) -> None:
     """Raise :class:`SceneError` if the scene cannot be solved; the message names the culprit. ``dynamic``: for
     a run in time, where the nodes' masses hold a net that nothing fixes (along an axis, or at all): the
     checks that a static equilibrium is held are left out."""
+    if not isinstance(scene, Scene):
+        raise TypeError(f"expected a jaxnet Scene, got a {type(scene).__name__}: a Case is run by "
+                        "jaxnet.solve_static(case) or jaxnet.simulate(case) (jaxnet.run), its scene is case.scene")
     nodes = scene.nodes
     pos = np.asarray(nodes.position, dtype=float)
     if pos.ndim != 2 or pos.shape[1] != 3:

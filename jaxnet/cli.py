@@ -389,7 +389,8 @@ def _run_static(args, out):
     _record_command(out, args)
     from jaxnet import figures
     from jaxnet.io import vtk
-    from jaxnet.solve.statics import SolveError, solve
+    from jaxnet.run import solve_static
+    from jaxnet.solve.results import SolveError
 
     failed = None
     # what the outputs need is made ready while the solver iterates (the figures' program compiles in XLA beside
@@ -399,11 +400,11 @@ def _run_static(args, out):
     with ThreadPoolExecutor(max_workers=1) as pool:
         figures_program = pool.submit(_prepare_outputs, scene, not args.no_pictures)
         try:
-            eq = solve(case, verbose=not args.quiet, **_overrides(args))
+            eq = solve_static(case, verbose=not args.quiet, **_overrides(args))
         except SolveError as err:
             failed, eq = err, err.equilibrium
         figures_program.exception()   # done (an error there is raised again, and named, by net_figures below)
-    # what the solve ran with: the case's options with the command line's (solve() above took the same)
+    # what the solve ran with: the case's options with the command line's (solve_static() above took the same)
     used = dataclasses.replace(case.solver, verbose=not args.quiet, **_overrides(args))
     t = time.perf_counter()
     source = args.scene if args.scene is not None else f"built-in scene '{args.builtin or _default_scene()}'"
@@ -491,6 +492,7 @@ def _run_dynamic(args, out):
 
     import equinox as eqx
 
+    from jaxnet import run as run_lib
     from jaxnet.solve import dynamics
     from jaxnet.solve.statics import solve
 
@@ -527,8 +529,8 @@ def _run_dynamic(args, out):
         print(f"  its gauge node {case.info['gauge']['node']} ({case.info['gauge']['axes']}), held for the static "
               "start, is free in time")
     try:
-        run = dynamics.simulate(scene, end_time, implicit, loading, record_every=record_every, out=out,
-                                resume=args.resume, x0=x0, progress=not args.quiet)
+        run = run_lib.simulate(scene, end_time, implicit, loading, record_every=record_every, out=out,
+                               resume=args.resume, x0=x0, progress=not args.quiet)
     except dynamics.DynamicsError as err:
         print(f"jaxnet: {err}", file=sys.stderr)
         return FAILED

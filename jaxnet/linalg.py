@@ -2,7 +2,7 @@
 
 The tangent of a net is sparse, often nearly singular (slack twines, a flat membrane has no out-of-plane
 stiffness) and badly conditioned (EA/l0 against small geometric stiffness): Krylov methods with cheap
-preconditioners do not converge on it (measured: ../shared/notes/solvers.md), so it is factorised on the
+preconditioners do not converge on it (``docs/solvers.md``), so it is factorised on the
 host: by oneMKL's PARDISO where MKL is installed (:class:`PardisoSolver`, :mod:`jaxnet.pardiso` says why),
 else by SuperLU (scipy, :class:`HostSolver`), which is also PARDISO's fallback; where JAX computes on a GPU, by
 cuDSS on the device (:class:`CudssSolver`, :mod:`jaxnet.cudss`); :func:`direct_solver` picks

@@ -15,7 +15,7 @@ It runs in oneMKL's reproducible mode (:data:`CNR`), so that one scene gives one
 
 Why it. Measured side by side on the static solver's own tangents (``validation/bench_factorisation.py``):
 against SuperLU with a minimum-degree ordering, PARDISO factorises as fast on FEMNET's cod-end (10³ nodes)
-and several to tens of times faster on the cage from 10⁴ to 10⁵ nodes, with less fill;
+and faster on the cage from 10⁴ to 10⁵ nodes, with less fill (the figures: ``validation/REPORT.md``);
 SuperLU with METIS's ordering, UMFPACK, KLU and MUMPS are slower than PARDISO at every size there, and the
 symmetric factorisations (CHOLMOD, LDLᵀ) give inaccurate solutions once drag makes the tangent
 nonsymmetric. PARDISO solves with A or with Aᵀ on one factor (``iparm[11]``), which the implicit function

@@ -231,7 +231,7 @@ def panel():
     net.sinker(netting.corner(1), 0.1)
     drawn = net.build()
     still = dynamics.Loading(current_speed=forcing.Ramp(0.2, 0.2, 0.0, 0.3))
-    settling = dynamics.simulate(drawn, 10.0, dynamics.Implicit(time_step=0.5, newton=NEWTON), still, progress=False)
+    settling = dynamics.simulate(drawn, 10.0, dynamics.Implicit(time_step=0.5, newton=NEWTON), still)
     assert np.abs(settling.velocities[-1]).max() < 1e-9
     scene = eqx.tree_at(lambda s: s.nodes.position, drawn, settling.positions[-1])
     loading = dynamics.Loading(current_speed=forcing.Ramp(0.2, 0.4, 0.0, 0.3))
@@ -277,8 +277,7 @@ def panel_adjoint():
 
 def test_run_is_simulate_at_the_same_step():
     scene, loading, _ = panel()
-    reference = dynamics.simulate(scene, STEPS * STEP, dynamics.Implicit(time_step=STEP, newton=NEWTON), loading,
-                                  progress=False)
+    reference = dynamics.simulate(scene, STEPS * STEP, dynamics.Implicit(time_step=STEP, newton=NEWTON), loading)
     assert int(reference.state.retries) == 0 and reference.steps == STEPS
     for ours, theirs in zip(jax.jit(ad.lumped_masses)(scene), dynamics.lumped_masses(scene)):
         np.testing.assert_allclose(np.asarray(ours), theirs, rtol=1e-14, atol=0)

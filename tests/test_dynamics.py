@@ -7,7 +7,7 @@ import jax.numpy as jnp
 import pytest
 
 import jaxnet  # noqa: F401  (float64)
-from jaxnet import assemble, model as model_lib
+from jaxnet import assemble, model as model_lib, run
 from jaxnet.scene import Bars, Environment, Nodes, Scene
 from jaxnet.solve import dynamics, kernel, statics
 
@@ -40,8 +40,7 @@ def test_spring_follows_the_schemes_exact_discrete_solution():
     m, ea, L, delta = 2.0, 800.0, 1.0, 0.01
     omega = np.sqrt(ea / L / m)
     h = 2 * np.pi / omega / 25
-    tr = dynamics.simulate(spring_mass(m, L, ea, delta), 40 * h, dynamics.Implicit(time_step=h, newton=TIGHT),
-                           progress=False)
+    tr = dynamics.simulate(spring_mass(m, L, ea, delta), 40 * h, dynamics.Implicit(time_step=h, newton=TIGHT))
     x = tr.positions[:, 1, 0] - L
     np.testing.assert_allclose(tr.times, h * np.arange(41), rtol=1e-12, atol=1e-15)
     np.testing.assert_allclose(x, recurrence(delta, omega, h, 40), rtol=0, atol=1e-10 * delta)
@@ -59,8 +58,7 @@ def test_spring_period_and_damping_converge_at_the_schemes_order():
     period_errors, damping_rates = [], []
     for n in (20, 40, 80):
         h = period / n
-        tr = dynamics.simulate(spring_mass(m, L, ea, delta), 3 * period, dynamics.Implicit(time_step=h, newton=TIGHT),
-                               progress=False)
+        tr = dynamics.simulate(spring_mass(m, L, ea, delta), 3 * period, dynamics.Implicit(time_step=h, newton=TIGHT))
         x = tr.positions[:, 1, 0] - L
         s = np.sign(x)
         up = np.flatnonzero((s[:-1] < 0) & (s[1:] >= 0))
@@ -92,7 +90,7 @@ def test_energy_changes_exactly_as_the_scheme_dissipates():
     m, L = 1.5, 1.0
     scene = spring_mass(m=m, L=L, ea=2e4, delta=0.0, gravity=9.81, free_axes="xz")
     h = 0.01
-    tr = dynamics.simulate(scene, 0.6, dynamics.Implicit(time_step=h, newton=TIGHT), progress=False)
+    tr = dynamics.simulate(scene, 0.6, dynamics.Implicit(time_step=h, newton=TIGHT))
     model = model_lib.active_terms(scene, dynamic=True)
     x, v = tr.positions, tr.velocities
     V = np.array([_potential(scene, model, xi) for xi in x])
@@ -111,8 +109,7 @@ def test_current_settles_to_the_static_equilibrium():
     solver's equilibrium (drag on the relative velocity is what damps it)."""
     scene = spring_mass(m=3.0, ea=500.0, delta=0.0, drag_area=0.2, current=1.0)
     eq = statics.solve(scene, tol=1e-9)
-    tr = dynamics.simulate(scene, 20.0, dynamics.Implicit(time_step=0.05, newton=TIGHT), record_every=1.0,
-                           progress=False)
+    tr = dynamics.simulate(scene, 20.0, dynamics.Implicit(time_step=0.05, newton=TIGHT), record_every=1.0)
     drag = 0.5 * 1025.0 * 0.2 * 1.0**2
     assert float(eq.x[1, 0]) == pytest.approx(1.0 + drag / 500.0, rel=1e-9)
     assert tr.positions[-1, 1, 0] == pytest.approx(float(eq.x[1, 0]), abs=1e-7)
@@ -129,10 +126,10 @@ def test_current_settles_to_the_static_equilibrium():
 def test_resumed_run_equals_an_uninterrupted_one(tmp_path):
     scene = spring_mass(m=2.0, ea=800.0, delta=0.02, drag_area=0.05, current=0.5)
     opts = dynamics.Implicit(time_step=0.01, newton=TIGHT)
-    whole = dynamics.simulate(scene, 0.5, opts, record_every=0.05, out=tmp_path / "whole", progress=False, vtk=False)
-    dynamics.simulate(scene, 0.25, opts, record_every=0.05, out=tmp_path / "part", progress=False, vtk=False)
-    resumed = dynamics.simulate(scene, 0.5, opts, record_every=0.05, out=tmp_path / "part", resume=True,
-                                progress=False, vtk=False)
+    whole = run.simulate(scene, 0.5, opts, record_every=0.05, out=tmp_path / "whole", progress=False, vtk=False)
+    run.simulate(scene, 0.25, opts, record_every=0.05, out=tmp_path / "part", progress=False, vtk=False)
+    resumed = run.simulate(scene, 0.5, opts, record_every=0.05, out=tmp_path / "part", resume=True, progress=False,
+                           vtk=False)
     from jaxnet.io import timeseries
 
     a, b = timeseries.read_series(tmp_path / "whole"), timeseries.read_series(tmp_path / "part")
@@ -147,8 +144,7 @@ def test_failed_steps_are_retried_smaller_and_reported():
     """Newton allowed 2 iterations: the big steps of a swinging pendulum fail, are halved until they pass."""
     scene = spring_mass(m=1.0, ea=1e4, delta=0.0, gravity=9.81, free_axes="xz")
     newton = statics.Newton(tol=1e-9, max_iter=2, damping=1e-12, stall_window=None)
-    tr = dynamics.simulate(scene, 0.4, dynamics.Implicit(time_step=0.05, newton=newton), record_every=0.05,
-                           progress=False)
+    tr = dynamics.simulate(scene, 0.4, dynamics.Implicit(time_step=0.05, newton=newton), record_every=0.05)
     assert int(tr.state.retries) > 0
     assert tr.figures["time_step_s"].min() < 0.05
     assert tr.times[-1] == pytest.approx(0.4, abs=1e-14)
@@ -156,8 +152,7 @@ def test_failed_steps_are_retried_smaller_and_reported():
     with pytest.raises(dynamics.DynamicsError, match=r"node 1"):
         dynamics.simulate(scene, 0.4, dynamics.Implicit(time_step=0.05, min_time_step=0.05,
                                                         newton=statics.Newton(tol=1e-9, max_iter=1, damping=1e-12,
-                                                                              stall_window=None)),
-                          progress=False)
+                                                                              stall_window=None)))
 
 
 def test_a_failed_run_returns_its_records_when_asked_not_to_throw():
@@ -167,8 +162,8 @@ def test_a_failed_run_returns_its_records_when_asked_not_to_throw():
     solver = dynamics.Implicit(time_step=0.05, min_time_step=0.05,
                                newton=statics.Newton(tol=1e-9, max_iter=1, damping=1e-12, stall_window=None))
     with pytest.raises(dynamics.DynamicsError) as raised:
-        dynamics.simulate(scene, 0.4, solver, record_every=0.05, progress=False)
-    run = dynamics.simulate(scene, 0.4, solver, record_every=0.05, progress=False, throw=False)
+        dynamics.simulate(scene, 0.4, solver, record_every=0.05)
+    run = dynamics.simulate(scene, 0.4, solver, record_every=0.05, throw=False)
     assert run.status == dynamics.STEP_FAILED and run.reason == dynamics.REASONS[dynamics.STEP_FAILED]
     assert float(run.state.t) == float(raised.value.state.t) < 0.4
     assert run.times[-1] <= float(run.state.t) and np.all(np.isfinite(run.positions))
@@ -183,8 +178,7 @@ def test_stiff_twines_stay_stable_at_any_step(h):
     omega = np.sqrt(ea / m)
     tr = dynamics.simulate(spring_mass(m=m, ea=ea, delta=delta), 10 * h,
                            dynamics.Implicit(time_step=h, newton=statics.Newton(tol=1e-6, max_iter=30, damping=1e-12,
-                                                                                stall_window=None)),
-                           progress=False)
+                                                                                stall_window=None)))
     x = tr.positions[:, 1, 0] - 1.0
     assert np.all(np.isfinite(x))
     np.testing.assert_allclose(x, recurrence(delta, omega, h, 10), rtol=0, atol=1e-6 / ea + 1e-15)
@@ -291,7 +285,7 @@ def test_towing_through_still_water_is_the_current_seen_from_the_net():
     end = 40.0
     newton = statics.Newton(tol=1e-6, max_iter=30, damping=1e-12, stall_window=None)
     tr = dynamics.simulate(still, end, dynamics.Implicit(time_step=0.05, newton=newton), loading, record_every=5.0,
-                           x0=np.asarray(start.x), progress=False)
+                           x0=np.asarray(start.x))
     seen = tr.positions[-1] - np.asarray(towing(end))
     np.testing.assert_allclose(seen, np.asarray(eq.x), atol=2e-4)
     np.testing.assert_allclose(tr.velocities[-1], np.tile([-speed, 0.0, 0.0], (still.n_nodes, 1)), atol=1e-4)
@@ -313,7 +307,7 @@ def test_an_accelerating_current_pushes_by_the_waters_inertia():
     scene = Scene(nodes=nodes, bars=bars, environment=Environment(gravity=0.0, current_direction=np.array([1.0, 0.0, 0.0])))
     loading = dynamics.Loading(current_speed=forcing.Ramp(0.0, 10 * rate, 0.0, 10.0, smooth=False))
     h, n = 0.05, 40
-    tr = dynamics.simulate(scene, n * h, dynamics.Implicit(time_step=h, newton=TIGHT), loading, progress=False)
+    tr = dynamics.simulate(scene, n * h, dynamics.Implicit(time_step=h, newton=TIGHT), loading)
     A = (Ma + 1025.0 * V) / (M + Ma) * rate
     k = np.arange(n + 1)
     np.testing.assert_allclose(tr.positions[:, 1, 0], A * h**2 * k * (k + 1) / 2, rtol=1e-8, atol=1e-14)
@@ -336,8 +330,8 @@ def test_the_cage_in_waves_starts_from_its_static_equilibrium_without_a_shock(tm
     eq = statics.solve(dynamics.scene_at(scene, loading, 0.0), case.solver)
     static = np.asarray(eq.reaction(scene)).sum(axis=0)
     # to the end of the ramp and half a period at full height: the heave's crest (6 s) and trough (9 s)
-    run = dynamics.simulate(scene, 9.0, case.time.solver, loading, record_every=0.25, x0=np.asarray(eq.x),
-                            out=tmp_path, vtk=False, progress=False)
+    run = jaxnet.run.simulate(scene, 9.0, case.time.solver, loading, record_every=0.25, x0=np.asarray(eq.x),
+                              out=tmp_path, vtk=False, progress=False)
     total = run.figures["reaction_total_N"]
     times = run.times
     np.testing.assert_allclose(total[0], static, rtol=1e-6, atol=1e-6 * np.abs(static).max())
@@ -372,8 +366,7 @@ def test_a_pendulum_towed_by_a_speed_table_trails_at_the_drag_angle():
     table = forcing.SpeedTable([0.0, 5.0, 60.0], [[0.0, 0.0, 0.0], [speed, 0.0, 0.0], [speed, 0.0, 0.0]])
     loading = dynamics.Loading(motions=(forcing.PrescribedMotion(np.array([0]), table),))
     newton = statics.Newton(tol=1e-8, max_iter=30, damping=1e-12, stall_window=None)
-    tr = dynamics.simulate(scene, 40.0, dynamics.Implicit(time_step=0.05, newton=newton), loading, record_every=10.0,
-                           progress=False)
+    tr = dynamics.simulate(scene, 40.0, dynamics.Implicit(time_step=0.05, newton=newton), loading, record_every=10.0)
     top, body = tr.positions[-1]
     assert top[0] == pytest.approx(speed * (40.0 - 2.5), rel=1e-12)
     drag, weight = 0.5 * 1025.0 * cda * speed**2, m * 9.81
@@ -412,7 +405,7 @@ def test_the_host_loop_takes_the_compiled_loops_steps(case):
 def same_run_both_loops(scene, end, h, newton, loading=None):
     """Runs ``scene`` with either loop and asserts they took the same steps; (host run, compiled run)."""
     runs = {loop: dynamics.simulate(scene, end, dynamics.Implicit(time_step=h, newton=newton, loop=loop), loading,
-                                    record_every=end / 4, progress=False) for loop in ("host", "compiled")}
+                                    record_every=end / 4) for loop in ("host", "compiled")}
     host, compiled = runs["host"], runs["compiled"]
     np.testing.assert_array_equal(host.times, compiled.times)
     assert host.steps == compiled.steps and int(host.state.retries) == int(compiled.state.retries)
@@ -436,7 +429,7 @@ def test_a_net_that_nothing_holds_moves_freely_in_time():
     with pytest.raises(Exception, match="no node is fixed"):
         statics.solve(scene)
     h, n = 0.1, 10
-    tr = dynamics.simulate(scene, n * h, dynamics.Implicit(time_step=h, newton=TIGHT), progress=False)
+    tr = dynamics.simulate(scene, n * h, dynamics.Implicit(time_step=h, newton=TIGHT))
     shift = h**2 * 1.5 * np.arange(n + 1) * (np.arange(n + 1) + 1) / 2
     np.testing.assert_allclose(tr.positions[:, :, 0] - tr.positions[0, :, 0], np.stack([shift, shift], axis=1),
                                rtol=1e-9, atol=1e-12)
@@ -502,7 +495,7 @@ def test_a_float_heaves_with_the_waves_surface_as_the_schemes_steady_response():
     alone: -0.06 A."""
     scene = float_in_waves()
     h, period, a = 0.1, 8.0, 0.1
-    tr = dynamics.simulate(scene, 64.0, dynamics.Implicit(time_step=h, newton=TIGHT), progress=False)
+    tr = dynamics.simulate(scene, 64.0, dynamics.Implicit(time_step=h, newton=TIGHT))
     mass, water = dynamics.lumped_masses(scene)
     M, c = float(mass[1, 2]), float(water[1, 2])
     omega = 2 * np.pi / period

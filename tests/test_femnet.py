@@ -327,7 +327,7 @@ def test_a_case_meshed_finer_keeps_its_net_and_converges_to_the_same_answer():
     assert int(np.asarray(fine.scene.nodes.fixed).sum()) > int(np.asarray(coarse.scene.nodes.fixed).sum())
     forces = []
     for case in (coarse, fine):
-        eq = solve(case)
+        eq = solve(case.scene, case.solver)
         forces.append(femnet.femnet_figures(case.scene, eq, case.info["symmetry_axes"])["total_force_N"][0])
     assert forces[1] / forces[0] - 1.0 == pytest.approx(0.0024, abs=0.0015)
 

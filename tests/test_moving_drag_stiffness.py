@@ -271,8 +271,7 @@ def test_both_paths_follow_the_same_trajectory():
     runs = {}
     for path in assemble.STIFFNESS_PATHS:
         newton = statics.Newton(tol=1e-6, max_iter=30, damping=1e-12, stall_window=None, stiffness=path)
-        runs[path] = dynamics.simulate(scene, 0.5, dynamics.Implicit(time_step=0.05, newton=newton), record_every=0.25,
-                                       progress=False, vtk=False)
+        runs[path] = dynamics.simulate(scene, 0.5, dynamics.Implicit(time_step=0.05, newton=newton), record_every=0.25)
     a, c = runs["autodiff"], runs["closed_form"]
     assert np.abs(a.positions[-1] - a.positions[0]).max() > 0.5  # the net swings
     np.testing.assert_allclose(c.positions, a.positions, rtol=0, atol=1e-9)

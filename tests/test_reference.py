@@ -126,7 +126,7 @@ def test_book_scheme_error_is_first_order_against_the_reference():
     errors = []
     for n in (160, 320, 640):
         book = dynamics.simulate(scene, ts[-1], dynamics.Implicit(time_step=period / n, newton=newton),
-                                 record_every=ts[1], progress=False)
+                                 record_every=ts[1])
         np.testing.assert_allclose(book.times, ts, rtol=0, atol=1e-12)
         errors.append(np.abs(book.positions[:, 1, 2] - ref.positions[:, 1, 2]).max())
     ratios = np.array(errors[:-1]) / np.array(errors[1:])
@@ -177,8 +177,7 @@ def test_small_net_in_a_current_agrees_with_the_book_scheme():
     assert motion > 5e-3  # the current does move the net
     runs = {}
     for h in (1e-3, 5e-4):
-        book = dynamics.simulate(scene, end, dynamics.Implicit(time_step=h), loading=loading, record_every=ts[1],
-                                 progress=False)
+        book = dynamics.simulate(scene, end, dynamics.Implicit(time_step=h), loading=loading, record_every=ts[1])
         runs[h] = book.positions
     error = np.abs(runs[5e-4] - ref.positions).max()
     assert error < 0.03 * motion

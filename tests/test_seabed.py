@@ -398,7 +398,7 @@ def test_in_time_the_bed_brakes_a_sliding_body_by_mu_times_its_weight_against_it
     newton = statics.Newton(tol=1e-10, max_iter=30, damping=1e-12, stall_window=None)
     v0 = np.zeros((2, 3))
     v0[1] = heading
-    tr = dynamics.simulate(scene, n * h, dynamics.Implicit(time_step=h, newton=newton), v0=v0, progress=False)
+    tr = dynamics.simulate(scene, n * h, dynamics.Implicit(time_step=h, newton=newton), v0=v0)
     travel = tr.positions[:, 1] - tr.positions[0, 1]
     speeds = braking_recurrence(1.0, 0.5 * 9.81, h, n)
     np.testing.assert_allclose(travel[:, :2], np.outer(h * np.concatenate([[0], np.cumsum(speeds[1:])]),

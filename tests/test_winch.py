@@ -103,7 +103,7 @@ def test_a_winch_hauls_a_hanging_weight_at_its_speed():
     end = 30.0
     x0 = np.asarray(statics.solve(scene, tol=1e-7).x)
     tr = dynamics.simulate(scene, end, dynamics.Implicit(time_step=0.01, newton=newton), loading, record_every=5.0,
-                           x0=x0, progress=False)
+                           x0=x0)
     hauled = v * (end - 3.0) + 0.5 * v * 2.0
     assert tr.figures["winch_hauled_m"][-1][0] == pytest.approx(hauled, rel=1e-12)
     rest = bar * n_bars - hauled
@@ -142,8 +142,8 @@ def test_bad_winches_are_refused_naming_the_culprit():
     opts = dynamics.Implicit(time_step=0.1)
     outside = forcing.Winch([1, 7], 1, [0.0, 1.0], [1.0, 1.0], 0.01, 5.0)
     with pytest.raises(SceneError, match="bar index 7 outside the scene's 3 bars"):
-        dynamics.simulate(scene, 1.0, opts, dynamics.Loading(winches=(outside,)), progress=False)
+        dynamics.simulate(scene, 1.0, opts, dynamics.Loading(winches=(outside,)))
     a = forcing.Winch([0, 1], 0, [0.0, 1.0], [1.0, 1.0], 0.01, 5.0)
     b = forcing.Winch([2, 1], 2, [0.0, 1.0], [1.0, 1.0], 0.01, 5.0)
     with pytest.raises(SceneError, match="winches 0 and 1 both take bar 1"):
-        dynamics.simulate(scene, 1.0, opts, dynamics.Loading(winches=(a, b)), progress=False)
+        dynamics.simulate(scene, 1.0, opts, dynamics.Loading(winches=(a, b)))

@@ -278,7 +278,7 @@ def _simulated(end_time=1.0, loading=None, **options):
     def run(folder):
         from jaxnet.solve import dynamics
 
-        return dynamics.simulate(small_scene(), end_time, loading=loading, progress=False, vtk=False, **options)
+        return dynamics.simulate(small_scene(), end_time, loading=loading, **options)
     return run
 
 

@@ -100,7 +100,7 @@ def pendulum_table(end=1.0):
     for n in (50, 100, 200, 400, 800, 1600):
         h = end / n
         tr, wall = timed(lambda: dynamics.simulate(scene, end, dynamics.Implicit(time_step=h, newton=NEWTON),
-                                                   record_every=end, progress=False))
+                                                   record_every=end))
         err = float(np.linalg.norm(tr.positions[-1, 1] - exact))
         order = "" if last is None else f"{np.log2(last / err):.2f}"
         last = err
@@ -131,7 +131,7 @@ def cage_table(end):
     runs = {}
     for h in (0.04, 0.02, 0.01, 0.005, 0.0025):
         opts = dynamics.Implicit(time_step=h)
-        tr, wall = timed(lambda: dynamics.simulate(scene, end, opts, loading, record_every=0.05, x0=x0, progress=False))
+        tr, wall = timed(lambda: dynamics.simulate(scene, end, opts, loading, record_every=0.05, x0=x0))
         runs[h] = (tr, wall)
     fine = runs[0.0025][0]
     peak_ref = peak(fine.figures["reaction_total_N"][:, 2])
@@ -155,8 +155,7 @@ def cage_table(end):
     per_step, iterations = {path: [] for path in paths}, {}
     for _ in range(5):
         for path in paths:
-            tr, wall = timed(lambda: dynamics.simulate(scene, end, options[path], loading, record_every=0.05, x0=x0,
-                                                       progress=False), compile_first=not per_step[path])
+            tr, wall = timed(lambda: dynamics.simulate(scene, end, options[path], loading, record_every=0.05, x0=x0), compile_first=not per_step[path])
             per_step[path].append(wall / tr.steps)
             iterations[path] = tr.mean_iterations
     for path in paths:
@@ -231,8 +230,7 @@ def cage_reference_table(end, reference_rtol=1e-6):
     rows = []
     for h in (0.04, 0.02, 0.01, 0.005, 0.0025):
         opts = dynamics.Implicit(time_step=h)
-        tr, wall = timed(lambda: dynamics.simulate(scene, end, opts, loading, record_every=record, x0=x0,
-                                                   progress=False))
+        tr, wall = timed(lambda: dynamics.simulate(scene, end, opts, loading, record_every=record, x0=x0))
         err = abs(peak(tr.figures["reaction_total_N"][:, 2]) - peak_exact) / abs(peak_exact)
         verr = abs(tr.figures["volume_m3"][-1] - volume_exact) / volume_exact
         rows.append(("book scheme", wall, err))
@@ -265,10 +263,10 @@ def size_table(steps):
         opts = dynamics.Implicit(time_step=0.01)
         end = 0.5 if scene.n_nodes < 3000 else 0.1
         t0 = time.perf_counter()
-        dynamics.simulate(scene, 0.02, opts, loading, record_every=0.02, x0=x0, progress=False)
+        dynamics.simulate(scene, 0.02, opts, loading, record_every=0.02, x0=x0)
         first = time.perf_counter() - t0
         t0 = time.perf_counter()
-        tr = dynamics.simulate(scene, end, opts, loading, record_every=end, x0=x0, progress=False)
+        tr = dynamics.simulate(scene, end, opts, loading, record_every=end, x0=x0)
         wall = time.perf_counter() - t0
         print(f"| {step:g} | {scene.n_nodes} | {scene.n_dof} | {static_s:.1f} | {first:.1f} | {end:g} | "
               f"{tr.steps / wall:.1f} | {wall / tr.steps * 1e3:.1f} | {tr.mean_iterations:.2f} |", flush=True)
@@ -304,7 +302,7 @@ def time_step_problem(mesh_step, run_time, time_step=0.01):
     pattern = assemble.build_pattern(scene, model)
     masses = tuple(jnp.asarray(m) for m in dynamics.lumped_masses(scene))
     state = dynamics.simulate(scene, run_time, dynamics.Implicit(time_step=time_step), loading, record_every=run_time,
-                              x0=x_eq, progress=False).state
+                              x0=x_eq).state
     scene_t = dynamics.scene_at(scene, loading, state.t + time_step)
     water_load = masses[1] * dynamics.water_acceleration(state.x, scene_t, loading, True)
     step = dynamics.TimeStep(state.x, state.v, jnp.asarray(time_step), masses[0], water_load)
@@ -349,7 +347,7 @@ def breakdown():
     calm = eqx.tree_at(lambda s: s.environment.waves.height, scene, jnp.asarray(0.0))
     x_calm = np.asarray(statics.solve(calm, tol=1e-7).x)
     opts = dynamics.Implicit(time_step=h)
-    _, wall = timed(lambda: dynamics.simulate(calm, 1.0, opts, None, record_every=0.05, x0=x_calm, progress=False))
+    _, wall = timed(lambda: dynamics.simulate(calm, 1.0, opts, None, record_every=0.05, x0=x_calm))
     rows.append(("a step without Newton iterations (1 evaluation, records every 5 steps)", wall / 100 * 1e3))
     print("\n## Where a step's time goes: the cage in waves, Δt = 10 ms, pieces timed alone (compiled)\n")
     print("| piece | ms |")

@@ -95,7 +95,7 @@ def one(name):
     # a net held only at jaxnet's gauge for its static start is free in time, as FEMNET's dyna has it
     scene = eqx.tree_at(lambda s: s.nodes.fixed, scene, femnet.released_gauge(case).nodes.fixed)
     run = dynamics.simulate(scene, settings.end_time, settings.solver, loading, record_every=settings.record_every,
-                            x0=x0, progress=False, throw=False)
+                            x0=x0, throw=False)
     wall = time.perf_counter() - t0
     femnet_t, femnet_x = read_dyn(CORPUS / f"{name}.dyn", scene.n_nodes)
     inside = (femnet_t >= run.times[0]) & (femnet_t <= run.times[-1])

@@ -51,8 +51,7 @@ def dynamic(problem):
     from jaxnet.solve import dynamics
 
     d = problem.dynamic
-    run = dynamics.simulate(problem.scene, d.end_time, d.solver, d.loading, record_every=d.end_time,
-                            progress=False, vtk=False, throw=False)
+    run = dynamics.simulate(problem.scene, d.end_time, d.solver, d.loading, record_every=d.end_time, throw=False)
     state = run.state
     return int(state.iterations), digest(state.x, state.v, state.force)
 

@@ -570,8 +570,7 @@ def _solve_dynamic(problem: Problem, x0):
 
     d = problem.dynamic
     try:
-        run = dynamics.simulate(problem.scene, d.end_time, d.solver, d.loading, record_every=d.end_time, x0=x0,
-                                progress=False, vtk=False)
+        run = dynamics.simulate(problem.scene, d.end_time, d.solver, d.loading, record_every=d.end_time, x0=x0)
         state, reason, compile_s = run.state, DONE, run.timing.compile_s
         arrays = [run.positions, run.velocities] + [np.asarray(v, dtype=float) for v in run.figures.values()]
     except dynamics.DynamicsError as error:

@@ -32,7 +32,7 @@ print("|---|---|---|---|---|---|")
 for name, (scene, loading) in (("start ramp (default, one period)", default), ("before: heave ramped over 2 s", before)):
     eq = solve(dynamics.scene_at(scene, loading, 0.0), case.solver)
     static = np.asarray(eq.reaction(scene)).sum(axis=0)
-    run = dynamics.simulate(scene, 12.0, case.time.solver, loading, record_every=0.1, x0=np.asarray(eq.x), progress=False)
+    run = dynamics.simulate(scene, 12.0, case.time.solver, loading, record_every=0.1, x0=np.asarray(eq.x))
     z, t = run.figures["reaction_total_N"][:, 2], run.times
     full = z[t >= 6.0]
     first = z[t <= 1.0 + 1e-9]

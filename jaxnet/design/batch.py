@@ -38,23 +38,22 @@ SuperLU (scipy) on the host (:mod:`jaxnet.linalg`), then the solution goes back 
   callback), prefer ``method="map"``.
 * *sharded over several devices.* Each device runs its own loop over its own designs (it stops at its own
   slowest) and makes its own callbacks, from its own thread, so the callbacks of different devices run on
-  the host at the same time. On a 2-core machine with emulated CPU devices (``validation/design_batch.py``)
-  the factorisations of ``method="map"`` overlap, but each takes several times longer than alone, the two
-  cores and Python's GIL being shared: sharded is slower than one device. With ``method="vmap"`` sharding
+  the host at the same time. With emulated CPU devices on a host of few cores (``validation/design_batch.py``)
+  the factorisations of ``method="map"`` overlap, but each takes longer than alone, the cores and Python's
+  GIL being shared: sharded can be slower than one device (``validation/REPORT.md``). With ``method="vmap"`` sharding
   helps because it cuts the batched waste (each device stops at its own slowest design). Emulated devices
   add no cores: sharding can only pay where the host has cores to spare for the concurrent callbacks.
 * *a deadlock to avoid.* XLA's CPU client runs the programs of all CPU devices, and their callbacks, on
-  max(cores, CPU devices) threads (:func:`xla_cpu_threads`). On this 2-core machine a mesh of all 2, 3 or
-  4 emulated devices hung on the 362-node panel, every time; each XLA thread was inside a callback,
-  waiting to read its operands (which JAX had put on CPU device 0) as numpy arrays, and no thread was left
-  to complete those copies. Meshes of 3 of 4 or 4 of 5 devices (device 0 in or out) did not hang in any
-  run. So
+  max(cores, CPU devices) threads (:func:`xla_cpu_threads`). A mesh of as many emulated devices as those
+  threads can hang: each XLA thread is then inside a callback, waiting to read its operands (which JAX put on
+  CPU device 0) as numpy arrays, and no thread is left to complete those copies; a mesh of one device fewer
+  leaves a thread for them. So
   :func:`design_mesh` leaves CPU device 0 out when the devices are as many as those threads, and
   :func:`solve_sharded` refuses a mesh of that many CPU devices.
 * *threads.* The host solves of different devices run in different threads at once, so
   :mod:`jaxnet.linalg` must not share a factorisation between threads (one solver per structure *and*
   thread).
-* *on a GPU* (not measured: no GPU here). The same program runs on the GPU; every callback stops the GPU's
+* *on a GPU* (not measured). The same program runs on the GPU; every callback stops the GPU's
   stream, copies the tangent's entries (nnz floats) and the right-hand side to the host, factorises on the
   CPU and copies the solution back. So a GPU speeds up the assembly and the line search, not the
   factorisations, half of a Newton iteration's time at 362 nodes on the CPU and more on larger nets:

@@ -39,9 +39,10 @@ the run stops: :class:`DynamicsError` naming the time, the node with the largest
 reason, or with ``throw=False`` the run so far, its state's ``status`` STEP_FAILED. Nothing non-finite is
 accepted (Newton's NON_FINITE status is a failure).
 
-The loop. :func:`simulate` advances the run one record interval at a time, writes each record at once
-(:mod:`jaxnet.io.timeseries`: time series and VTK), shows progress, and can resume a stopped run from its last
-record. Two drivers take the same steps (:attr:`jaxnet.solve.options.Implicit.loop`): the host
+The loop. :func:`integrate` advances a run (checked first: :func:`plan`) one record interval at a time and
+hands each record to an observer as it is taken; :func:`simulate` does both. Writing the records
+(:mod:`jaxnet.io.timeseries`: time series and VTK), progress and resuming a stopped run from its last record are
+the run layer's (:func:`jaxnet.run.simulate`). Two drivers take the same steps (:attr:`jaxnet.solve.options.Implicit.loop`): the host
 (:class:`Stepper`: a compiled :func:`step_setup` per step, then the static solver's host Newton loop given the
 step, whose programs are kept on disk, so that the next run and a resumed one load them); or one jitted
 program per interval (:func:`advance`: ``lax.while_loop`` over steps, Newton's ``lax.while_loop`` inside, the
@@ -62,7 +63,7 @@ Units: m, s, kg, N.
 from __future__ import annotations
 
 import dataclasses
-import pathlib
+from typing import NamedTuple
 import time as _time
 
 import equinox as eqx
@@ -71,7 +72,6 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxnet import assemble, catch as catch_lib, checks, forcing, linalg, model as model_lib, scene as scene_lib
-from jaxnet.case import Case
 from jaxnet.forcing import Loading  # simulate's argument, offered here as dynamics.Loading too
 from jaxnet.solve import newton, options as options_lib, programs, results, statics
 from jaxnet.solve.masses import lumped_masses
@@ -146,6 +146,15 @@ class State(eqx.Module):
     newton_status: jax.Array
     worst_node: jax.Array
     residual_N: jax.Array
+
+    def arrays(self):
+        """The state as numpy arrays by field name: what a resumed run starts from, exactly (a checkpoint)."""
+        return {f.name: np.asarray(getattr(self, f.name)) for f in dataclasses.fields(self)}
+
+    @classmethod
+    def from_arrays(cls, arrays):
+        """The state of a checkpoint (:meth:`arrays`)."""
+        return cls(**{f.name: jnp.asarray(arrays[f.name]) for f in dataclasses.fields(cls)})
 
     @classmethod
     def start(cls, x, v, t, solver: Implicit, force=None):
@@ -548,38 +557,24 @@ def check_loading(scene, loading: Loading):
             taken[b] = k
 
 
-def simulate(scene, end_time=None, solver: Implicit | None = None, loading: Loading | None = None, record_every=None,
-             out=None, resume=False, x0=None, v0=None, progress=True, vtk=True, throw: bool = True) -> Trajectory:
-    """Runs ``scene`` from time 0 (or from the last record of ``out`` when ``resume``) to ``end_time`` (s).
+class Plan(NamedTuple):
+    """A run in time, checked and ready (:func:`plan`): the scene and loading with the start ramp applied
+    (:func:`with_start_ramp`), the options, the end time and the record interval (s), the ramp (s), and the
+    nodes held on some axis, whose reactions the records hold (``reaction_nodes``, (F,))."""
 
-    Args:
-      scene: a :class:`jaxnet.scene.Scene` (validated here, before anything is compiled), or a
-        :class:`jaxnet.case.Case`: its scene, and from its time settings the end time, options, loading and
-        record interval not given here.
-      end_time: the time to reach (s).
-      solver: :class:`Implicit` options. loading: :class:`Loading` (histories, prescribed motions).
-      record_every: the interval between records (s); default: every step.
-      out: a directory to write the records to as the run goes (:mod:`jaxnet.io.timeseries`: raw series,
-        ``series.npz`` at the end, ``checkpoint.npz``, VTK ``series.pvd`` when ``vtk``); None keeps them in memory.
-      resume: continue the run in ``out`` from its last record (same scene and options).
-      x0, v0: (N, 3) start positions and velocities (default: the scene's positions, at rest).
-      progress: show a progress bar (simulated time, steps per second, Newton iterations per step).
-      throw: raise :class:`DynamicsError` when a step fails below the smallest step; with ``throw=False``
-        the run stops there and returns its records so far, ``Trajectory.status`` STEP_FAILED (its state
-        names the time reached, Newton's status, the worst node and its residual).
-    Returns:
-      a :class:`Trajectory`, its ``timing`` the compile and wall times (s).
-    """
-    from jaxnet.io import timeseries
-    from jaxnet.io.progress import Progress
+    scene: scene_lib.Scene
+    loading: Loading
+    solver: Implicit
+    end_time: float
+    record_every: float
+    ramp_s: float
+    reaction_nodes: np.ndarray
 
-    if isinstance(scene, Case):
-        settings = scene.time
-        if settings is not None:
-            end_time = settings.end_time if end_time is None else end_time
-            solver, loading = solver or settings.solver, loading or settings.loading
-            record_every = settings.record_every if record_every is None else record_every
-        scene = scene.scene
+
+def plan(scene, end_time, solver: Implicit | None = None, loading: Loading | None = None, record_every=None) -> Plan:
+    """Checks a run of ``scene`` to ``end_time`` (s) before anything is compiled (the scene for dynamics, the
+    loading against it, the times) and gives its :class:`Plan`. ``solver`` defaults to ``Implicit()``,
+    ``loading`` to none, ``record_every`` (s) to every step."""
     if end_time is None:
         raise ValueError("simulate: give end_time (s): the case has no time settings, or none with an end time")
     solver = solver or Implicit()
@@ -593,6 +588,48 @@ def simulate(scene, end_time=None, solver: Implicit | None = None, loading: Load
     record_every = solver.time_step if record_every is None else float(record_every)
     if not (np.isfinite(record_every) and record_every > 0):
         raise ValueError(f"simulate: record_every must be finite and > 0, got {record_every!r}")
+    held = np.flatnonzero(np.asarray(scene.nodes.fixed).any(axis=1))
+    return Plan(scene=scene, loading=loading, solver=solver, end_time=float(end_time), record_every=record_every,
+                ramp_s=ramp, reaction_nodes=held)
+
+
+def simulate(scene, end_time, solver: Implicit | None = None, loading: Loading | None = None, record_every=None,
+             x0=None, v0=None, observer=None, throw: bool = True) -> Trajectory:
+    """Runs ``scene`` from time 0 to ``end_time`` (s): :func:`integrate` of its :func:`plan`. Records are kept in
+    memory; writing them, progress and resuming are the run layer's (:func:`jaxnet.run.simulate`).
+
+    Args:
+      scene: a :class:`jaxnet.scene.Scene` (validated here, before anything is compiled).
+      end_time: the time to reach (s).
+      solver: :class:`Implicit` options. loading: :class:`Loading` (histories, prescribed motions).
+      record_every: the interval between records (s); default: every step.
+      x0, v0: (N, 3) start positions and velocities (default: the scene's positions, at rest).
+      observer: called as ``observer(state, figures)`` with each record as it is taken (:func:`integrate`).
+      throw: raise :class:`DynamicsError` when a step fails below the smallest step; with ``throw=False``
+        the run stops there and returns its records so far, ``Trajectory.status`` STEP_FAILED (its state
+        names the time reached, Newton's status, the worst node and its residual).
+    Returns:
+      a :class:`Trajectory`, its ``timing`` the compile and wall times (s).
+    """
+    return integrate(plan(scene, end_time, solver, loading, record_every), x0=x0, v0=v0, observer=observer,
+                     throw=throw)
+
+
+def integrate(run: Plan, x0=None, v0=None, start: State | None = None, observer=None, throw: bool = True
+              ) -> Trajectory:
+    """Advances a planned run (:func:`plan`) one record interval at a time to its end.
+
+    Args:
+      run: the :class:`Plan`.
+      x0, v0: (N, 3) start positions (m) and velocities (m/s) at time 0 (default: the scene's, at rest).
+      start: a :class:`State` to continue from instead (a stopped run's last record: :meth:`State.from_arrays`);
+        records then go on at the same times as the whole run's.
+      observer: called as ``observer(state, figures)`` at each record (the start's too when the run starts at
+        time 0), ``figures`` the record's figures by name (:func:`record_figures`): where a writer or a
+        progress bar takes them as they come.
+      throw: as :func:`simulate`'s.
+    """
+    scene, loading, solver, end_time = run.scene, run.loading, run.solver, run.end_time
     model = model_lib.active_terms(scene, dynamic=True)
     pattern = assemble.build_pattern(scene, model)
     masses = tuple(jnp.asarray(m) for m in lumped_masses(scene, np))
@@ -600,75 +637,60 @@ def simulate(scene, end_time=None, solver: Implicit | None = None, loading: Load
     # device at each call, a cost on every record (every step by default).
     scene_arg, pattern, loading_arg = jax.tree.map(lambda a: jnp.asarray(a) if isinstance(a, np.ndarray) else a,
                                                    (scene, pattern, loading))
-    fixed_nodes = np.flatnonzero(np.asarray(scene.nodes.fixed).any(axis=1))
-    x_start = np.asarray(scene_at(scene, loading, 0.0).nodes.position if x0 is None else x0, dtype=float)
-    v_start = np.zeros_like(x_start) if v0 is None else np.asarray(v0, dtype=float)
-    # the force at the start: the net's own inertia unknown there, the rest (reactions at t = 0) is
-    force0 = out_of_balance_jit(jnp.asarray(x_start), jnp.asarray(v_start), 0.0, scene, masses, loading, model=model)
-    state = State.start(x_start, v_start, 0.0, solver, force0)
+    if start is None:
+        x_start = np.asarray(scene_at(scene, loading, 0.0).nodes.position if x0 is None else x0, dtype=float)
+        v_start = np.zeros_like(x_start) if v0 is None else np.asarray(v0, dtype=float)
+        # the force at the start: the net's own inertia unknown there, the rest (reactions at t = 0) is
+        force0 = out_of_balance_jit(jnp.asarray(x_start), jnp.asarray(v_start), 0.0, scene, masses, loading,
+                                    model=model)
+        start = State.start(x_start, v_start, 0.0, solver, force0)
+    state = start
     times, positions, velocities, figures = [], [], [], {}
-    writer = None
-    if out is not None:
-        writer = timeseries.SeriesWriter(pathlib.Path(out), scene, vtk=vtk, resume=resume,
-                                         run={"start_ramp_s": ramp, "reaction_nodes": fixed_nodes.tolist()})
-        if resume and writer.resumed is not None:
-            _, checkpoint = writer.resumed
-            state = State(**{f.name: jnp.asarray(checkpoint[f.name]) for f in dataclasses.fields(State)})
 
     def keep(s):
-        fig = record_figures(s, scene_arg, loading_arg, model, fixed_nodes)
+        fig = record_figures(s, scene_arg, loading_arg, model, run.reaction_nodes)
         times.append(float(s.t))
         positions.append(np.asarray(s.x))
         velocities.append(np.asarray(s.v))
         for k, v in fig.items():
             figures.setdefault(k, []).append(v)
-        if writer is not None:
-            record = timeseries.Record(time=float(s.t), step=int(s.steps), position=np.asarray(s.x),
-                                       velocity=np.asarray(s.v), figures=fig)
-            writer.write(record, _checkpoint(s))
+        if observer is not None:
+            observer(s, fig)
 
     t0 = _time.perf_counter()
     compile_s = 0.0
     if float(state.t) == 0.0:
         keep(state)
-    iterations = int(state.iterations)
     # record times k * record_every, the same whichever record a run resumes from (so is each step)
+    record_every = run.record_every
     targets = np.minimum(record_every * np.arange(1, int(np.ceil(end_time / record_every - 1e-9)) + 1), end_time)
     targets = targets[targets > float(state.t) + 1e-9 * record_every]
-    bar = Progress(float(state.t), end_time, disable=not progress, steps0=int(state.steps))
     loop = chosen_loop(solver, end_time - float(state.t))
     stepper = Stepper(scene, pattern, masses, loading, model, solver) if loop == "host" else None
-    try:
-        with bar:
-            for k, target in enumerate(targets):
-                t_call = _time.perf_counter()
-                if stepper is not None:
-                    state = stepper.advance(state, float(target))
-                else:
-                    state = advance_jit(state, float(target), scene_arg, pattern, masses, loading_arg,
-                                        solver.time_step, solver.min_time_step, model=model, solver=solver.newton)
-                    jax.block_until_ready(state)
-                if k == 0:
-                    compile_s = _time.perf_counter() - t_call  # the first call compiles (and runs one interval)
-                if int(state.status) == STEP_FAILED:
-                    if not throw:
-                        break
-                    node = int(state.worst_node)
-                    raise DynamicsError(
-                        f"dynamic step failed at t = {float(state.t):.6g} s: Newton "
-                        f"({results.REASONS[int(state.newton_status)]}) with the step halved down to "
-                        f"{solver.min_time_step:g} s; largest residual {float(state.residual_N):.4g} N at node {node}",
-                        state)
-                keep(state)
-                bar.update(float(state.t), int(state.steps), int(state.iterations) - iterations)
-                iterations = int(state.iterations)
-    finally:
-        if writer is not None:
-            writer.close()
+    for k, target in enumerate(targets):
+        t_call = _time.perf_counter()
+        if stepper is not None:
+            state = stepper.advance(state, float(target))
+        else:
+            state = advance_jit(state, float(target), scene_arg, pattern, masses, loading_arg,
+                                solver.time_step, solver.min_time_step, model=model, solver=solver.newton)
+            jax.block_until_ready(state)
+        if k == 0:
+            compile_s = _time.perf_counter() - t_call  # the first call compiles (and runs one interval)
+        if int(state.status) == STEP_FAILED:
+            if not throw:
+                break
+            node = int(state.worst_node)
+            raise DynamicsError(
+                f"dynamic step failed at t = {float(state.t):.6g} s: Newton "
+                f"({results.REASONS[int(state.newton_status)]}) with the step halved down to "
+                f"{solver.min_time_step:g} s; largest residual {float(state.residual_N):.4g} N at node {node}",
+                state)
+        keep(state)
     return Trajectory(times=np.asarray(times), positions=np.asarray(positions), velocities=np.asarray(velocities),
                       figures={k: np.asarray(v) for k, v in figures.items()}, state=state,
-                      timing=Timing(compile_s=compile_s, wall_s=_time.perf_counter() - t0), start_ramp_s=ramp,
-                      reaction_nodes=fixed_nodes, loop=loop)
+                      timing=Timing(compile_s=compile_s, wall_s=_time.perf_counter() - t0), start_ramp_s=run.ramp_s,
+                      reaction_nodes=run.reaction_nodes, loop=loop)
 
 
 def chosen_loop(solver: Implicit, duration):
@@ -677,8 +699,3 @@ def chosen_loop(solver: Implicit, duration):
     if solver.loop != "auto":
         return solver.loop
     return "compiled" if duration / solver.time_step > options_lib.AUTO_COMPILED_STEPS else "host"
-
-
-def _checkpoint(state: State):
-    """The state as numpy arrays by field name: what a resumed run starts from, exactly."""
-    return {f.name: np.asarray(getattr(state, f.name)) for f in dataclasses.fields(State)}

@@ -136,8 +136,8 @@ DIFFERENTIABLE = Newton(tol=1e-8, max_iter=200, damping=1e-6, stall_window=None,
 LOOPS = ("auto", "host", "compiled")
 
 #: ``loop="auto"`` takes the compiled loop for a run of more steps than this still to take: the host loop's
-#: extra cost, about 5 ms a step on small nets (``validation/dynamics_loops.py``: the cage in waves, the seine
-#: s4), then outweighs the compiled loop's compilation in every process (5-8 s there)
+#: extra cost a step then outweighs the compiled loop's compilation in every process (both measured by
+#: ``validation/dynamics_loops.py`` on the cage in waves and the seine s4: ``validation/REPORT.md``)
 AUTO_COMPILED_STEPS = 1500
 
 

@@ -29,7 +29,7 @@ reference between steps. Many close save times therefore cap the step.
 Newton inside each step: sparse, dense or GMRES. Each implicit stage solves f_i = F(y + γ h f_i) by Newton.
 diffrax's default (a chord iteration on a *dense* Jacobian, LU-factorised) costs n Jacobian-vector products
 and an n³ factorisation per step (n = 2 × free coordinates): fine for a few hundred states, hopeless beyond
-(measured: ``../shared/notes/solvers.md``). The default here ("sparse", :class:`SparseLU`) uses the element
+(``docs/solvers.md``, "The diffrax reference"). The default here ("sparse", :class:`SparseLU`) uses the element
 graph instead: the stage Jacobian couples only the coordinates of nodes sharing an element, so a greedy
 distance-2 colouring of its columns recovers every entry from one JVP per colour (a few dozen, whatever n),
 and the matrix is factorised densely in JAX for small systems or by SuperLU on the host above
@@ -47,7 +47,7 @@ The sparse solvers are the fastest of these on the hanging panel of ``tests/test
 and without the host's SuperLU alike), GMRES several times slower, and diffrax's chord iteration the
 slowest: it keeps its Jacobian across steps, the stiff twines make it fail to converge, and diffrax answers
 by cutting the step, an order of magnitude more steps than with a fresh Newton linearisation
-(``../shared/notes/solvers.md``).
+(``docs/solvers.md``).
 
 Reverse-mode gradients through diffrax's implicit solvers form and factorise a dense Jacobian whatever
 the root finder (diffrax calls optx.root_find without an adjoint): differentiate the reference only on

@@ -57,7 +57,6 @@ import jax
 import numpy as np
 
 from jaxnet import assemble, checks, linalg, model as model_lib
-from jaxnet.case import Case
 from jaxnet.memo import Memo
 from jaxnet.solve import diagnosis, interior, kernel, newton, programs
 from jaxnet.solve.options import STATIC, Newton
@@ -99,8 +98,8 @@ def constant_loads(scene, model):
 
 
 #: the force terms' state shapes per scene signature (:func:`jaxnet.solve.programs.identity` of the states'
-#: arguments and terms): found by tracing the states alone (tens of milliseconds on FEMNET's cases), once per
-#: process for a scene shape, not at every warm solve
+#: arguments and terms): found by tracing the states alone, once per process for a scene shape, not at every
+#: warm solve
 _STATE_SHAPES = Memo(64)
 
 
@@ -412,8 +411,8 @@ def solve(scene, solver: Newton | None = None, x0=None, throw: bool = True, **op
     """Static equilibrium of ``scene``.
 
     Args:
-      scene: a :class:`jaxnet.scene.Scene` (validated here, before anything is compiled), or a
-        :class:`jaxnet.case.Case`: its scene, with its solver options unless ``solver`` is given.
+      scene: a :class:`jaxnet.scene.Scene` (validated here, before anything is compiled). A
+        :class:`jaxnet.case.Case` is solved by the run layer, with its own options: :func:`jaxnet.run.solve_static`.
       solver: a :class:`~jaxnet.solve.options.Newton` options object (default
         :data:`jaxnet.solve.options.STATIC`); keyword ``options`` override its fields.
       x0: optional (N, 3) start positions (default: the scene's node positions); fixed nodes keep the
@@ -424,8 +423,6 @@ def solve(scene, solver: Newton | None = None, x0=None, throw: bool = True, **op
       an :class:`Equilibrium`, its ``timing`` the compile and run wall times (s): ``timing.compile_s`` is
       ~0 when a program compiled for a scene of the same shape and terms is reused.
     """
-    if isinstance(scene, Case):
-        scene, solver = scene.scene, solver or scene.solver
     solver = dataclasses.replace(solver or STATIC, **options)
     checks.validate(scene)
     linalg.solver_choice()  # a sparse solver asked for that cannot run here: said before anything compiles
