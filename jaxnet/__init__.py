@@ -22,13 +22,8 @@ import importlib
 import importlib.abc
 import importlib.util
 import sys
-from importlib import metadata as _metadata
 
-try:
-    #: the installed package's version (``pyproject.toml``), as ``jaxnet --version`` and result.json give it
-    __version__ = _metadata.version("jaxnet")
-except _metadata.PackageNotFoundError:  # run from a source tree that was not installed
-    __version__ = "0+unknown"
+from jaxnet.version import __version__  # noqa: F401  (the installed package's version)
 
 
 class _Float64OnImport(importlib.abc.MetaPathFinder):
@@ -61,17 +56,51 @@ if "jax" in sys.modules:
 elif not any(isinstance(finder, _Float64OnImport) for finder in sys.meta_path):
     sys.meta_path.insert(0, _Float64OnImport())
 
+#: modules that moved into the folders of their layer, by their former name: importable under it for one
+#: release (the same module object, with a DeprecationWarning), through :class:`_MovedModules`
+MOVED = {
+    "jaxnet.current": "jaxnet.water.current", "jaxnet.waves": "jaxnet.water.waves",
+    "jaxnet.spectra": "jaxnet.water.spectra", "jaxnet.forcing": "jaxnet.water.forcing",
+    "jaxnet.pardiso": "jaxnet.linalg.pardiso", "jaxnet.cudss": "jaxnet.linalg.cudss",
+    "jaxnet.assemble": "jaxnet.model.assemble", "jaxnet.catch": "jaxnet.model.catch",
+    "jaxnet.checks": "jaxnet.scene.checks",
+}
+
+
+class _MovedModules(importlib.abc.MetaPathFinder, importlib.abc.Loader):
+    """Finds a module by its former name (:data:`MOVED`) and gives the module under its new name: one object
+    under both names, so that state and patches are shared."""
+
+    def find_spec(self, name, path=None, target=None):
+        if name not in MOVED:
+            return None
+        return importlib.util.spec_from_loader(name, self)
+
+    def create_module(self, spec):
+        import warnings
+
+        warnings.warn(f"{spec.name} moved to {MOVED[spec.name]}; the old name goes in the next release",
+                      DeprecationWarning, stacklevel=3)
+        return importlib.import_module(MOVED[spec.name])
+
+    def exec_module(self, module):
+        pass
+
+
+if not any(isinstance(finder, _MovedModules) for finder in sys.meta_path):
+    sys.meta_path.append(_MovedModules())
+
 #: public name -> the module that defines it (its attribute of the same name, or of the name after ':')
 _PUBLIC = {
     "Case": "jaxnet.case", "TimeSettings": "jaxnet.case",
-    "Loading": "jaxnet.forcing",
+    "Loading": "jaxnet.water.forcing",
     "read_don": "jaxnet.io.femnet", "read_mdg": "jaxnet.io.femnet",
     "read_scene": "jaxnet.io.scene_file:read",
     "Net": "jaxnet.net", "Twine": "jaxnet.net", "Rope": "jaxnet.net", "HexTwine": "jaxnet.net",
     "NumericalTwines": "jaxnet.net",
     "Bars": "jaxnet.scene", "Environment": "jaxnet.scene", "Netting": "jaxnet.scene", "Nodes": "jaxnet.scene",
     "Scene": "jaxnet.scene", "SceneError": "jaxnet.scene",
-    "validate": "jaxnet.checks",
+    "validate": "jaxnet.scene.checks",
     "Newton": "jaxnet.solve.options", "Implicit": "jaxnet.solve.options",
     "Equilibrium": "jaxnet.solve.results", "SolveError": "jaxnet.solve.results",
     "solve_static": "jaxnet.run",

@@ -24,7 +24,7 @@ import dataclasses
 
 import numpy as np
 
-from jaxnet.forcing import Loading
+from jaxnet.water.forcing import Loading
 from jaxnet.scene import Scene, SceneError
 from jaxnet.solve.options import Implicit, Newton
 
@@ -37,7 +37,7 @@ class TimeSettings:
     record_every: the interval between records (s); None: every step.
     solver: the implicit time stepping's options (:class:`~jaxnet.solve.options.Implicit`: Δt, and each
       step's Newton).
-    loading: what changes with time besides the net (:class:`~jaxnet.forcing.Loading`: a current's history,
+    loading: what changes with time besides the net (:class:`~jaxnet.water.forcing.Loading`: a current's history,
       prescribed motions).
     """
 

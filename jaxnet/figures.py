@@ -14,9 +14,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxnet import assemble, catch as catch_lib, geometry, model as model_lib, scene as scene_lib
+from jaxnet import geometry, model as model_lib, scene as scene_lib
+from jaxnet.model import assemble, catch as catch_lib
 from jaxnet.solve import programs, statics
 from jaxnet.terms import cable, hexagonal as hexagonal_lib, pressure, tension, term as term_lib
+from jaxnet.version import __version__
 
 
 # The figures are computed by compiled programs, each for a scene shape, kept by :mod:`jaxnet.solve.programs`
@@ -64,7 +66,7 @@ class NetFigures(NamedTuple):
     bar_tension: (B,) N, every cable bar; element_forces: per active term of a result group (the external forces:
     drag, catch, weight and buoyancy, applied forces, the sea bed; not the internal ones, twines and bars, mesh
     opening, knots, bending, which sum to zero over the net), (E, k, 3) N, the force each element of its family
-    exerts on each of its vertices (:func:`jaxnet.assemble.forces_by_element`); nodal_forces: per such term,
+    exerts on each of its vertices (:func:`jaxnet.model.assemble.forces_by_element`); nodal_forces: per such term,
     (N, 3) N, those forces summed onto the nodes."""
 
     twine_tension: np.ndarray
@@ -257,8 +259,8 @@ def _json(value):
 
 def _waves_inputs(waves):
     """The waves of the environment, by their type and main numbers (m, s, rad), or None for still water.
-    Regular waves (:class:`jaxnet.waves.Airy` and its Stokes orders) by height, period, direction, depth, phase
-    and ramp; an irregular sea (:class:`jaxnet.waves.Irregular`) by its number of components, its significant
+    Regular waves (:class:`jaxnet.water.waves.Airy` and its Stokes orders) by height, period, direction, depth, phase
+    and ramp; an irregular sea (:class:`jaxnet.water.waves.Irregular`) by its number of components, its significant
     height 4 √m0 (m0 = Σ a_i²/2, the variance of the elevation), its peak period and the energy-weighted mean
     of its components' headings, not component by component (hundreds of them)."""
     if waves is None:
@@ -465,8 +467,6 @@ def summary(scene, eq, *, case=None, source=None, solver=None, figures=None):
     (:func:`weight_by_carrier`); ``about`` says in a line what the main figures are (:data:`ABOUT`).
     Plain JSON values throughout: a non-finite number (a failed solve's NaN residual) is null.
     """
-    import jaxnet  # its version (a module-level import would be circular: jaxnet imports the readers)
-
     x = np.asarray(eq.x, dtype=float)
     figures = net_figures(scene, x) if figures is None else figures
     reaction = eq.reaction(scene).sum(axis=0)
@@ -482,7 +482,7 @@ def summary(scene, eq, *, case=None, source=None, solver=None, figures=None):
                 if np.linalg.norm(v) > 1e-12 * scale}
     worst = int(eq.worst_node)
     out = {
-        "jaxnet_version": jaxnet.__version__,
+        "jaxnet_version": __version__,
         "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         "converged": bool(eq.converged),
         "reason": eq.reason,
@@ -542,7 +542,7 @@ def summary(scene, eq, *, case=None, source=None, solver=None, figures=None):
 
 def nodal_forces_by_term(scene, x):
     """Per active term (:func:`jaxnet.model.active_terms`), the (N, 3) nodal forces (N) it exerts on the net at
-    positions x (N, 3): :func:`jaxnet.assemble.term_forces`, by the program :func:`forces_by_term` runs for all
+    positions x (N, 3): :func:`jaxnet.model.assemble.term_forces`, by the program :func:`forces_by_term` runs for all
     the terms (one compilation serves both). Their sum is the out-of-balance force on every node."""
     model = model_lib.active_terms(scene)
     args = (np.asarray(x, dtype=float), scene)

@@ -42,13 +42,9 @@ import warnings
 import numpy as np
 
 from jaxnet import materials
-from jaxnet.materials import HexTwine, Rope, Twine, bar_columns, netting_rows
-from jaxnet.mesh.hinges import netting_hinges
-from jaxnet.mesh.joining import NodeJoiner
-from jaxnet.mesh.panel import lattice_divisions, mesh_panel
-from jaxnet.mesh.polygon import PanelError, side_divisions
-from jaxnet.mesh.twines import NumericalTwines, mesh_twines, numerical_twine_rope
-from jaxnet.scene import Bars, CableJoints, Environment, Netting, Nodes, Scene, SceneError, on_symmetry_planes
+from jaxnet.materials import HexTwine, Rope, Twine
+from jaxnet.mesh.twines import NumericalTwines
+from jaxnet.scene import Environment, Scene, SceneError
 
 
 @dataclasses.dataclass(frozen=True)
@@ -154,23 +150,30 @@ class CableRef:
         return CableNodes(self.name)
 
 
-def describe_reference(ref) -> str:
-    """A node reference in words, for messages: "corner 7 of panel 'wall'", "side 2 of panel 'wall'", "the end 1
-    of cable 'rope'", "the point (1, 0, -2)", ..."""
+def describe_reference(ref, short: bool = False) -> str:
+    """A node reference in words: for messages, "corner 7 of panel 'wall'", "side 2 of panel 'wall'", "end 1
+    of cable 'rope'", "the point (1.0, 0.0, -2.0)", ...; ``short``, a name of the place (a design space's keys:
+    "wall corner 7", "wall side 2", "rope end", "(1, 0, -2)")."""
     if isinstance(ref, Corner):
-        return f"corner {ref.index} of panel '{ref.panel}'"
+        return f"{ref.panel} corner {ref.index}" if short else f"corner {ref.index} of panel '{ref.panel}'"
     if isinstance(ref, Side):
-        return f"side {ref.index} of panel '{ref.panel}'"
+        return f"{ref.panel} side {ref.index}" if short else f"side {ref.index} of panel '{ref.panel}'"
     if isinstance(ref, Nearest):
+        if short:
+            return f"{ref.panel} near ({ref.point[0]:g}, {ref.point[1]:g}, {ref.point[2]:g})"
         return f"the node of panel '{ref.panel}' nearest {tuple(float(v) for v in ref.point)}"
-    if isinstance(ref, PanelRef):
-        return f"panel '{ref.name}'"
     if isinstance(ref, CableEnd):
+        if short:
+            return f"{ref.cable} {'start' if ref.end == 0 else 'end'}"
         return f"end {ref.end} of cable '{ref.cable}'"
     if isinstance(ref, CableNodes):
-        return f"cable '{ref.cable}'"
+        return ref.cable if short else f"cable '{ref.cable}'"
+    if isinstance(ref, PanelRef):
+        return ref.name if short else f"panel '{ref.name}'"
     if isinstance(ref, CableRef):
-        return f"cable '{ref.name}'"
+        return ref.name if short else f"cable '{ref.name}'"
+    if short:
+        return "(" + ", ".join(f"{v:g}" for v in np.asarray(ref, dtype=float).ravel()) + ")"
     try:
         return f"the point {tuple(float(v) for v in ref)}"
     except (TypeError, ValueError):
@@ -178,7 +181,7 @@ def describe_reference(ref) -> str:
 
 
 @dataclasses.dataclass
-class _Panel:
+class PanelDescription:
     name: str
     corners: np.ndarray  # (C, 5): x y z U V
     twine: Twine
@@ -188,7 +191,7 @@ class _Panel:
 
 
 @dataclasses.dataclass
-class _Cable:
+class CableDescription:
     name: str
     start: object
     end: object
@@ -207,23 +210,23 @@ class Net:
     def __init__(self, environment: Environment | None = None, merge_tolerance: float = 1e-6):
         self.environment = environment or Environment()
         self.merge_tolerance = merge_tolerance
-        self._catch = None
-        self._panel_catches: list[tuple] = []   # (volume m³, panel names, centre m or None), in call order
-        self._panel_catch_options = None   # (drag_coefficient, symmetry, axis or None): the last call's
-        self._enclosure = None
-        self._panels: dict[str, _Panel] = {}
-        self._cables: dict[str, _Cable] = {}
-        self._seams: list[tuple[Side, Side]] = []
-        self._cable_joints: list[tuple[str, str, float, float | None]] = []   # (cable a, cable b, angle rad, EI)
-        self._fixed: list[tuple[object, tuple[bool, bool, bool]]] = []
-        self._symmetry_planes: list[tuple[int, float, bool]] = []   # (axis, position m, hold its nodes)
-        self._attached: list[tuple[object, float, float, np.ndarray, float, float]] = []
-        self._bodies: list[tuple[object, np.ndarray, np.ndarray]] = []   # (where, sizes m, Cd), in call order
-        self._limits: list[tuple[object, np.ndarray, np.ndarray]] = []   # (where, limits m, senses), in call order
+        self.main_catch = None
+        self.panel_catches: list[tuple] = []   # (volume m³, panel names, centre m or None), in call order
+        self.panel_catch_options = None   # (drag_coefficient, symmetry, axis or None): the last call's
+        self.enclosure = None
+        self.panels: dict[str, PanelDescription] = {}
+        self.cables: dict[str, CableDescription] = {}
+        self.seams: list[tuple[Side, Side]] = []
+        self.cable_joints: list[tuple[str, str, float, float | None]] = []   # (cable a, cable b, angle rad, EI)
+        self.fixings: list[tuple[object, tuple[bool, bool, bool]]] = []
+        self.symmetry_planes: list[tuple[int, float, bool]] = []   # (axis, position m, hold its nodes)
+        self.attachments: list[tuple[object, float, float, np.ndarray, float, float]] = []
+        self.bodies: list[tuple[object, np.ndarray, np.ndarray]] = []   # (where, sizes m, Cd), in call order
+        self.limits: list[tuple[object, np.ndarray, np.ndarray]] = []   # (where, limits m, senses), in call order
         # which attachments are sinkers (attach index, mass, density) and floats (attach index, buoyancy, g,
         # rho, own mass): the design space (jaxnet.design.space) varies their mass and buoyancy
-        self._sinkers: list[tuple[int, float, float]] = []
-        self._floats: list[tuple[int, float, float, float, float]] = []
+        self.sinkers: list[tuple[int, float, float]] = []
+        self.floats: list[tuple[int, float, float, float, float]] = []
         #: what the last :meth:`build` made of the description (:class:`Layout`); None before any build
         self.layout: Layout | None = None
 
@@ -248,7 +251,7 @@ class Net:
         :func:`~jaxnet.mesh.panel.mesh_panel`), instead of an isotropic step: a long, low panel (a gill net)
         then gets long thin triangles. ``step`` is then unused; a side's default division is its length in
         lattice cells."""
-        if name in self._panels or name in self._cables:
+        if name in self.panels or name in self.cables:
             raise SceneError(f"panel '{name}': the name is already used")
         if not isinstance(twine, (Twine, HexTwine)):
             raise SceneError(f"panel '{name}': its material must be a Twine or a HexTwine, got {twine!r}")
@@ -264,7 +267,7 @@ class Net:
             if bad:
                 raise SceneError(bad)
             _check_material(twine, f"panel '{name}'")
-            self._panels[name] = _Panel(name, corners, twine, float("nan") if step is None else float(step), twines)
+            self.panels[name] = PanelDescription(name, corners, twine, float("nan") if step is None else float(step), twines)
             return PanelRef(name)
         if lattice is not None:
             if twines is not None or not isinstance(twine, Twine):
@@ -281,16 +284,16 @@ class Net:
             raise SceneError(f"panel '{name}': give its meshing step (m), or twines= to mesh it as numerical twines")
         _check_material(twine, f"panel '{name}'")
         if isinstance(twine, HexTwine):
-            self._panels[name] = _Panel(name, corners, twine, float(step))
+            self.panels[name] = PanelDescription(name, corners, twine, float(step))
             return PanelRef(name)
-        self._panels[name] = _Panel(name, corners, twine, float(step), lattice=lattice)
+        self.panels[name] = PanelDescription(name, corners, twine, float(step), lattice=lattice)
         return PanelRef(name)
 
     def cable(self, name, start=None, end=None, rope: Rope | None = None, n_bars: int | None = None,
               length: float | None = None, along: Side | None = None) -> CableRef:
         """Add a cable of ``n_bars`` bars between ``start`` and ``end`` (references or (x, y, z) points), or
         sewn ``along`` a panel side. length: unstretched length (m), default the start distance."""
-        if name in self._panels or name in self._cables:
+        if name in self.panels or name in self.cables:
             raise SceneError(f"cable '{name}': the name is already used")
         if rope is None:
             raise SceneError(f"cable '{name}': no rope material given")
@@ -301,7 +304,7 @@ class Net:
             raise SceneError(f"cable '{name}': number of bars must be a positive integer, got {n_bars!r}")
         if length is not None and not (np.isfinite(length) and length > 0):
             raise SceneError(f"cable '{name}': length must be > 0, got {length!r}")
-        self._cables[name] = _Cable(name, start, end, rope, length, n_bars, along)
+        self.cables[name] = CableDescription(name, start, end, rope, length, n_bars, along)
         return CableRef(name)
 
     def cable_joint(self, a, b, neutral_angle=float(np.pi), stiffness=None):
@@ -319,8 +322,8 @@ class Net:
         names = []
         for ref in (a, b):
             name = ref.name if isinstance(ref, CableRef) else ref
-            if not isinstance(name, str) or name not in self._cables:
-                raise SceneError(f"cable joint: no cable named {name!r} (cables: {sorted(self._cables)})")
+            if not isinstance(name, str) or name not in self.cables:
+                raise SceneError(f"cable joint: no cable named {name!r} (cables: {sorted(self.cables)})")
             names.append(name)
         if names[0] == names[1]:
             raise SceneError(f"cable joint: cable '{names[0]}' is joined to itself (its own joints bend with its "
@@ -330,20 +333,20 @@ class Net:
             raise SceneError(f"{what}: neutral_angle must be in [0, pi] rad (pi: aligned), got {neutral_angle!r}")
         if stiffness is not None and not (np.isfinite(stiffness) and stiffness >= 0):
             raise SceneError(f"{what}: stiffness EI must be >= 0 (N·m²), got {stiffness!r}")
-        self._cable_joints.append((names[0], names[1], float(neutral_angle), None if stiffness is None else float(stiffness)))
+        self.cable_joints.append((names[0], names[1], float(neutral_angle), None if stiffness is None else float(stiffness)))
 
     def seam(self, a: Side, b: Side):
         """Sew panel side ``a`` to panel side ``b``: they share their border nodes."""
         if a == b:  # its nodes would merge pairwise from both ends: the side folded onto itself
             raise SceneError(f"seam: side {getattr(a, 'index', '?')} of panel '{getattr(a, 'panel', '?')}' is sewn to itself")
-        self._seams.append((a, b))
+        self.seams.append((a, b))
 
     def fix(self, where, axes="xyz"):
         """Hold the node(s) at ``where`` (a reference or (x, y, z) point) along ``axes`` (e.g. "xyz", "z")."""
         bad = set(axes) - set("xyz")
         if bad:
             raise SceneError(f"fix: unknown axes {sorted(bad)} (use x, y, z)")
-        self._fixed.append((where, tuple(a in axes for a in "xyz")))
+        self.fixings.append((where, tuple(a in axes for a in "xyz")))
 
     def symmetry_plane(self, axis, at=0.0, hold=True):
         """Declare the net the modelled part of a net symmetric about the plane ``axis`` = ``at`` (axis "x", "y"
@@ -356,21 +359,21 @@ class Net:
         if not np.isfinite(at):
             raise SceneError(f"symmetry_plane: 'at' must be a finite position (m), got {at!r}")
         index = "xyz".index(axis)
-        if any(a == index for a, _, _ in self._symmetry_planes):
+        if any(a == index for a, _, _ in self.symmetry_planes):
             raise SceneError(f"symmetry_plane: the net already has a symmetry plane across {axis}")
-        self._symmetry_planes.append((index, float(at), bool(hold)))
+        self.symmetry_planes.append((index, float(at), bool(hold)))
 
     def attach(self, where, mass=0.0, volume=0.0, force=(0.0, 0.0, 0.0), drag_area=0.0, size=0.0):
         """Attach a lumped mass (kg) displacing ``volume`` (m³), an external force (N) and/or a drag area
         Cd·A (m²) to the node(s) at ``where``; on several nodes (a side, a cable) the amounts are shared
         equally. ``size`` (m): the vertical size of the body, over which it goes from immersed to
         emerged when it crosses the free surface (floats)."""
-        self._attached.append((where, float(mass), float(volume), np.asarray(force, dtype=float), float(drag_area), float(size)))
+        self.attachments.append((where, float(mass), float(volume), np.asarray(force, dtype=float), float(drag_area), float(size)))
 
     def sinker(self, where, mass, density=11340.0):
         """A sinker of ``mass`` kg of a material of ``density`` (kg/m³, lead by default)."""
         self.attach(where, mass=mass, volume=mass / density)
-        self._sinkers.append((len(self._attached) - 1, float(mass), float(density)))
+        self.sinkers.append((len(self.attachments) - 1, float(mass), float(density)))
 
     def float(self, where, buoyancy_N, mass=0.0, size=0.0, drag_area=0.0):
         """A float pulling up with ``buoyancy_N`` newtons net of its own weight (+ optional mass, kg) when
@@ -378,7 +381,7 @@ class Net:
         the gear's floats are; inside the class's methods ``float`` is still Python's number type.)"""
         g, rho = self.environment.gravity, self.environment.water_density
         self.attach(where, mass=mass, volume=(buoyancy_N / g + mass) / rho, drag_area=drag_area, size=size)
-        self._floats.append((len(self._attached) - 1, float(buoyancy_N), float(g), float(rho), float(mass)))
+        self.floats.append((len(self.attachments) - 1, float(buoyancy_N), float(g), float(rho), float(mass)))
 
     def float_(self, *args, **kwargs):
         """The former name of :meth:`float`, kept for one release: it warns and calls :meth:`float`."""
@@ -408,7 +411,7 @@ class Net:
             raise SceneError(f"body: length along x and y must be >= 0 (m), got {length.tolist()}")
         if np.any(cd < 0):
             raise SceneError(f"body: drag_coefficient must be >= 0 along x, y and z, got {cd.tolist()}")
-        self._bodies.append((where, length, cd))
+        self.bodies.append((where, length, cd))
 
     def limit(self, where, value, sense):
         """Give the node(s) at ``where`` a floor or a ceiling per axis, as FEMNET's node types ("Limits X,Y,Z",
@@ -432,7 +435,7 @@ class Net:
         values = _triple(value, "limit: value (m)", finite=False)
         if not np.all(np.isfinite(values[used])):
             raise SceneError(f"limit: value must be finite on the axes with a sense, got {values.tolist()}")
-        self._limits.append((where, np.where(used, values, 0.0), sense_arr.astype(np.int32)))
+        self.limits.append((where, np.where(used, values, 0.0), sense_arr.astype(np.int32)))
 
     def catch(self, volume, drag_coefficient=1.4, symmetry=1.0, center=(0.0, 0.0, 0.0), axis=None, density=0.0):
         """Fill the cod-end with ``volume`` m³ of catch (whole cod-end; ``symmetry`` copies of the modelled
@@ -449,7 +452,7 @@ class Net:
                              f"{volume!r}, {drag_coefficient!r}, {symmetry!r}")
         if not (np.isfinite(density) and density >= 0):
             raise SceneError(f"catch: density must be finite and >= 0 (kg/m³; 0 for a catch in a current), got {density!r}")
-        self._catch = dict(volume=float(volume), drag_coefficient=float(drag_coefficient), symmetry=float(symmetry),
+        self.main_catch = dict(volume=float(volume), drag_coefficient=float(drag_coefficient), symmetry=float(symmetry),
                            center=_point(center, "catch: center"), axis=None if axis is None else _unit(axis, "catch: axis"),
                            density=float(density))
 
@@ -471,19 +474,19 @@ class Net:
         if not names:
             raise SceneError("panel_catch: give the panels that hold the catch")
         for name in names:
-            self._panel(name, "panel_catch")
-        taken = {n for _, held, _ in self._panel_catches for n in held}
+            self.panel_named(name, "panel_catch")
+        taken = {n for _, held, _ in self.panel_catches for n in held}
         twice = [n for n in names if n in taken or names.count(n) > 1]
         if twice:
             raise SceneError(f"panel_catch: panel '{twice[0]}' already holds a catch (a panel holds at most one)")
-        self._panel_catches.append((float(volume), names, None if center is None else _point(center, "panel_catch: center")))
-        self._panel_catch_options = (float(drag_coefficient), float(symmetry),
+        self.panel_catches.append((float(volume), names, None if center is None else _point(center, "panel_catch: center")))
+        self.panel_catch_options = (float(drag_coefficient), float(symmetry),
                                      None if axis is None else _unit(axis, "panel_catch: axis"))
 
     def enclose(self, center, axis):
         """Declare the net closed but for the opening through ``center`` (m) normal to ``axis`` (pointing into
         the net): the result reports the volume it holds. See :class:`jaxnet.scene.Enclosure`."""
-        self._enclosure = dict(center=_point(center, "enclose: center"), axis=_unit(axis, "enclose: axis"))
+        self.enclosure = dict(center=_point(center, "enclose: center"), axis=_unit(axis, "enclose: axis"))
 
     def description(self) -> dict:
         """What was described, as plain data (copies, in call order), for writers of the description
@@ -518,462 +521,52 @@ class Net:
         def ref(where):
             return copy(where) if isinstance(where, (list, tuple, np.ndarray)) else where
 
-        options = self._panel_catch_options or (None, None, None)
+        options = self.panel_catch_options or (None, None, None)
         return {
             "environment": self.environment,
             "merge_tolerance": float(self.merge_tolerance),
             "panels": [dict(name=p.name, corners=copy(p.corners), twine=p.twine,
                             step=float(p.step) if np.isfinite(p.step) else None, twines=p.twines,
-                            lattice=None if p.lattice is None else tuple(p.lattice)) for p in self._panels.values()],
+                            lattice=None if p.lattice is None else tuple(p.lattice)) for p in self.panels.values()],
             "cables": [dict(name=c.name, start=ref(c.start), end=ref(c.end), rope=c.rope, n_bars=c.n_bars,
-                            length=c.length, along=c.along) for c in self._cables.values()],
-            "seams": [tuple(pair) for pair in self._seams],
+                            length=c.length, along=c.along) for c in self.cables.values()],
+            "seams": [tuple(pair) for pair in self.seams],
             "cable_joints": [dict(cables=(a, b), neutral_angle=angle, stiffness=ei)
-                             for a, b, angle, ei in self._cable_joints],
+                             for a, b, angle, ei in self.cable_joints],
             "fixed": [dict(at=ref(where), axes="".join(a for a, on in zip("xyz", axes) if on))
-                      for where, axes in self._fixed],
-            "symmetry_planes": [dict(axis="xyz"[axis], at=at, hold=hold) for axis, at, hold in self._symmetry_planes],
+                      for where, axes in self.fixings],
+            "symmetry_planes": [dict(axis="xyz"[axis], at=at, hold=hold) for axis, at, hold in self.symmetry_planes],
             "attached": [dict(at=ref(where), mass=m, volume=v, force=copy(f), drag_area=a, size=h)
-                         for where, m, v, f, a, h in self._attached],
-            "sinkers": [dict(attached=k, mass=m, density=rho) for k, m, rho in self._sinkers],
+                         for where, m, v, f, a, h in self.attachments],
+            "sinkers": [dict(attached=k, mass=m, density=rho) for k, m, rho in self.sinkers],
             "floats": [dict(attached=k, buoyancy_N=b, gravity=g, water_density=rho, mass=m)
-                       for k, b, g, rho, m in self._floats],
+                       for k, b, g, rho, m in self.floats],
             "bodies": [dict(at=ref(where), length=copy(length), drag_coefficient=copy(cd))
-                       for where, length, cd in self._bodies],
+                       for where, length, cd in self.bodies],
             "limits": [dict(at=ref(where), value=copy(value), sense=np.array(sense))
-                       for where, value, sense in self._limits],
-            "catch": None if self._catch is None else {k: copy(v) if k in ("center", "axis") else v
-                                                       for k, v in self._catch.items()},
+                       for where, value, sense in self.limits],
+            "catch": None if self.main_catch is None else {k: copy(v) if k in ("center", "axis") else v
+                                                       for k, v in self.main_catch.items()},
             "panel_catches": [dict(volume=volume, panels=tuple(names), center=copy(center),
                                    drag_coefficient=options[0], symmetry=options[1], axis=copy(options[2]))
-                              for volume, names, center in self._panel_catches],
-            "enclosure": None if self._enclosure is None else {k: copy(v) for k, v in self._enclosure.items()},
+                              for volume, names, center in self.panel_catches],
+            "enclosure": None if self.enclosure is None else {k: copy(v) for k, v in self.enclosure.items()},
         }
 
     # -- building ---------------------------------------------------------------------------------
 
     def build(self) -> Scene:
-        """Mesh every panel, join panels and cables, and return the :class:`Scene` (validated)."""
-        if not self._panels and not self._cables:
-            raise SceneError("the net has no panel and no cable")
-        divisions = self._side_divisions()
-        builder = NodeJoiner(self.merge_tolerance)
-        meshes = {}
-        for p in self._panels.values():
-            try:
-                if p.twines is not None:
-                    m = mesh_twines(p.corners[:, 3:5], p.corners[:, 0:3], p.twines, divisions=divisions[p.name],
-                                    name=p.name)
-                else:
-                    m = mesh_panel(p.corners[:, 3:5], p.corners[:, 0:3], p.step, _mesh_length(p.twine), divisions=divisions[p.name], name=p.name,
-                                   lattice=p.lattice)
-            except PanelError as err:
-                raise SceneError(str(err)) from err
-            offset = builder.add_nodes(m.xyz)
-            meshes[p.name] = (m, offset[0])
-            builder.mergeable(offset[m.corner_nodes])
-        for a, b in self._seams:
-            ia = self._side_nodes(meshes, a)
-            ib = self._side_nodes(meshes, b)
-            xa, xb = builder.position(ia), builder.position(ib)
-            same = np.linalg.norm(xa[0] - xb[0]) + np.linalg.norm(xa[-1] - xb[-1])
-            flipped = np.linalg.norm(xa[0] - xb[-1]) + np.linalg.norm(xa[-1] - xb[0])
-            builder.merge_pairs(ia, ib if same <= flipped else ib[::-1])
-        cable_nodes = {}
-        for c in self._cables.values():
-            cable_nodes[c.name] = self._cable_nodes(builder, meshes, c)
-            builder.mergeable(cable_nodes[c.name][[0, -1]])
-        builder.merge_close()
-        ids = builder.resolve()
-        n = int(ids.max()) + 1
-        position = np.zeros((n, 3))
-        count = np.zeros(n)
-        np.add.at(position, ids, builder.xyz)
-        np.add.at(count, ids, 1)
-        position /= count[:, None]
+        """Mesh every panel, join panels and cables, and return the :class:`Scene` (validated); what was made of
+        the description is then :attr:`layout` (:func:`jaxnet.build.scene_of`)."""
+        from jaxnet.build import scene_of
 
-        hexagonal = self._hexagonal(meshes, ids)
-        netting = self._netting(meshes, ids)
-        bars = self._bars(cable_nodes, ids, position, meshes)
-        cable_joints = self._joints(bars)
-        environment = _normalised(self.environment)
-        catch, enclosure = self._catch_and_enclosure(environment)
-        if netting is not None and (catch is not None or enclosure is not None):
-            center = (catch or enclosure).center
-            netting = dataclasses.replace(netting, outward=_outward(position, np.asarray(netting.vertices), center,
-                                                                    np.asarray(netting.uv), np.asarray(netting.panel)))
-        panel_catches = self._panel_catches_of(environment)
-        if netting is not None and panel_catches is not None and netting.outward is None:
-            netting = dataclasses.replace(netting, outward=self._panel_catch_outward(netting, position, panel_catches))
-        fixed = np.zeros((n, 3), dtype=bool)
-        mass, volume, force = np.zeros(n), np.zeros(n), np.zeros((n, 3))
-        drag_area, size = np.zeros(n), np.zeros(n)
-        lookup = lambda ref: np.unique(ids[self._nodes_of(ref, meshes, cable_nodes, builder)])  # noqa: E731
-        for ref, axes in self._fixed:
-            fixed[lookup(ref)] |= np.array(axes)
-        fixed |= on_symmetry_planes(position, [(axis, at) for axis, at, hold in self._symmetry_planes if hold])
-        for ref, m, v, f, a, h in self._attached:
-            nodes = lookup(ref)
-            mass[nodes] += m / nodes.size
-            volume[nodes] += v / nodes.size
-            force[nodes] += f / nodes.size
-            drag_area[nodes] += a / nodes.size
-            size[nodes] = np.maximum(size[nodes], h)
-        # node types (FEMNET's): each node takes the body and the limits of the last call naming it; the
-        # fields stay None without any call, so that their terms are not compiled
-        drag_length = drag_coefficient = limit = limit_sense = None
-        if self._bodies:
-            drag_length, drag_coefficient = np.zeros((n, 3)), np.zeros((n, 3))
-            for ref, length, cd in self._bodies:
-                nodes = lookup(ref)
-                drag_length[nodes], drag_coefficient[nodes] = length, cd
-        if self._limits:
-            limit, limit_sense = np.zeros((n, 3)), np.zeros((n, 3), dtype=np.int32)
-            for ref, value, sense in self._limits:
-                nodes = lookup(ref)
-                limit[nodes], limit_sense[nodes] = value, sense
-        scene = Scene(
-            nodes=Nodes(position=position, fixed=fixed, mass=mass, volume=volume, force=force,
-                        drag_area=drag_area, size=size, drag_length=drag_length, drag_coefficient=drag_coefficient,
-                        limit=limit, limit_sense=limit_sense),
-            netting=netting,
-            bars=bars,
-            hinges=netting_hinges(netting),
-            cable_joints=cable_joints,
-            hexagonal=hexagonal,
-            catch=catch,
-            enclosure=enclosure,
-            panel_catches=panel_catches,
-            environment=environment,
-            panel_names=tuple(self._panels),
-            cable_names=tuple(self._cables) + tuple(f"{p.name} twines" for p in self._twine_panels()),
-            symmetry_planes=tuple((axis, at) for axis, at, _ in self._symmetry_planes),
-        )
-        from jaxnet.checks import validate
-
-        validate(scene)
-        self.layout = Layout(
-            meshes={name: m for name, (m, _) in meshes.items()},
-            twines={p.name: p.twine for p in self._panels.values()},
-            panel_nodes={name: ids[offset + np.arange(len(m.uv))] for name, (m, offset) in meshes.items()},
-            cable_nodes={name: ids[nodes] for name, nodes in cable_nodes.items()},
-            cable_sides={c.name: c.along for c in self._cables.values() if c.along is not None},
-            fixed=tuple((ref, lookup(ref), axes) for ref, axes in self._fixed),
-            attached=tuple(lookup(ref) for ref, *_ in self._attached),
-            attached_where=tuple(ref for ref, *_ in self._attached),
-            sinkers=tuple(self._sinkers),
-            floats=tuple(self._floats),
-        )
+        scene, self.layout = scene_of(self)
         return scene
 
-    # -- helpers of build -------------------------------------------------------------------------
-
-    def _catch_and_enclosure(self, environment):
-        from jaxnet.scene import Catch, Enclosure
-
-        catch = enclosure = None
-        if self._catch is not None:
-            spec = dict(self._catch)
-            if spec["axis"] is None and spec["density"] > 0:
-                spec["axis"] = -np.asarray(environment.up, dtype=float)  # a gravity catch fills the bag from below
-            if spec["axis"] is None:
-                if not environment.current_speed > 0:
-                    raise SceneError("catch: give its axis, or a current (the axis defaults to its direction)")
-                spec["axis"] = np.asarray(environment.current_direction, dtype=float)
-            catch = Catch(**spec)
-        if self._enclosure is not None:
-            enclosure = Enclosure(**self._enclosure)
-        return catch, enclosure
-
-    def _panel_catches_of(self, environment):
-        from jaxnet.scene import PanelCatches
-
-        if not self._panel_catches:
-            return None
-        cd, symmetry, axis = self._panel_catch_options
-        if axis is None:
-            if not environment.current_speed > 0:
-                raise SceneError("panel_catch: give its axis, or a current (the axis defaults to its direction)")
-            axis = np.asarray(environment.current_direction, dtype=float)
-        index = {name: k for k, name in enumerate(self._panels)}
-        panel_catch = np.full(len(self._panels), -1, dtype=np.int32)
-        for k, (_, names, _) in enumerate(self._panel_catches):
-            panel_catch[[index[n] for n in names]] = k
-        return PanelCatches(volume=np.array([v for v, _, _ in self._panel_catches]), panel_catch=panel_catch,
-                            drag_coefficient=cd, axis=axis, symmetry=symmetry)
-
-    def _panel_catch_outward(self, netting, position, panel_catches):
-        """``Netting.outward`` for panel catches alone: the triangles of each catch's panels oriented away from
-        its centre (:meth:`panel_catch`), panel by panel (:func:`_outward`); +1 elsewhere."""
-        vertices, uv, panel = np.asarray(netting.vertices), np.asarray(netting.uv), np.asarray(netting.panel)
-        holder = np.asarray(panel_catches.panel_catch)[panel]
-        out = np.ones(len(vertices))
-        for k, (_, _, center) in enumerate(self._panel_catches):
-            rows = np.flatnonzero(holder == k)
-            if rows.size:
-                if center is None:
-                    center = position[np.unique(vertices[rows])].mean(axis=0)
-                out[rows] = _outward(position, vertices[rows], center, uv[rows], panel[rows])
-        return out
-
-    def _panel(self, name, what):
-        if name not in self._panels:
-            raise SceneError(f"{what}: no panel named '{name}' (panels: {sorted(self._panels)})")
-        return self._panels[name]
-
-    def _side_divisions(self):
-        """Number of segments of every panel side; seams and sewn cables make sides agree."""
-        div = {}
-        for p in self._panels.values():
-            if p.twines is not None:
-                # a side of numerical twines has the nodes where they cross it, and those of a cable of a given
-                # number of bars sewn along it (mesh_twines' divisions; 0: none)
-                div[p.name] = np.zeros(len(p.corners), dtype=int)
-                continue
-            try:
-                if p.lattice is not None:
-                    div[p.name] = np.array(lattice_divisions(p.corners[:, 3:5], p.lattice), dtype=int)
-                    continue
-                div[p.name] = np.array(side_divisions(p.corners[:, 3:5], p.step, _mesh_length(p.twine)), dtype=int)
-            except PanelError as err:
-                # the mesher names the function, not the panel, in what it finds wrong here
-                message = str(err).removeprefix("panel 'side_divisions': ").removeprefix("panel 'lattice_divisions': ")
-                raise SceneError(f"panel '{p.name}': {message}") from err
-        sides = [s for seam in self._seams for s in seam]
-        for s in sides:
-            self._check_side(s, "seam")
-            if self._panels[s.panel].twines is not None:
-                raise SceneError(f"seam: panel '{s.panel}' is meshed as numerical twines: sew a cable along its "
-                                 f"side {s.index} instead (its twines end on the rope)")
-        sewn = {c.along for c in self._cables.values() if c.along is not None}
-        for p in self._twine_panels():
-            for k in range(len(p.corners)):
-                if Side(p.name, k) not in sewn:
-                    raise SceneError(f"panel '{p.name}': side {k} has no cable sewn along it: a panel of numerical "
-                                     "twines must be surrounded by ropes (their twines end on them), as in FEMNET")
-        # Sides joined by seams (possibly in chains) form groups that all take the largest division.
-        parent = {}
-
-        def find(s):
-            while parent.setdefault(s, s) != s:
-                s = parent[s]
-            return s
-
-        for a, b in self._seams:
-            parent[find(a)] = find(b)
-        forced = {}
-        for c in self._cables.values():
-            if c.along is not None:
-                self._check_side(c.along, f"cable '{c.name}'")
-                if c.n_bars is not None:
-                    forced[c.along] = int(c.n_bars)
-        groups = {}
-        for s in set(sides) | set(forced):
-            groups.setdefault(find(s), []).append(s)
-        for members in groups.values():
-            want = [forced[s] for s in members if s in forced]
-            value = max(want) if want else max(div[s.panel][s.index] for s in members)
-            for s in members:
-                div[s.panel][s.index] = value
-        return div
-
-    def _check_side(self, side, what):
-        if not isinstance(side, Side):
-            raise SceneError(f"{what}: expected a panel side (panel.side(k)), got {side!r}")
-        p = self._panel(side.panel, what)
-        if not 0 <= side.index < len(p.corners):
-            raise SceneError(f"{what}: panel '{side.panel}' has no side {side.index} (it has {len(p.corners)})")
-
-    def _side_nodes(self, meshes, side):
-        self._check_side(side, "side")
-        m, offset = meshes[side.panel]
-        return offset + m.side_nodes[side.index]
-
-    def _cable_nodes(self, builder, meshes, c):
-        """Builder indices of the nodes of cable c, in order from start to end."""
-        if c.along is not None:
-            return self._side_nodes(meshes, c.along)
-        ends = []
-        for k, ref in enumerate((c.start, c.end)):
-            ends.append(self._point(builder, meshes, ref, f"cable '{c.name}' {'start' if k == 0 else 'end'}"))
-        (ia, xa), (ib, xb) = ends
-        length = c.length if c.length is not None else float(np.linalg.norm(xb - xa))
-        if length <= 0:
-            raise SceneError(f"cable '{c.name}': both ends at the same point and no length given")
-        nb = c.n_bars or 1
-        t = np.linspace(0.0, 1.0, nb + 1)[1:-1, None]
-        inner = builder.add_nodes(xa + t * (xb - xa))
-        head = [ia] if ia is not None else list(builder.add_nodes(xa[None]))
-        tail = [ib] if ib is not None else list(builder.add_nodes(xb[None]))
-        return np.concatenate([head, inner, tail]).astype(np.int64)
-
-    def _point(self, builder, meshes, ref, what):
-        """(builder index or None, position) of a cable end given as a reference or a point."""
-        if isinstance(ref, Corner):
-            p = self._panel(ref.panel, what)
-            if not 0 <= ref.index < len(p.corners):
-                raise SceneError(f"{what}: panel '{ref.panel}' has no corner {ref.index} (it has {len(p.corners)})")
-            m, offset = meshes[ref.panel]
-            i = offset + m.corner_nodes[ref.index]
-            return i, builder.xyz[i]
-        if isinstance(ref, (CableEnd, CableNodes, Side, PanelRef, CableRef)):
-            raise SceneError(f"{what}: a cable end may be a panel corner or a point (x, y, z), got "
-                             f"{describe_reference(ref)}")
-        xyz = np.asarray(ref, dtype=float)
-        if xyz.shape != (3,) or not np.all(np.isfinite(xyz)):
-            raise SceneError(f"{what}: expected a panel corner or a finite point (x, y, z), got "
-                             f"{describe_reference(ref)}")
-        return None, xyz
-
-    def _nodes_of(self, ref, meshes, cable_nodes, builder):
-        """Builder indices of the nodes a fixing/attachment reference designates."""
-        what = f"reference {describe_reference(ref)}"
-        if isinstance(ref, Corner):
-            return np.array([self._point(builder, meshes, ref, what)[0]])
-        if isinstance(ref, Side):
-            self._check_side(ref, what)
-            return self._side_nodes(meshes, ref)
-        if isinstance(ref, Nearest):
-            self._panel(ref.panel, what)
-            m, offset = meshes[ref.panel]
-            xyz = np.asarray(ref.point, dtype=float)
-            if not np.all(np.isfinite(xyz)):
-                raise SceneError(f"{what}: the point must be finite")
-            return np.array([offset + int(np.argmin(np.linalg.norm(m.xyz - xyz, axis=1)))])
-        if isinstance(ref, PanelRef):
-            self._panel(ref.name, what)
-            m, offset = meshes[ref.name]
-            return offset + np.arange(len(m.uv))
-        if isinstance(ref, (CableEnd, CableNodes, CableRef)):
-            name = ref.cable if not isinstance(ref, CableRef) else ref.name
-            if name not in cable_nodes:
-                raise SceneError(f"{what}: no cable named '{name}' (cables: {sorted(cable_nodes)})")
-            nodes = cable_nodes[name]
-            if isinstance(ref, CableEnd):
-                return nodes[[0 if ref.end == 0 else -1]]
-            return nodes
-        xyz = np.asarray(ref, dtype=float)
-        if xyz.shape != (3,) or not np.all(np.isfinite(xyz)):
-            raise SceneError(f"{what}: not a panel corner/side, a cable (end) or a point (x, y, z)")
-        dist = np.linalg.norm(builder.xyz - xyz, axis=1)
-        hit = np.flatnonzero(dist <= self.merge_tolerance)
-        if hit.size == 0:
-            raise SceneError(f"no node at point {xyz.tolist()} (nearest is {dist.min():.4g} m away)")
-        return hit
-
-    def _netting(self, meshes, ids):
-        rows = {k: [] for k in ("vertices", "uv", "panel")}
-        twines = []
-        for p, e in self._panel_triangles(meshes, ids, rows,
-                                          lambda p: not isinstance(p.twine, HexTwine) and p.twines is None):
-            twines.append(p.twine)
-        if not rows["vertices"]:
-            return None
-        # the rows of the k-th diamond panel take the k-th diamond material (panel indices count all panels)
-        material = np.concatenate([np.full(len(r), k) for k, r in enumerate(rows["panel"])])
-        return Netting(**{k: np.concatenate(v) for k, v in rows.items()}, **netting_rows(twines, material))
-
-    def _panel_triangles(self, meshes, ids, rows, keep):
-        """For each kept panel, append its triangles' vertices, twine coordinates and panel index to
-        ``rows`` and yield (panel, number of triangles) for the caller's material columns."""
-        for k, p in enumerate(self._panels.values()):
-            if not keep(p):
-                continue
-            m, offset = meshes[p.name]
-            tri = m.triangles
-            rows["vertices"].append(ids[offset + tri])
-            rows["uv"].append(m.uv[tri])
-            rows["panel"].append(np.full(len(tri), k))
-            yield p, len(tri)
-
-    def _hexagonal(self, meshes, ids):
-        from jaxnet.scene import HexagonalNetting
-
-        rows = {k: [] for k in ("vertices", "uv", "l0", "ea_traction", "ea_compression", "diameter", "density", "panel")}
-        for p, e in self._panel_triangles(meshes, ids, rows, lambda p: isinstance(p.twine, HexTwine)):
-            for key, field in (("l0", "l0"), ("ea_traction", "ea"), ("ea_compression", "ea_compression")):
-                rows[key].append(np.broadcast_to(p.twine.per_family(field), (e, 3)))
-            rows["diameter"].append(np.full(e, float(p.twine.diameter)))
-            rows["density"].append(np.full(e, float(p.twine.density)))
-        if not rows["vertices"]:
-            return None
-        return HexagonalNetting(**{key: np.concatenate(v) for key, v in rows.items()})
-
-    def _twine_panels(self):
-        """The panels meshed as numerical twines, in the net's order."""
-        return [p for p in self._panels.values() if p.twines is not None]
-
-    def _bars(self, cable_nodes, ids, position, meshes=None):
-        """The cables' bars (a cable's rest length shared by its bars' start lengths), then those of each panel of
-        numerical twines (rest length l0 times the twines a bar spans, cable index after the net's cables)."""
-        twine_panels = self._twine_panels()
-        if not cable_nodes and not twine_panels:
-            return None
-        rows = {k: [] for k in ("ends", "rest_length", "ea_traction", "ea_compression", "diameter", "density", "cable",
-                                "cd_normal", "tangential_ratio")}
-        for k, c in enumerate(self._cables.values()):
-            nodes = ids[cable_nodes[c.name]]
-            ends = np.stack([nodes[:-1], nodes[1:]], axis=1)
-            seg = np.linalg.norm(position[ends[:, 1]] - position[ends[:, 0]], axis=1)
-            total = c.length if c.length is not None else seg.sum()
-            # each bar takes its share of the rope by its start length (equal shares if all are zero)
-            share = seg / seg.sum() if seg.sum() > 0 else np.full(len(seg), 1.0 / len(seg))
-            rows["ends"].append(ends)
-            rows["rest_length"].append(total * share)
-            for key, value in bar_columns(c.rope).items():
-                rows[key].append(np.full(len(ends), value))
-            rows["cable"].append(np.full(len(ends), k))
-        for j, p in enumerate(twine_panels):
-            m, offset = meshes[p.name]
-            ends = ids[offset + m.bars]
-            rows["ends"].append(ends)
-            rows["rest_length"].append(p.twine.l0 * np.asarray(m.twines))
-            for key, value in bar_columns(numerical_twine_rope(p.twine, p.twines)).items():
-                rows[key].append(np.full(len(ends), value))
-            rows["cable"].append(np.full(len(ends), len(self._cables) + j))
-        return Bars(**{k: np.concatenate(v) for k, v in rows.items()})
-
-    def _joints(self, bars):
-        """The bending joints of the stiff cables and of the welded pairs (:class:`CableJoints`), or None."""
-        if bars is None:
-            return None
-        ends, rest, cable_of = np.asarray(bars.ends), np.asarray(bars.rest_length), np.asarray(bars.cable)
-        names = list(self._cables)
-        rows = []   # (first bar, second bar, joint node, EI, neutral turning angle)
-        for k, c in enumerate(self._cables.values()):
-            ei = float(c.rope.bending_stiffness)
-            own = np.flatnonzero(cable_of == k)   # the cable's bars, from its start to its end
-            if ei <= 0:
-                continue
-            rows += [(i, j, ends[i, 1], ei, 0.0) for i, j in zip(own[:-1], own[1:])]
-            if len(own) > 2 and ends[own[-1], 1] == ends[own[0], 0]:   # a closed cable bends where it closes too
-                rows.append((own[-1], own[0], ends[own[0], 0], ei, 0.0))
-        for a, b, angle, stiffness in self._cable_joints:
-            ka, kb = names.index(a), names.index(b)
-            ei = stiffness if stiffness is not None else min(self._cables[a].rope.bending_stiffness,
-                                                             self._cables[b].rope.bending_stiffness)
-            bars_a, bars_b = np.flatnonzero(cable_of == ka), np.flatnonzero(cable_of == kb)
-            shared = np.intersect1d(ends[bars_a], ends[bars_b])
-            if shared.size == 0:
-                raise SceneError(f"cable joint '{a}'-'{b}': the cables share no node (a joint needs an end of one "
-                                 "on a node of the other)")
-            for node in shared:
-                for i in bars_a[np.any(ends[bars_a] == node, axis=1)]:
-                    for j in bars_b[np.any(ends[bars_b] == node, axis=1)]:
-                        rows.append((i, j, node, float(ei), float(np.pi) - angle))
-        if not rows:
-            return None
-        first, second, node, ei, beta = (np.array(col) for col in zip(*rows))
-        far = lambda bar: np.where(ends[bar, 0] == node, ends[bar, 1], ends[bar, 0])  # noqa: E731
-        return CableJoints(vertices=np.stack([far(first), node, far(second)], axis=1).astype(np.int64),
-                           rest_length=np.stack([rest[first], rest[second]], axis=1),
-                           stiffness=ei.astype(float), rest_angle=beta.astype(float),
-                           cable=np.stack([cable_of[first], cable_of[second]], axis=1))
-
-
-def _mesh_length(twine):
-    """Length (m) of one unit of twine coordinates, which sets the size of the triangles in the mesher."""
-    return twine.base_mesh_side if isinstance(twine, HexTwine) else twine.l0
+    def panel_named(self, name, what):
+        if name not in self.panels:
+            raise SceneError(f"{what}: no panel named '{name}' (panels: {sorted(self.panels)})")
+        return self.panels[name]
 
 
 def _check_material(material, what):
@@ -983,16 +576,6 @@ def _check_material(material, what):
         materials.check(material)
     except materials.MaterialError as err:
         raise SceneError(f"{what}: {err.problem}") from None
-
-
-def outward(position, triangles, center, uv=None, panel=None) -> np.ndarray:
-    """(E,) ``Netting.outward`` of triangles ``triangles`` (E, 3) (node indices into ``position`` (N, 3), m):
-    +1 where the triangle's 12 ^ 13 points away from ``center`` (a point on the axis of the net, m), -1
-    otherwise; with the triangles' twine coordinates ``uv`` (E, 3, 2) and ``panel`` (E,), decided panel by panel
-    (:func:`_outward`). This is how :meth:`Net.build` orients netting for a catch or an enclosure (the catch pushes
-    outwards); public for readers that build the :class:`~jaxnet.scene.Netting` themselves."""
-    return _outward(np.asarray(position, dtype=float), np.asarray(triangles), np.asarray(center, dtype=float),
-                    None if uv is None else np.asarray(uv, dtype=float), None if panel is None else np.asarray(panel))
 
 
 def _triple(value, what, finite=True):
@@ -1019,39 +602,3 @@ def _unit(value, what):
     if not n > 0:
         raise SceneError(f"{what}: expected a non-zero vector, got {value!r}")
     return v / n
-
-
-def _outward(position, triangles, center, uv=None, panel=None):
-    """(E,) +1 where a triangle's 12 ^ 13 points away from ``center`` (out of the net), -1 otherwise.
-
-    Triangle by triangle, from the start shape, unless the twine coordinates ``uv`` (E, 3, 2) and the ``panel``
-    (E,) of the triangles are given: then panel by panel. On a panel, 12 ^ 13 = d U ^ V (d the sign of the
-    triangle's twine determinant, U ^ V the side of the netting, continuous over the panel), so a panel has one
-    outward side and each triangle's orientation is the panel's times d. The panel's side is its triangles'
-    majority vote (ties: the outward side of d > 0): a drawn shape that is not the net's (a bag drawn open, a
-    panel folded across a corner, as FEMNET's 13gravity_catch/g1) misleads the test of some triangles, not of
-    most of a panel."""
-    x = position[triangles]
-    normal = np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
-    away = x.mean(axis=1) - center
-    geometric = np.where(np.einsum("ij,ij->i", normal, away) >= 0.0, 1.0, -1.0)
-    if uv is None or panel is None:
-        return geometric
-    e1, e2 = uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]
-    d = np.where(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0] >= 0.0, 1.0, -1.0)
-    votes = np.zeros(int(panel.max()) + 1 if panel.size else 0)
-    np.add.at(votes, panel, geometric * d)
-    return np.where(votes[panel] >= 0.0, 1.0, -1.0) * d
-
-
-def _normalised(env):
-    """The environment with a unit current direction (a zero vector is an error when there is a current)."""
-    direction = np.asarray(env.current_direction, dtype=float)
-    norm = np.linalg.norm(direction)
-    if env.current_speed and not norm > 0:
-        raise SceneError(f"environment: current_direction must be a non-zero vector, got {direction.tolist()}")
-    if norm > 0:
-        env = dataclasses.replace(env, current_direction=direction / norm)
-    return env
-
-

@@ -15,7 +15,7 @@ import pathlib
 import numpy as np
 
 from jaxnet.case import Case
-from jaxnet.forcing import Loading
+from jaxnet.water.forcing import Loading
 from jaxnet.solve import dynamics, statics
 from jaxnet.solve.options import Implicit, Newton
 from jaxnet.solve.results import Equilibrium
@@ -47,7 +47,7 @@ def simulate(case, end_time=None, solver: Implicit | None = None, loading: Loadi
       case: a :class:`~jaxnet.case.Case` (its scene, and from its time settings the end time, options, loading
         and record interval not given here) or a :class:`~jaxnet.scene.Scene`.
       end_time: the time to reach (s).
-      solver: :class:`~jaxnet.solve.options.Implicit` options. loading: :class:`~jaxnet.forcing.Loading`.
+      solver: :class:`~jaxnet.solve.options.Implicit` options. loading: :class:`~jaxnet.water.forcing.Loading`.
       record_every: the interval between records (s); default: every step.
       out: a directory to write the records to as the run goes (:mod:`jaxnet.io.timeseries`: raw series,
         ``series.npz`` at the end, ``checkpoint.npz``, VTK ``series.pvd`` when ``vtk``); None keeps them in

@@ -24,12 +24,13 @@ import pytest
 from jax.extend import core as jax_core
 
 import jaxnet  # noqa: F401  (float64)
-from jaxnet import forcing
+from jaxnet.water import forcing
 from jaxnet.net import Net, Twine
 from jaxnet.scene import Bars, Environment, Nodes, Scene
-from jaxnet.solve import adjoint_dynamics as ad, dynamics, implicit, statics
+from jaxnet.solve import adjoint_dynamics as ad, dynamics, implicit
+from jaxnet.solve.options import Newton
 
-NEWTON = statics.Newton(tol=1e-10, max_iter=50, damping=1e-12, stall_window=None, line_search=30)
+NEWTON = Newton(tol=1e-10, max_iter=50, damping=1e-12, stall_window=None, line_search=30)
 
 
 # -- the body on a spring: closed forms --------------------------------------------------------------------

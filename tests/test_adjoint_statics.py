@@ -20,10 +20,11 @@ import pytest
 import jaxnet  # noqa: F401  (float64)
 from jaxnet.scene import Environment
 from jaxnet.scenes.panel import hanging_panel
-from jaxnet.solve import adjoint_statics, implicit, programs, statics
+from jaxnet.solve import adjoint_statics, implicit, programs, results, statics
+from jaxnet.solve.options import Newton
 from panels import SMOOTH  # tests/panels.py
 
-NEWTON = statics.Newton(tol=1e-10, max_iter=100, damping=1e-6, stall_window=None, line_search=30)
+NEWTON = Newton(tol=1e-10, max_iter=100, damping=1e-6, stall_window=None, line_search=30)
 
 
 class Deflection(eqx.Module):
@@ -55,7 +56,7 @@ def test_the_host_gradient_is_jax_grads_and_the_differences_of_solves():
     adjoint = adjoint_statics.Adjoint(scene, NEWTON)
     figure = Deflection()
     result = adjoint.value_and_grad(figure, scene, x0)
-    assert int(result.equilibrium.status) == statics.CONVERGED
+    assert int(result.equilibrium.status) == results.CONVERGED
     assert result.adjoint_residual < 1e-8  # K the exact Jacobian: its transposed solve at roundoff (x its condition)
     params, rest = eqx.partition(scene, eqx.is_inexact_array)
     structure = implicit.structure_of(scene)
@@ -95,10 +96,10 @@ def test_a_solve_that_does_not_converge_gives_no_gradient_and_says_why():
     """Two Newton iterations from the panel drawn flat do not reach 1e-10 N: no gradient (None), the value NaN,
     and the equilibrium's status and residual say where the solve stopped."""
     scene, _ = panel_in_current()
-    adjoint = adjoint_statics.Adjoint(scene, statics.Newton(tol=1e-10, max_iter=2, stall_window=None))
+    adjoint = adjoint_statics.Adjoint(scene, Newton(tol=1e-10, max_iter=2, stall_window=None))
     result = adjoint.value_and_grad(Deflection(), scene)
     assert result.grad is None and np.isnan(result.value)
-    assert int(result.equilibrium.status) == statics.MAX_ITERATIONS
+    assert int(result.equilibrium.status) == results.MAX_ITERATIONS
     assert float(result.equilibrium.residual_N) > 1e-10
 
 

@@ -16,7 +16,8 @@ import pytest
 from elements import central_differences, random_triangles, relative_difference
 
 import jaxnet  # noqa: F401  (float64)
-from jaxnet import current, geometry
+from jaxnet import geometry
+from jaxnet.water import current
 from jaxnet.closed_form import drag as closed
 from jaxnet.terms import drag
 

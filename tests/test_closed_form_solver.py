@@ -19,11 +19,12 @@ import numpy as np
 import pytest
 
 import jaxnet as jn
-from jaxnet import assemble, model
+from jaxnet import model
+from jaxnet.model import assemble
 from jaxnet.net import Twine
 from jaxnet.scenes.codend import codend
 from jaxnet.scenes.panel import hanging_panel
-from jaxnet.solve import newton, programs, statics
+from jaxnet.solve import newton, programs, results, statics
 
 CLOSED_FORM = pathlib.Path(jn.__file__).parent / "closed_form"
 #: the tangent, compiled (op by op, its vmaps would compile dozens of small programs) with the XLA options of
@@ -212,7 +213,7 @@ def test_jitted_newton_loop_runs_on_the_closed_form():
     pattern = assemble.build_pattern(scene, m)
     x0 = jnp.asarray(np.asarray(scene.nodes.position).ravel()[np.asarray(pattern.free)])
     jitted = newton.newton_loop_jit(x0, scene, pattern, model=m, solver=solver)
-    assert int(jitted.status) == statics.CONVERGED
+    assert int(jitted.status) == results.CONVERGED
     assert int(jitted.iterations) == int(host.iterations)
     np.testing.assert_allclose(np.asarray(jitted.x), np.asarray(host.x), atol=1e-9)
 
@@ -221,7 +222,7 @@ def test_jitted_newton_loop_threads_the_catch_front_as_the_host_loop():
     """With a catch, each evaluation starts its front from the last accepted iterate's (``previous``): the
     one-program loop carries that state as the host loop does, from NaN placeholders (no front yet), and
     the two reach the same equilibrium in the same iterations, the front holding the catch's volume."""
-    from jaxnet import catch
+    from jaxnet.model import catch
 
     scene = codend(meshes_around=8, meshes_along=6, catch_m3=0.01).scene
     solver = jn.Newton(stall_window=None)
@@ -230,7 +231,7 @@ def test_jitted_newton_loop_threads_the_catch_front_as_the_host_loop():
     pattern = assemble.build_pattern(scene, m)
     x0 = jnp.asarray(np.asarray(scene.nodes.position).ravel()[np.asarray(pattern.free)])
     jitted = newton.newton_loop_jit(x0, scene, pattern, model=m, solver=solver)
-    assert host.converged and int(jitted.status) == statics.CONVERGED
+    assert host.converged and int(jitted.status) == results.CONVERGED
     assert int(jitted.iterations) == int(host.iterations)
     np.testing.assert_allclose(np.asarray(jitted.x), np.asarray(host.x), atol=1e-9)
     c = scene.catch

@@ -18,6 +18,7 @@ from jaxnet import figures, model
 from jaxnet.net import Net, Rope
 from jaxnet.scene import Environment
 from jaxnet.solve import statics
+from jaxnet.solve.options import Newton
 from jaxnet.terms import term as term_lib
 
 K = 40.0       # N/m, the toy spring
@@ -67,7 +68,7 @@ def test_a_declared_term_is_solved_and_reported(toy_term, stiffness):
     active = model.active_terms(scene)
     assert [t.name for t in active] == ["bar_tension", "node_force", "toy_anchor_spring"]
     assert model.stiffness_paths(active, stiffness)["toy_anchor_spring"] == stiffness
-    eq = statics.solve(scene, statics.Newton(tol=1e-9, stiffness=stiffness))
+    eq = statics.solve(scene, Newton(tol=1e-9, stiffness=stiffness))
     u = F / (EA / L + K)
     np.testing.assert_allclose(np.asarray(eq.x)[1], [L + u, 0.0, 0.0], rtol=1e-10, atol=1e-12)
     np.testing.assert_allclose(eq.reaction(scene).sum(axis=0), [-EA * u / L, 0.0, 0.0], rtol=1e-8)
@@ -84,7 +85,7 @@ def test_the_term_is_gone_once_unregistered(toy_term):
     scene = pulled_bar()
     assert "toy_anchor_spring" not in [t.name for t in model.active_terms(scene)]
     assert "anchors_N" not in term_lib.groups()
-    eq = statics.solve(scene, statics.Newton(tol=1e-9))
+    eq = statics.solve(scene, Newton(tol=1e-9))
     np.testing.assert_allclose(np.asarray(eq.x)[1], [L + F * L / EA, 0.0, 0.0], rtol=1e-10)  # the bar alone
 
 

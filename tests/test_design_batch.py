@@ -30,11 +30,12 @@ import jaxnet  # noqa: F401  (float64)
 from jaxnet.design import batch, objectives
 from jaxnet.design.space import DesignSpace
 from jaxnet.scenes.panel import hanging_panel
-from jaxnet.solve import implicit, statics
+from jaxnet.solve import implicit
+from jaxnet.solve.options import Newton
 from panels import SMOOTH  # tests/panels.py
 
 #: converged far below options.DIFFERENTIABLE's 1e-8 N, for the differences of the figure
-NEWTON = statics.Newton(tol=1e-10, max_iter=100, damping=1e-6, stall_window=None, line_search=30)
+NEWTON = Newton(tol=1e-10, max_iter=100, damping=1e-6, stall_window=None, line_search=30)
 B = 16  # four designs a device when sharded: their host callbacks then overlap (a race once found there)
 
 

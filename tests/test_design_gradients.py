@@ -20,10 +20,11 @@ import jaxnet  # noqa: F401
 from jaxnet.design import objectives
 from jaxnet.design.space import DesignSpace
 from jaxnet.solve import implicit, programs, statics
+from jaxnet.solve.options import Newton
 from jaxnet.net import Twine
 from test_design_space import L0, rig
 
-NEWTON = statics.Newton(tol=1e-10, max_iter=100, damping=1e-6, stall_window=None, line_search=30)
+NEWTON = Newton(tol=1e-10, max_iter=100, damping=1e-6, stall_window=None, line_search=30)
 
 
 @functools.lru_cache(maxsize=1)

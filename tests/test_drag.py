@@ -7,7 +7,8 @@ import pytest
 from elements import central_differences  # tests/elements.py
 
 import jaxnet  # noqa: F401  (float64)
-from jaxnet import current, geometry
+from jaxnet import geometry
+from jaxnet.water import current
 from jaxnet.terms import drag
 
 

@@ -13,7 +13,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxnet import assemble, geometry, model as model_lib
+from jaxnet import geometry, model as model_lib
+from jaxnet.model import assemble
 from jaxnet.closed_form.drag import moving_netting_drag_zhan_stiffness, netting_drag_zhan_stiffness
 from jaxnet.io import femnet
 from jaxnet.materials import DRAG_MODELS

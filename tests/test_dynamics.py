@@ -7,11 +7,13 @@ import jax.numpy as jnp
 import pytest
 
 import jaxnet  # noqa: F401  (float64)
-from jaxnet import assemble, model as model_lib, run
+from jaxnet import model as model_lib, run
+from jaxnet.model import assemble
 from jaxnet.scene import Bars, Environment, Nodes, Scene
 from jaxnet.solve import dynamics, kernel, statics
+from jaxnet.solve.options import Newton
 
-TIGHT = statics.Newton(tol=1e-9, max_iter=30, damping=1e-12, stall_window=None)
+TIGHT = Newton(tol=1e-9, max_iter=30, damping=1e-12, stall_window=None)
 
 
 def spring_mass(m=2.0, L=1.0, ea=800.0, delta=0.01, drag_area=None, current=0.0, gravity=0.0, free_axes="x"):
@@ -143,7 +145,7 @@ def test_resumed_run_equals_an_uninterrupted_one(tmp_path):
 def test_failed_steps_are_retried_smaller_and_reported():
     """Newton allowed 2 iterations: the big steps of a swinging pendulum fail, are halved until they pass."""
     scene = spring_mass(m=1.0, ea=1e4, delta=0.0, gravity=9.81, free_axes="xz")
-    newton = statics.Newton(tol=1e-9, max_iter=2, damping=1e-12, stall_window=None)
+    newton = Newton(tol=1e-9, max_iter=2, damping=1e-12, stall_window=None)
     tr = dynamics.simulate(scene, 0.4, dynamics.Implicit(time_step=0.05, newton=newton), record_every=0.05)
     assert int(tr.state.retries) > 0
     assert tr.figures["time_step_s"].min() < 0.05
@@ -151,7 +153,7 @@ def test_failed_steps_are_retried_smaller_and_reported():
     assert np.all(np.isfinite(tr.positions))
     with pytest.raises(dynamics.DynamicsError, match=r"node 1"):
         dynamics.simulate(scene, 0.4, dynamics.Implicit(time_step=0.05, min_time_step=0.05,
-                                                        newton=statics.Newton(tol=1e-9, max_iter=1, damping=1e-12,
+                                                        newton=Newton(tol=1e-9, max_iter=1, damping=1e-12,
                                                                               stall_window=None)))
 
 
@@ -160,7 +162,7 @@ def test_a_failed_run_returns_its_records_when_asked_not_to_throw():
     recorded, its status saying why (as the error would have)."""
     scene = spring_mass(m=1.0, ea=1e4, delta=0.0, gravity=9.81, free_axes="xz")
     solver = dynamics.Implicit(time_step=0.05, min_time_step=0.05,
-                               newton=statics.Newton(tol=1e-9, max_iter=1, damping=1e-12, stall_window=None))
+                               newton=Newton(tol=1e-9, max_iter=1, damping=1e-12, stall_window=None))
     with pytest.raises(dynamics.DynamicsError) as raised:
         dynamics.simulate(scene, 0.4, solver, record_every=0.05)
     run = dynamics.simulate(scene, 0.4, solver, record_every=0.05, throw=False)
@@ -177,7 +179,7 @@ def test_stiff_twines_stay_stable_at_any_step(h):
     m, ea, delta = 1.0, 1e9, 1e-6
     omega = np.sqrt(ea / m)
     tr = dynamics.simulate(spring_mass(m=m, ea=ea, delta=delta), 10 * h,
-                           dynamics.Implicit(time_step=h, newton=statics.Newton(tol=1e-6, max_iter=30, damping=1e-12,
+                           dynamics.Implicit(time_step=h, newton=Newton(tol=1e-6, max_iter=30, damping=1e-12,
                                                                                 stall_window=None)))
     x = tr.positions[:, 1, 0] - 1.0
     assert np.all(np.isfinite(x))
@@ -268,7 +270,7 @@ def test_towing_through_still_water_is_the_current_seen_from_the_net():
     """Galilean invariance: a net towed at speed U through still water (its top held and moved by a prescribed
     motion, reaching U after a smooth ramp) settles, seen from the towing point, on the static shape of the
     same net held in a current U."""
-    from jaxnet import forcing
+    from jaxnet.water import forcing
     from jaxnet.scenes.panel import hanging_panel
 
     speed = 0.4
@@ -283,7 +285,7 @@ def test_towing_through_still_water_is_the_current_seen_from_the_net():
     loading = dynamics.Loading(motions=(forcing.PrescribedMotion(held, towing),))
     start = statics.solve(still, tol=1e-8)
     end = 40.0
-    newton = statics.Newton(tol=1e-6, max_iter=30, damping=1e-12, stall_window=None)
+    newton = Newton(tol=1e-6, max_iter=30, damping=1e-12, stall_window=None)
     tr = dynamics.simulate(still, end, dynamics.Implicit(time_step=0.05, newton=newton), loading, record_every=5.0,
                            x0=np.asarray(start.x))
     seen = tr.positions[-1] - np.asarray(towing(end))
@@ -295,7 +297,7 @@ def test_an_accelerating_current_pushes_by_the_waters_inertia():
     """A body (mass M, volume V, added mass M_a along x, no drag) in a current whose speed rises at a steady
     rate a: the water's inertia (M_a + ρV) a (4.265's γ_h terms) accelerates it at (M_a + ρV)/(M + M_a) a, and
     the scheme from rest puts it at A h² n(n+1)/2 after n steps (its exact response to a constant force)."""
-    from jaxnet import forcing
+    from jaxnet.water import forcing
 
     M, V, Ma, rate = 4.0, 2e-3, 1.5, 0.3
     # held by a bar of negligible stiffness and size (validation wants every node held by something)
@@ -354,7 +356,7 @@ def test_a_pendulum_towed_by_a_speed_table_trails_at_the_drag_angle():
     area 0.05 m²) towed through still water, its speed rising linearly from 0 to 1 m/s over 5 s then held,
     settles at the angle where drag and weight balance, tan θ = ½ρ CdA V² / (m g); the top's path is the table's
     integral, V (t - 2.5 s) after the rise."""
-    from jaxnet import forcing
+    from jaxnet.water import forcing
 
     m, cda, speed = 10.0, 0.05, 1.0
     scene = spring_mass(m=m, L=1.0, ea=1e6, delta=0.0, drag_area=cda, gravity=9.81, free_axes="xyz")
@@ -365,7 +367,7 @@ def test_a_pendulum_towed_by_a_speed_table_trails_at_the_drag_angle():
     scene = eqx.tree_at(lambda s: s.nodes.position, scene, position)
     table = forcing.SpeedTable([0.0, 5.0, 60.0], [[0.0, 0.0, 0.0], [speed, 0.0, 0.0], [speed, 0.0, 0.0]])
     loading = dynamics.Loading(motions=(forcing.PrescribedMotion(np.array([0]), table),))
-    newton = statics.Newton(tol=1e-8, max_iter=30, damping=1e-12, stall_window=None)
+    newton = Newton(tol=1e-8, max_iter=30, damping=1e-12, stall_window=None)
     tr = dynamics.simulate(scene, 40.0, dynamics.Implicit(time_step=0.05, newton=newton), loading, record_every=10.0)
     top, body = tr.positions[-1]
     assert top[0] == pytest.approx(speed * (40.0 - 2.5), rel=1e-12)
@@ -386,7 +388,7 @@ def test_the_host_loop_takes_the_compiled_loops_steps(case):
         scene, end, h = spring_mass(m=3.0, ea=500.0, delta=0.0, drag_area=0.2, current=1.0), 2.0, 0.05
     else:
         scene, end, h = spring_mass(m=1.0, ea=1e4, delta=0.0, gravity=9.81, free_axes="xz"), 0.4, 0.05
-        newton = statics.Newton(tol=1e-9, max_iter=2, damping=1e-12, stall_window=None)
+        newton = Newton(tol=1e-9, max_iter=2, damping=1e-12, stall_window=None)
     host, compiled = same_run_both_loops(scene, end, h, newton)
     if case == "retries":
         assert int(host.state.retries) > 0
@@ -441,7 +443,7 @@ def float_in_waves(mass=400.0, side=1.0, height=1.0, wave_height=0.2, period=8.0
     the origin, free to heave in deep-water Airy waves, and a horizontal bar of diameter 0.5 m lying on the mean
     surface a quarter of a wavelength long; the float's link to a fixed node is slack and weightless. The float
     rests with its bottom at -mass / (ρ side²)."""
-    from jaxnet import waves
+    from jaxnet.water import waves
 
     rho, airy = 1025.0, waves.Airy(height=wave_height, period=period, depth=float("inf"))
     quarter = float(airy.wavelength) / 4.0

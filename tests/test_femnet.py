@@ -12,7 +12,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxnet import assemble, cli, figures, geometry, model as model_lib
+from jaxnet import cli, figures, geometry, model as model_lib
+from jaxnet.model import assemble
 from jaxnet.io import femnet
 from jaxnet.scene import SceneError
 from jaxnet.solve.statics import solve
@@ -31,7 +32,7 @@ def _sta(case, scene):
 
 def _residual_at(scene, x):
     """jaxnet's out-of-balance nodal forces (N, 3) at positions x, zero on held coordinates; and per term.
-    (:func:`jaxnet.assemble.term_forces` of every active term, by the compiled program of
+    (:func:`jaxnet.model.assemble.term_forces` of every active term, by the compiled program of
     :func:`jaxnet.figures.nodal_forces_by_term`, which the case's summary figures then reuse.)"""
     per = figures.nodal_forces_by_term(scene, x)
     total = sum(np.asarray(v) for v in per.values())

@@ -133,7 +133,7 @@ def test_node_loads_on_a_symmetry_plane_are_halved_as_femnets_equilibrium_has_th
     sea-bed contacts, and below 0.2 N at those two; with the whole 10000 N it was 5000 N along x there."""
     import jax.numpy as jnp
 
-    from jaxnet import assemble
+    from jaxnet.model import assemble
     from jaxnet import model as model_lib
 
     don = _don("11bottom_seine/s1")
@@ -359,7 +359,7 @@ def test_purse_seine_difference_is_what_femnet_left_unbalanced():
     (``validation/femnet_differences.py`` does this for every case more than 1 % off)."""
     import jax.numpy as jnp
 
-    from jaxnet import assemble
+    from jaxnet.model import assemble
     from jaxnet import model as model_lib
     from jaxnet.solve.statics import solve
 

@@ -4,7 +4,7 @@ Each example takes one of FEMNET's two worked cases (or one of the small synthet
 use links, seams and hexagonal netting) and damages its text once or twice, as a careless edit would: a
 line deleted, the file cut short, a number replaced by NaN, inf, -1, 0, a huge value or a word, two lines
 swapped, a line duplicated, a label misspelt. The reader must then either read the case, and the net it
-returns must build into a scene that :func:`jaxnet.checks.validate` accepts, or raise ``SceneError`` whose
+returns must build into a scene that :func:`jaxnet.scene.checks.validate` accepts, or raise ``SceneError`` whose
 message names the file and a line (``file.don:LINE: ...``). Any other exception is a bug of the reader.
 Nothing is solved. The examples are derandomized (the same every run) so that the test cannot flicker.
 """
@@ -18,7 +18,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from jaxnet.io import femnet
-from jaxnet.checks import validate
+from jaxnet.scene.checks import validate
 from jaxnet.scene import SceneError
 
 DATA = pathlib.Path(__file__).parent / "data" / "femnet"

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 import jaxnet  # noqa: F401  (float64)
-from jaxnet import forcing
-from jaxnet.forcing import (Constant, Harmonic, Oscillation, PrescribedMotion, Ramp, Step, Sum, Towing)
+from jaxnet.water import forcing
+from jaxnet.water.forcing import (Constant, Harmonic, Oscillation, PrescribedMotion, Ramp, Step, Sum, Towing)
 
 
 SAMPLES = 32  # times per evaluation, padded: one shape, so one compilation per kind of history
@@ -240,7 +240,7 @@ def test_traced_parameters_are_not_validated_but_work():
 
 
 def test_speed_table_is_femnets_linear_speeds_and_their_exact_integral():
-    from jaxnet.forcing import SpeedTable
+    from jaxnet.water.forcing import SpeedTable
 
     table = SpeedTable([10.0, 20.0, 40.0], [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 2.0, -1.0]])
     t = np.array([0.0, 10.0, 15.0, 20.0, 30.0, 40.0, 55.0])

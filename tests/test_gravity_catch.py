@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from jaxnet import figures, model
-from jaxnet.catch import catch_front, catch_state
+from jaxnet.model.catch import catch_front, catch_state
 from jaxnet.closed_form.gravity_catch import gravity_catch_stiffness
 from jaxnet.io import femnet
 from jaxnet.net import Net, outward

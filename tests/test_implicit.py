@@ -22,9 +22,10 @@ import jaxnet  # noqa: F401  (float64)
 from jaxnet.net import Twine
 from jaxnet.scene import Environment
 from jaxnet.scenes.panel import hanging_panel
-from jaxnet.solve import implicit, statics
+from jaxnet.solve import implicit, results, statics
+from jaxnet.solve.options import Newton
 
-NEWTON = statics.Newton(tol=1e-10, max_iter=100, damping=1e-6, stall_window=None, line_search=30)
+NEWTON = Newton(tol=1e-10, max_iter=100, damping=1e-6, stall_window=None, line_search=30)
 #: the parameters and the scene field each one scales (the design families a scene carries)
 FIELDS = {
     "twine diameter": lambda s: s.netting.diameter,
@@ -155,7 +156,7 @@ def test_vmap_of_gradients_over_designs_equals_the_loop():
 def test_equilibrium_is_the_static_solvers_and_failures_are_reported():
     scene, structure, x0 = panel_in_current()
     eq = implicit.equilibrium(scene, structure, x0=x0, solver=NEWTON)
-    assert float(eq.residual_N) <= NEWTON.tol and int(eq.status) == statics.CONVERGED
+    assert float(eq.residual_N) <= NEWTON.tol and int(eq.status) == results.CONVERGED
     np.testing.assert_allclose(np.asarray(eq.x), np.asarray(solver()(np.zeros(len(FIELDS)))), rtol=0, atol=1e-12)
     reference = statics.solve(scene, tol=1e-10)
     np.testing.assert_allclose(np.asarray(eq.x), np.asarray(reference.x), rtol=0, atol=1e-9)
@@ -165,7 +166,7 @@ def test_equilibrium_is_the_static_solvers_and_failures_are_reported():
                                                      r"largest residual .* N at node \d+"):
         implicit.equilibrium(scene, structure, solver=few)
     eq = implicit.equilibrium(scene, structure, solver=few, throw=False)
-    assert int(eq.status) == statics.MAX_ITERATIONS and float(eq.residual_N) > 1e-3
+    assert int(eq.status) == results.MAX_ITERATIONS and float(eq.residual_N) > 1e-3
     # under a transformation the error is raised when the program runs
     with pytest.raises(Exception, match="did not converge"):
         jax.block_until_ready(jax.vmap(lambda x: implicit.equilibrium(scene, structure, x0=x, solver=few).x)(

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 import jaxnet as jn
-from jaxnet import assemble, cli, model as model_lib
+from jaxnet import cli, model as model_lib
+from jaxnet.model import assemble
 from jaxnet.io.femnet import read_don
 from jaxnet.materials import rod_bending_stiffness
 from jaxnet.solve import interior, options

@@ -377,7 +377,8 @@ def test_scene_knot_form_codes_select_the_law_per_triangle():
     # Netting.knot_form: 0 the book's law, 1 FEMNET's; a scene mixing both sums each triangle's own law.
     import dataclasses
 
-    from jaxnet import assemble, model
+    from jaxnet import model
+    from jaxnet.model import assemble
     from jaxnet.net import Net, Twine
 
     net = Net()

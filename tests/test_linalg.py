@@ -342,7 +342,7 @@ def test_the_sparse_solver_is_chosen_by_the_environment_and_refused_by_name(monk
     here, is refused with the variable, the value and what to do -- before anything compiles, by the static,
     dynamic and differentiable solves."""
     import jaxnet as jn
-    from jaxnet import cudss, pardiso
+    from jaxnet.linalg import cudss, pardiso
     from jaxnet.scenes.panel import hanging_panel
     from jaxnet.solve import dynamics, implicit
 
@@ -372,8 +372,8 @@ def test_the_sparse_solver_is_chosen_by_the_environment_and_refused_by_name(monk
 
 def test_the_transposed_structure_gathers_a_transpose_from_the_entries():
     """cuDSS solves with A only: the adjoints' A^T is factorised from A's entries gathered into A^T's CSR
-    structure (:func:`jaxnet.cudss.transposed_structure`), explicit zeros and empty rows included."""
-    from jaxnet import cudss
+    structure (:func:`jaxnet.linalg.cudss.transposed_structure`), explicit zeros and empty rows included."""
+    from jaxnet.linalg import cudss
 
     rng = np.random.default_rng(3)
     a = sp.random(40, 40, density=0.15, random_state=4, format="csr") + sp.eye(40, format="csr")

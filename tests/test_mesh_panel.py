@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from jaxnet.mesh import panel as P
+from jaxnet.mesh import panel as P, polygon
 from jaxnet.mesh.panel import PanelMesh, mesh_panel
 from jaxnet.mesh.polygon import PanelError, side_divisions
 
@@ -163,9 +163,9 @@ def test_mean_value_coordinates_exact_for_linear_functions():
     for shape in ["taper", "L_shape", "U_shape_cw"]:
         poly = np.asarray(SHAPES[shape][0], float)
         pts = rng.uniform(poly.min(0), poly.max(0), size=(4000, 2))
-        pts = pts[P._inside(pts, poly) & (P._dist_to_boundary(pts, poly) > 1e-6)]
+        pts = pts[polygon.inside(pts, poly) & (polygon.distance_to_boundary(pts, poly) > 1e-6)]
         assert len(pts) > 1000
-        w = P._mean_value_coordinates(pts, poly)
+        w = polygon.mean_value_coordinates(pts, poly)
         np.testing.assert_allclose(w.sum(1), 1.0, atol=1e-13)
         np.testing.assert_allclose(w @ poly, pts, rtol=0, atol=1e-12)
 
@@ -179,7 +179,7 @@ def test_affine_start_shape_is_reproduced_exactly():
     assert len(m.uv) - n_b > 1000
     np.testing.assert_allclose(m.xyz, m.uv @ A.T + b, rtol=0, atol=1e-12)
     # and the interior nodes really sit inside the panel, away from the border
-    dist = P._dist_to_boundary(m.uv[n_b:], corners)
+    dist = polygon.distance_to_boundary(m.uv[n_b:], corners)
     assert dist.min() >= 0.6 * 2.0 * (1 - 1e-9)
 
 

@@ -5,7 +5,7 @@ In a time step each vertex i of a drag element takes its share of the element's 
 velocity relative to it, c_i = w(x_i) - (x_i - x_i^n)/Δt (:func:`jaxnet.terms.drag.per_vertex`), w the current at
 the vertex's depth plus the waves' orbital velocity. The reference is ``jax.jacfwd`` of the term's own element
 force with the velocity formed inside the differentiated function (what the autodiff path of
-:func:`jaxnet.assemble.scatter_hessians` does); the closed form (:mod:`jaxnet.closed_form.drag`, as the term
+:func:`jaxnet.model.assemble.scatter_hessians` does); the closed form (:mod:`jaxnet.closed_form.drag`, as the term
 declares it) takes the velocities and Δt. Cases: random states, still water, vertices
 moving with the water (c_i = 0 with the water moving), water along a twine (c_n = 0), a catch front across the
 netting (the shielding), both netting drag models made of twine drags.
@@ -21,11 +21,14 @@ import pytest
 from elements import central_differences
 
 import jaxnet  # noqa: F401  (float64)
-from jaxnet import assemble, geometry, model as model_lib, waves
+from jaxnet import geometry, model as model_lib
+from jaxnet.model import assemble
+from jaxnet.water import waves
 from jaxnet.terms import drag as drag_term
 from jaxnet.net import Net, Rope, Twine
 from jaxnet.scene import Environment
-from jaxnet.solve import dynamics, statics
+from jaxnet.solve import dynamics
+from jaxnet.solve.options import Newton
 
 TOL = 1e-10  # closed form against jacfwd, per element, relative to the element's largest entry
 DT = 0.02  # s
@@ -175,7 +178,7 @@ def compare(closed, auto):
 
 def wave_surface_levels(family, x, rows, seed):
     """(E, k) heights (m) of a wave's surface over the vertices x (E, k, 3) ((E,) for the nodes, as
-    :func:`jaxnet.assemble.surface_levels` gives them), each within its element's immersion band of the vertex
+    :func:`jaxnet.model.assemble.surface_levels` gives them), each within its element's immersion band of the vertex
     (1.2 bands wide): the wetted shares on their ramp and corners, each vertex its own."""
     if family == "nodes":
         band = drag_term.surface.node_band(rows.size, rows.volume)[:, None]
@@ -190,7 +193,7 @@ def wave_surface_levels(family, x, rows, seed):
 @pytest.mark.parametrize("name, family", [("netting_drag", "netting"), ("bar_drag", "bars"), ("node_drag", "nodes")])
 def test_moving_drag_stiffness_equals_jacfwd(name, family, surface):
     """With the mean level the elements lie deep; with a wave's surface over each vertex (a time step in waves,
-    :func:`jaxnet.assemble.element_environment`) each is partly wetted, and its wetted shares' slopes enter."""
+    :func:`jaxnet.model.assemble.element_environment`) each is partly wetted, and its wetted shares' slopes enter."""
     term, env = TERMS[name], SCENE.environment
     env = eqx.tree_at(lambda e: e.time, env, 0.7)
     x, xp, rows = states(family, seed=3)
@@ -270,7 +273,7 @@ def test_both_paths_follow_the_same_trajectory():
     scene = panel_in_waves()
     runs = {}
     for path in assemble.STIFFNESS_PATHS:
-        newton = statics.Newton(tol=1e-6, max_iter=30, damping=1e-12, stall_window=None, stiffness=path)
+        newton = Newton(tol=1e-6, max_iter=30, damping=1e-12, stall_window=None, stiffness=path)
         runs[path] = dynamics.simulate(scene, 0.5, dynamics.Implicit(time_step=0.05, newton=newton), record_every=0.25)
     a, c = runs["autodiff"], runs["closed_form"]
     assert np.abs(a.positions[-1] - a.positions[0]).max() > 0.5  # the net swings

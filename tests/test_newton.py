@@ -109,7 +109,8 @@ def test_host_factorisation_with_its_ordering_reused_solves_changing_nonsymmetri
 def test_host_loop_and_jitted_loop_are_the_same_iteration():
     # solve() drives the Newton from the host; newton_loop is the same iteration as one jitted program.
     # Same rules, same arithmetic: same iterates up to roundoff.
-    from jaxnet import assemble, model as model_lib
+    from jaxnet import model as model_lib
+    from jaxnet.model import assemble
     from jaxnet.solve import newton
 
     scene = framed_panel(meshes=12, step=0.1, sinker_kg=2.0).scene
@@ -131,7 +132,8 @@ def test_the_pattern_is_kept_for_the_same_net_and_rebuilt_for_another():
 
     import jax
 
-    from jaxnet import assemble, model as model_lib
+    from jaxnet import model as model_lib
+    from jaxnet.model import assemble
 
     net = framed_panel(meshes=12, step=0.1, sinker_kg=2.0).net
     scene, again = net.build(), net.build()
@@ -230,7 +232,8 @@ def test_stiffness_continuation_softens_the_net_not_its_weight_and_buoyancy():
     # The continuation scales the net's elastic energies only: scaling the potential of weight and
     # buoyancy at the free surface too would sink the cage's floats in the soft stages (the default cage
     # then stalled, no step decreasing the energy).
-    from jaxnet import assemble, model as model_lib
+    from jaxnet import model as model_lib
+    from jaxnet.model import assemble
     from jaxnet.scenes.cage import fish_cage
 
     scene = fish_cage(step=1.0).scene

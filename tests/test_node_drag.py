@@ -17,10 +17,11 @@ import pytest
 import scipy.sparse as sp
 
 import jaxnet as jn
-from jaxnet import assemble, model
+from jaxnet import model
+from jaxnet.model import assemble
 from jaxnet.io import scene_file
 from jaxnet.net import Net, Rope
-from jaxnet.checks import validate
+from jaxnet.scene.checks import validate
 from jaxnet.scene import Environment, SceneError
 from jaxnet.terms import drag
 from traced import traced_terms  # tests/traced.py

@@ -200,7 +200,7 @@ def test_codend_with_catch(monkeypatch):
     import jax
 
     import jaxnet as jn
-    from jaxnet import catch as catch_lib
+    from jaxnet.model import catch as catch_lib
 
     ns = run_notebook("codend_with_catch.ipynb", monkeypatch)
     rows, tol = ns["rows"], jn.Newton().tol
@@ -245,7 +245,7 @@ def test_dynamics_in_waves(monkeypatch):
     g, omega = 9.81, 2 * np.pi / ns["T"]
     assert t[0] == 0.0 and t[-1] == pytest.approx(ns["end"]) and int(run.figures["retries"][-1]) == 0
     # the collar follows the surface at the cage's centre, η = H/2 cos ωt, grown in over the run's start ramp by
-    # the C² envelope s³ (10 - 15 s + 6 s²), s = t/R (jaxnet.forcing.envelope)
+    # the C² envelope s³ (10 - 15 s + 6 s²), s = t/R (jaxnet.water.forcing.envelope)
     assert ramp == pytest.approx(T)
     s = np.minimum(t / ramp, 1.0)
     envelope = s**3 * (10 - 15 * s + 6 * s**2)

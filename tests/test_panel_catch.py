@@ -1,4 +1,4 @@
-"""Catches held by chosen panels (jaxnet.terms.panel_catch, jaxnet.catch.panel_catch_state, Net.panel_catch, FEMNET's
+"""Catches held by chosen panels (jaxnet.terms.panel_catch, jaxnet.model.catch.panel_catch_state, Net.panel_catch, FEMNET's
 ``input catch2_volume``): one catch on a whole cod-end is the main catch, two catches fill their own panels, the
 stiffness is the force's Jacobian, the readers map FEMNET's lines and give FEMNET's catch drag on its own mesh,
 result.json reports each catch, the equilibrium's derivative is right, and bad input is refused by name."""
@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 
 import jaxnet as jn
-from jaxnet import assemble, catch, geometry, model
+from jaxnet import geometry, model
+from jaxnet.model import assemble, catch
 from jaxnet.closed_form import pressure as pressure_closed
 from jaxnet.io import femnet
 from jaxnet.net import Net, Rope, Twine

@@ -1,4 +1,4 @@
-"""PardisoSolver (jaxnet.linalg, jaxnet.pardiso): the same checks as SuperLU's HostSolver (tests/test_linalg.py)
+"""PardisoSolver (jaxnet.linalg, jaxnet.linalg.pardiso): the same checks as SuperLU's HostSolver (tests/test_linalg.py)
 on the same matrices: solutions against numpy's dense solve, transposed solves on one factor, several
 right-hand sides, a nearly singular net tangent solved backward stably, a zero diagonal block, singular and
 non-finite matrices refused without NaN; and which solver jaxnet picks.
@@ -13,7 +13,8 @@ import platform
 import numpy as np
 import pytest
 
-from jaxnet import linalg, pardiso
+from jaxnet import linalg
+from jaxnet.linalg import pardiso
 from test_linalg import backward_error, block_mask, csr, kkt, net_tangent, random_on, sheet
 
 needs_mkl = pytest.mark.skipif(platform.machine() not in ("x86_64", "AMD64") and pardiso.library() is None,

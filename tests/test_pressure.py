@@ -1,11 +1,11 @@
-"""Catch pressure (4.246-4.264), the catch front and the enclosed volume (jaxnet.terms.pressure, jaxnet.catch)."""
+"""Catch pressure (4.246-4.264), the catch front and the enclosed volume (jaxnet.terms.pressure, jaxnet.model.catch)."""
 
 import jax
 import numpy as np
 import pytest
 
 import jaxnet  # noqa: F401  (float64)
-from jaxnet import catch
+from jaxnet.model import catch
 from jaxnet.terms import pressure
 
 AXIS = np.array([1.0, 0.0, 0.0])
@@ -319,7 +319,7 @@ def test_front_when_the_net_cannot_hold_the_catch():
 
 
 def test_a_front_started_near_its_solution_takes_fewer_passes(rng):
-    # the solver's evaluations start the front from the last iterate's (jaxnet.catch.catch_state): the same front,
+    # the solver's evaluations start the front from the last iterate's (jaxnet.model.catch.catch_state): the same front,
     # to the tolerance, in fewer passes over the elements than from the middle of the net
     x, tri = NOISY_CONE
     full = float(volume(x, tri, 0.0, AXIS, 1.0, 1.0))

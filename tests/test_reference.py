@@ -15,9 +15,11 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import jaxnet  # noqa: F401  (float64)
-from jaxnet import forcing, model as model_lib
+from jaxnet import model as model_lib
+from jaxnet.water import forcing
 from jaxnet.scene import Bars, Environment, Nodes, Scene
 from jaxnet.solve import dynamics, reference, statics
+from jaxnet.solve.options import Newton
 from panels import SMOOTH  # tests/panels.py
 
 G = 9.81
@@ -122,7 +124,7 @@ def test_book_scheme_error_is_first_order_against_the_reference():
     ts = np.linspace(0.0, period, SAVES)
     ref = reference.reference(scene, ts[-1], saveat=ts, rtol=1e-10, atol=1e-13)
     assert np.abs(ref.positions[:, 1, 2] - exact(ts)).max() < 1e-9
-    newton = statics.Newton(tol=1e-9, max_iter=30, damping=1e-12, stall_window=None)
+    newton = Newton(tol=1e-9, max_iter=30, damping=1e-12, stall_window=None)
     errors = []
     for n in (160, 320, 640):
         book = dynamics.simulate(scene, ts[-1], dynamics.Implicit(time_step=period / n, newton=newton),

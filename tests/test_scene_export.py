@@ -14,7 +14,7 @@ import jax
 import numpy as np
 import pytest
 
-from jaxnet import waves
+from jaxnet.water import waves
 from jaxnet.case import Case, from_net
 from jaxnet.io import scene_file
 from jaxnet.materials import HexTwine

@@ -1,4 +1,4 @@
-"""Irregular seas (jaxnet.spectra, jaxnet.waves.Irregular and sea_state): the spectra against their closed-form
+"""Irregular seas (jaxnet.water.spectra, jaxnet.water.waves.Irregular and sea_state): the spectra against their closed-form
 moments, a long synthetic record's significant height and moments against the spectrum's, the directional
 spreading realised, the kinematics against linear theory, and the ramp that starts a run."""
 
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import jaxnet  # noqa: F401  (float64)
-from jaxnet import forcing, spectra, waves
+from jaxnet.water import forcing, spectra, waves
 
 G = 9.81
 HS, TP = 3.0, 10.0

@@ -19,10 +19,11 @@ import numpy as np
 import pytest
 
 import jaxnet as jn
-from jaxnet import assemble, model
+from jaxnet import model
+from jaxnet.model import assemble
 from jaxnet.io import scene_file
 from jaxnet.net import Net, Rope, Twine
-from jaxnet.checks import validate
+from jaxnet.scene.checks import validate
 from jaxnet.scene import Environment, SceneError
 from jaxnet.terms import bottom
 from traced import traced_terms  # tests/traced.py
@@ -388,14 +389,15 @@ def test_in_time_the_bed_brakes_a_sliding_body_by_mu_times_its_weight_against_it
     """FEMNET's dyna rubs every node that presses on the bed (``fond_dyn.c``), moving bottom or not. A body sent
     sliding at 1 m/s along (0.6, 0.8, 0) over a still bed of mu = 0.5 slows on a straight line at mu g (the
     scheme's exact steps of the friction's smooth form) and stops after v0²/(2 mu g) to the scheme's accuracy."""
-    from jaxnet.solve import dynamics, statics
+    from jaxnet.solve import dynamics
+    from jaxnet.solve.options import Newton
 
     scene = sliding_body()
     names = {t.name for t in model.active_terms(scene, dynamic=True)}
     assert "bed_friction" in names and "bottom_friction" not in names
     assert "bed_friction" not in {t.name for t in model.active_terms(scene)}  # statics: nothing moves
     h, n, heading = 0.005, 60, np.array([0.6, 0.8, 0.0])
-    newton = statics.Newton(tol=1e-10, max_iter=30, damping=1e-12, stall_window=None)
+    newton = Newton(tol=1e-10, max_iter=30, damping=1e-12, stall_window=None)
     v0 = np.zeros((2, 3))
     v0[1] = heading
     tr = dynamics.simulate(scene, n * h, dynamics.Implicit(time_step=h, newton=newton), v0=v0)

@@ -27,7 +27,7 @@ from jaxnet.design import objectives
 from jaxnet.design import sweep as sw
 from jaxnet.design.space import DesignSpace
 from jaxnet.scenes.panel import hanging_panel
-from jaxnet.solve import adjoint_statics, statics
+from jaxnet.solve import adjoint_statics, results, statics
 from jaxnet.solve.options import DIFFERENTIABLE
 
 from distributed import get_task_stream
@@ -81,7 +81,7 @@ def single_process(space):
         if name in GOOD:
             scene = space.scene(theta)
             eq = adjoint.solve(scene, start)
-            assert int(eq.status) == statics.CONVERGED
+            assert int(eq.status) == results.CONVERGED
             outcome = objectives.Outcome(eq.x, scene, adjoint.model)
             out[name] = ({k: float(f(outcome)) for k, f in FIGURES.items()}, int(eq.iterations))
     return out

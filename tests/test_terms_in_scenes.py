@@ -34,7 +34,8 @@ import pytest
 from scipy.optimize import brentq
 
 import jaxnet as jn
-from jaxnet import assemble, figures, geometry, model
+from jaxnet import figures, geometry, model
+from jaxnet.model import assemble
 from jaxnet.net import HexTwine, Net, Rope, Twine
 from jaxnet.scene import Environment
 from jaxnet.terms import bending, drag as drag_term, opening, screen, term as term_lib

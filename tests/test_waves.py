@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import jaxnet  # noqa: F401  (float64)
-from jaxnet import waves
-from jaxnet.waves import Airy
+from jaxnet.water import waves
+from jaxnet.water.waves import Airy
 
 G = 9.81
 N = 6  # points per evaluation: one shape, so that every test reuses the same compiled code

@@ -6,9 +6,10 @@ import numpy as np
 import pytest
 
 import jaxnet  # noqa: F401  (float64)
-from jaxnet import forcing
+from jaxnet.water import forcing
 from jaxnet.scene import Bars, Environment, Nodes, Scene, SceneError
 from jaxnet.solve import dynamics, statics
+from jaxnet.solve.options import Newton
 
 
 def femnet_steps(rest, order, speeds_at, dt, n_steps, shortest, longest):
@@ -99,7 +100,7 @@ def test_a_winch_hauls_a_hanging_weight_at_its_speed():
     winch = forcing.Winch(np.arange(n_bars), drum_bar=0, times=[1.0, 3.0, 40.0], speeds=[0.0, v, v],
                           shortest=0.01, longest=50.0)
     loading = dynamics.Loading(winches=(winch,))
-    newton = statics.Newton(tol=1e-7, max_iter=30, damping=1e-12, stall_window=None)
+    newton = Newton(tol=1e-7, max_iter=30, damping=1e-12, stall_window=None)
     end = 30.0
     x0 = np.asarray(statics.solve(scene, tol=1e-7).x)
     tr = dynamics.simulate(scene, end, dynamics.Implicit(time_step=0.01, newton=newton), loading, record_every=5.0,
@@ -125,7 +126,7 @@ def test_the_host_loop_hauls_as_the_compiled_loop():
 
     scene = hanging_weight(50.0, 4, 2.0, 1e7)
     winch = forcing.Winch(np.arange(4), 0, [0.0, 1.0, 9.0], [0.0, 2.0, 2.0], shortest=0.01, longest=50.0)
-    newton = statics.Newton(tol=1e-7, max_iter=30, damping=1e-12, stall_window=None)
+    newton = Newton(tol=1e-7, max_iter=30, damping=1e-12, stall_window=None)
     same_run_both_loops(scene, 3.0, 0.01, newton, dynamics.Loading(winches=(winch,)))
 
 

@@ -7,7 +7,8 @@ import re
 import numpy as np
 
 import jaxnet as jn
-from jaxnet import assemble, model
+from jaxnet import model
+from jaxnet.model import assemble
 from jaxnet.solve import newton
 from jaxnet.terms import term as term_lib
 

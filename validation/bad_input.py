@@ -283,7 +283,7 @@ def _simulated(end_time=1.0, loading=None, **options):
 
 
 def _towed_free_node():
-    from jaxnet import forcing
+    from jaxnet.water import forcing
     from jaxnet.solve import dynamics
 
     towing = forcing.Towing(velocity=(1.0, 0.0, 0.0))
@@ -433,10 +433,11 @@ _C2_CORNERS = ("4\t0.000000\t0.270468\t-10.000000\t0.000000\t-25.000000",
 
 def _catalogue():
     import jaxnet as jn
-    from jaxnet import waves
+    from jaxnet.water import waves
     from jaxnet.net import Side
     from jaxnet.scene import Catch, SceneError
-    from jaxnet.solve import dynamics, statics
+    from jaxnet.solve import dynamics
+    from jaxnet.solve.options import Newton
 
     E = SceneError
     net, scene, solver, dyn, wav, sfile, don = "net", "scene", "solver", "dynamics", "waves", "scene file", ".don"
@@ -621,7 +622,7 @@ def _catalogue():
                  E, r"catch: volume must be finite and > 0"),
         # -- solver options ---------------------------------------------------------------------------------------
         BadInput("misspelt stiffness path", solver, "Newton(stiffness='closedform')",
-                 _calling(lambda: statics.Newton(stiffness="closedform")), ValueError,
+                 _calling(lambda: Newton(stiffness="closedform")), ValueError,
                  r"Newton: stiffness must be one of .*not 'closedform'"),
         BadInput("misspelt Newton option", solver, "solve(scene, tolerance=1e-3)",
                  _solved(small_scene, tolerance=1e-3), TypeError, r"unexpected keyword argument 'tolerance'"),
@@ -858,7 +859,7 @@ def _accepted_by_design():
     """Inputs that look wrong but are meant (README, docs): measured to be accepted, with what happens."""
     import jax.numpy as jnp
 
-    from jaxnet import catch as catch_lib
+    from jaxnet.model import catch as catch_lib
     from jaxnet.net import Net
     from jaxnet.scenes import codend
 

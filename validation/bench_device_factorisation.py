@@ -78,7 +78,8 @@ def timed(call, repeats, target=float("inf")):
 
 
 def host(data, indices, indptr, b):
-    from jaxnet import linalg, pardiso
+    from jaxnet import linalg
+    from jaxnet.linalg import pardiso
 
     solver = (linalg.PardisoSolver if pardiso.available() else linalg.HostSolver)(indptr, indices)
     name = type(solver).__name__

@@ -48,7 +48,7 @@ Solvers (each skipped, with the reason printed, if its package does not import):
     free coordinates) expanded node by node; SuperLU then runs with permc_spec NATURAL.
   - ``SuperLU-COLAMD-pp``: HostSolver's fallback (COLAMD, partial pivoting), the analysis not reusable.
   - ``PARDISO-11``, ``PARDISO-11nm``, ``PARDISO-1`` (``/2t``: 2 threads): oneMKL PARDISO (the library
-    library jaxnet loads, :func:`jaxnet.pardiso.library`, called through ctypes here so that phases 11, 22
+    library jaxnet loads, :func:`jaxnet.linalg.pardiso.library`, called through ctypes here so that phases 11, 22
     and 33 are timed apart): real
     nonsymmetric with MKL's defaults (mtype 11: scaling and weighted matching), the same without the
     matching (iparm(13) = 0), and structurally symmetric (mtype 1); METIS ordering, pivots perturbed
@@ -142,7 +142,7 @@ def iterate(name):
     """The scene of ``name`` solved for its Newton iterations: (case, free coordinates of the iterate, the
     iterations done, converged, solve time in s)."""
     import jaxnet as jn
-    from jaxnet import assemble
+    from jaxnet.model import assemble
     from jaxnet import model as model_lib
 
     _, kind, arg, iterations, _ = MATRICES[name]
@@ -162,7 +162,7 @@ def tangent_at(case, x, mu):
     that iterate)."""
     import jax
 
-    from jaxnet import assemble
+    from jaxnet.model import assemble
     from jaxnet import model as model_lib
     from jaxnet.solve import statics
 
@@ -342,7 +342,7 @@ class PardisoAdapter:
     def __init__(self, a, free):
         import ctypes
 
-        from jaxnet import pardiso
+        from jaxnet.linalg import pardiso
         self.ct = ctypes
         lib = pardiso.library()
         if lib is None:

@@ -84,7 +84,8 @@ def one(size, scene_name, ea_compression, current, max_iter, trawl=TRAWL, method
     chosen = {} if method is None else {"method": method}
     eq = jn.solve_static(case, throw=False, max_iter=max_iter, **chosen)  # FEMNET's threshold for its cases
     t = eq.timing
-    from jaxnet import assemble, model
+    from jaxnet import model
+    from jaxnet.model import assemble
 
     pattern = assemble.build_pattern(scene, model.active_terms(scene))
     iterations = max(int(eq.iterations), 1)

@@ -88,7 +88,7 @@ def _median_time(fn, repeats):
 
 def _assembly(x, scene, pattern, load, model):
     """What every Newton iteration assembles: the tangent's CSR entries and the out-of-balance force."""
-    from jaxnet import assemble
+    from jaxnet.model import assemble
 
     return assemble.tangent(x, scene, model, pattern), assemble.nodal_force(x, scene, model, load)
 
@@ -108,7 +108,7 @@ def _compile_assembly(x, scene, pattern, load, model):
 
 def _prepare(x, scene, model):
     """Everything an assembly of ``scene`` with ``model`` at x needs, the pattern and loads built for that model."""
-    from jaxnet import assemble
+    from jaxnet.model import assemble
 
     pattern = assemble.build_pattern(scene, model)
     return {"args": (x, scene, pattern, assemble.loads(scene, model)), "model": model, "nnz": int(pattern.nnz)}
@@ -181,7 +181,8 @@ def one_size(step, repeats):
     import jax
 
     import jaxnet as jn
-    from jaxnet import assemble, linalg, model
+    from jaxnet import linalg, model
+    from jaxnet.model import assemble
 
     scene = _cage(step)
     with _TimedSolves(linalg) as timed:  # this solve's own factorisations and solves

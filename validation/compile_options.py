@@ -24,7 +24,8 @@ import jax.numpy as jnp
 import numpy as np
 
 import jaxnet  # noqa: F401  (float64)
-from jaxnet import assemble, model as model_lib
+from jaxnet import model as model_lib
+from jaxnet.model import assemble
 from jaxnet.solve import kernel, programs
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]

@@ -12,7 +12,7 @@ second-order cone program states with one slack s_r per rod:
 
 w_r = n_r EA_r / (2 l0_r), n_r the rod's number of twines (|d|/2 for each family of a diamond triangle, book eqs
 4.25-4.26; 1 for a bar). At the minimum s_r = max(0, |U_r| - l0_r), so its value is jaxnet's potential energy
-(:func:`jaxnet.assemble.potential`) less the work of the loads on the fixed coordinates, and the cone's multiplier
+(:func:`jaxnet.model.assemble.potential`) less the work of the loads on the fixed coordinates, and the cone's multiplier
 is the rod's tension. Interior-point methods solve such programs in tens of iterations nearly independently of
 their size (Lobo, Vandenberghe, Boyd and Lebret, "Applications of second-order cone programming", Linear Algebra
 Appl. 284, 1998). Clarabel (Goulart and Chen, 2024) is one, used here through its own Python interface.
@@ -102,7 +102,8 @@ def solve_cone(scene, tol=1e-9, max_iter=200) -> ConeSolution:
     import clarabel
     import scipy.sparse as sp
 
-    from jaxnet import assemble, model as model_lib
+    from jaxnet import model as model_lib
+    from jaxnet.model import assemble
 
     model = model_lib.active_terms(scene)
     check_convex(scene, model)
@@ -157,7 +158,8 @@ def balance(scene, x):
     """jaxnet's largest out-of-balance force on a free coordinate (N) and its potential energy (J) at x."""
     import jax.numpy as jnp
 
-    from jaxnet import assemble, model as model_lib
+    from jaxnet import model as model_lib
+    from jaxnet.model import assemble
 
     model = model_lib.active_terms(scene)
     load = assemble.loads(scene, model)

@@ -43,8 +43,9 @@ import numpy as np
 import jaxnet  # noqa: F401
 from jaxnet.scene import Bars, Environment, Nodes, Scene
 from jaxnet.solve import dynamics, kernel, reference, statics
+from jaxnet.solve.options import Newton
 
-NEWTON = statics.Newton(tol=1e-9, max_iter=30, damping=1e-12, stall_window=None)
+NEWTON = Newton(tol=1e-9, max_iter=30, damping=1e-12, stall_window=None)
 
 
 def pendulum(m=1.5, L=1.0, ea=2e4):
@@ -173,7 +174,8 @@ def reference_figures(scene, loading, ref):
     import jax
     import jax.numpy as jnp
 
-    from jaxnet import catch as catch_lib, model as model_lib
+    from jaxnet import model as model_lib
+    from jaxnet.model import catch as catch_lib
 
     model = model_lib.active_terms(scene, dynamic=True)
     masses = tuple(jnp.asarray(m) for m in dynamics.lumped_masses(scene))
@@ -294,7 +296,8 @@ def time_step_problem(mesh_step, run_time, time_step=0.01):
     step's Newton iteration evaluates and differentiates."""
     import jax.numpy as jnp
 
-    from jaxnet import assemble, model as model_lib
+    from jaxnet import model as model_lib
+    from jaxnet.model import assemble
 
     scene, loading = cage_and_loading(mesh_step)
     x_eq = np.asarray(statics.solve(scene).x)
@@ -316,7 +319,8 @@ def breakdown():
     import jax
     import jax.numpy as jnp
 
-    from jaxnet import assemble, linalg
+    from jaxnet import linalg
+    from jaxnet.model import assemble
 
     scene, loading, model, pattern, scene_t, step, x, load = time_step_problem(1.6, 0.5)
     h = float(step.time_step)

@@ -100,7 +100,8 @@ def _at_femnet_positions(scene, positions):
     import jax.numpy as jnp
     import numpy as np
 
-    from jaxnet import assemble, linalg, model as model_lib
+    from jaxnet import linalg, model as model_lib
+    from jaxnet.model import assemble
 
     model = model_lib.active_terms(scene)
     pattern = assemble.build_pattern(scene, model)

@@ -58,7 +58,8 @@ def one(don):
     import jax.numpy as jnp
     import numpy as np
 
-    from jaxnet import assemble, model as model_lib
+    from jaxnet import model as model_lib
+    from jaxnet.model import assemble
     from jaxnet.io import femnet
     from jaxnet.solve.statics import solve
 

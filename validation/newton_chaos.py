@@ -7,7 +7,7 @@ Each of FEMNET's cases named is solved from its ``.don`` (FEMNET's laws, its own
 each in a fresh process, changing only what should not matter:
 
 * ``closed form``: the library's defaults (the tangent's element matrices by hand where a term has them,
-  PARDISO in oneMKL's reproducible mode, :data:`jaxnet.pardiso.CNR`);
+  PARDISO in oneMKL's reproducible mode, :data:`jaxnet.linalg.pardiso.CNR`);
 * ``autodiff``: the tangent's element matrices by ``jax.jacfwd`` of every term (``stiffness="autodiff"``:
   the same matrices to rounding, tested per element and on whole solves);
 * ``MKL default``: the closed form again, with ``MKL_CBWR`` empty (MKL's default code branch: the same
@@ -69,7 +69,7 @@ def run(don, name, timeout):
     none."""
     stiffness, cbwr = RUNS[name]
     env = dict(os.environ)
-    env.pop("MKL_CBWR", None)  # unset: jaxnet.pardiso chooses its own (the reproducible mode)
+    env.pop("MKL_CBWR", None)  # unset: jaxnet.linalg.pardiso chooses its own (the reproducible mode)
     if cbwr is not None:
         env["MKL_CBWR"] = cbwr
     try:
@@ -101,7 +101,8 @@ def trace(don, k):
     import jax
     import numpy as np
 
-    from jaxnet import assemble, figures, model as model_lib
+    from jaxnet import figures, model as model_lib
+    from jaxnet.model import assemble
     from jaxnet.io import femnet
     from jaxnet.solve import kernel, statics
 

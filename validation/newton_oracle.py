@@ -47,7 +47,9 @@ def energy_problem(scene):
     import jax
     import scipy.sparse as sp
 
-    from jaxnet import assemble, checks, model as model_lib
+    from jaxnet import model as model_lib
+    from jaxnet.model import assemble
+    from jaxnet.scene import checks
     from jaxnet.solve import kernel
 
     checks.validate(scene)

@@ -1,4 +1,4 @@
-"""PARDISO's reproducible mode (oneMKL's CNR, :data:`jaxnet.pardiso.CNR`) against MKL's default: cost and bits.
+"""PARDISO's reproducible mode (oneMKL's CNR, :data:`jaxnet.linalg.pardiso.CNR`) against MKL's default: cost and bits.
 
     python validation/pardiso_reproducible.py [--step 0.2] [--current 0.5] [--repeat 2]
 

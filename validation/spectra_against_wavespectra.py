@@ -1,4 +1,4 @@
-"""jaxnet's JONSWAP spectrum (``jaxnet.spectra``) against wavespectra's, the spectral package of the registry.
+"""jaxnet's JONSWAP spectrum (``jaxnet.water.spectra``) against wavespectra's, the spectral package of the registry.
 
     pip install wavespectra   # not a jaxnet dependency
     python validation/spectra_against_wavespectra.py [--hs 3] [--tp 10] [--gamma 3.3]
@@ -26,7 +26,7 @@ def main(argv=None):
     from wavespectra.construct import frequency
 
     import jaxnet  # noqa: F401  (float64)
-    from jaxnet import spectra
+    from jaxnet.water import spectra
 
     f = np.linspace(0.02, 0.6, 2000)
     theirs = np.asarray(frequency.jonswap(freq=f, fp=1.0 / args.tp, gamma=args.gamma, hs=args.hs))

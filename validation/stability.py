@@ -547,7 +547,7 @@ def _finite(*arrays):
 def newton_options(problem: Problem):
     """The Newton options a statics case runs with: its own (FEMNET's cases: theirs) or the defaults, with
     at least :data:`MAX_ITERATIONS` iterations."""
-    from jaxnet.solve.statics import Newton
+    from jaxnet.solve.options import Newton
 
     newton = problem.newton or Newton()
     return dataclasses.replace(newton, max_iter=max(newton.max_iter, MAX_ITERATIONS))

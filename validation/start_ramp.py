@@ -15,7 +15,7 @@ import jax.numpy as jnp
 import numpy as np
 
 import jaxnet  # noqa: F401
-from jaxnet import forcing
+from jaxnet.water import forcing
 from jaxnet.scenes import cage_in_waves
 from jaxnet.solve import dynamics
 from jaxnet.solve.statics import solve

@@ -1,6 +1,6 @@
 """Closed-form (hand-derived) tangent stiffness: the book's derivations, term by term, corrected.
 
-The other tangent is autodiff (:mod:`jaxnet.assemble`: ``jax.jacfwd`` of the element energies and forces
+The other tangent is autodiff (:mod:`jaxnet.model.assemble`: ``jax.jacfwd`` of the element energies and forces
 of :mod:`jaxnet.terms`), the reference. This package is the solvers' default path (``Newton(stiffness=
 "closed_form")``, cheaper: :class:`jaxnet.solve.options.Newton`): for every term where the chapter
 derives a stiffness, the same matrix K = -dF/dx (4.46) written out by hand, in the book's structure

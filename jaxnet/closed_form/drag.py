@@ -42,7 +42,7 @@ element's drag computed with the water's velocity relative to it, c_i = w(x_i) -
 vertex's depth plus the waves' orbital velocity, v_i = (x_i - x_i^n)/Δt (:func:`jaxnet.terms.drag.per_vertex`).
 Row block i of K = -∂F/∂x then holds the same twine terms as above taken at c_i, and on its diagonal block
 ∂F/∂c (∂w/∂x(x_i) - I/Δt): the water's velocity varying over the vertex's position (current profile,
-:meth:`jaxnet.waves.Airy.velocity_gradient`) and the damping of the vertex's own velocity
+:meth:`jaxnet.water.waves.Airy.velocity_gradient`) and the damping of the vertex's own velocity
 (:func:`moving_netting_drag_stiffness`, :func:`moving_bar_drag_stiffness`, :func:`moving_node_drag_stiffness`).
 Why a closed form: the autodiff path differentiates the element's drag once per vertex (``jax.jacfwd`` of a
 k-fold ``vmap``), most of a time step's tangent; the closed form takes about half of it
@@ -505,14 +505,14 @@ def moving_node_drag_stiffness(drag_area, relative_velocity, water_gradient, tim
 
 
 def current_slope(z, speed, direction, profile_depth, profile_factor, surface_level=0.0):
-    """dc/dz (m/s per m) of :func:`jaxnet.current.current_velocity` at height ``z`` (m).
+    """dc/dz (m/s per m) of :func:`jaxnet.water.current.current_velocity` at height ``z`` (m).
 
     c(z) = speed f(s - z) ĉ with f piecewise linear in depth, so dc/dz = -speed f'(depth) ĉ: the slope of
     the segment the point is on (the same segment ``searchsorted`` picks: at an interior profile point the
     deeper one), 0 strictly beyond the first and last points (where the factor is constant; at those points
     themselves the adjoining segment's slope, as the clamp by ``where`` gives), 0 with fewer than 2 points.
 
-    Args: as :func:`jaxnet.current.current_velocity` (speed m/s, direction (3,) any length, profile_depth
+    Args: as :func:`jaxnet.water.current.current_velocity` (speed m/s, direction (3,) any length, profile_depth
       (P,) m strictly increasing, profile_factor (P,), surface_level m; NaN means 0).
     Returns:
       (3,) dc/dz; (..., 3) if z is an array.

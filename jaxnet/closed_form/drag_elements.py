@@ -5,7 +5,7 @@ and the others) and returns the element matrix K = -∂F/∂x (N/m), vertex-majo
 :mod:`jaxnet.closed_form.drag`: the water's velocity where the term takes it (the current at the centroid in
 statics, with its slope over depth; the relative velocity at each vertex in a time step, with the gradient of
 the water's velocity there and the damping of the vertex's own), the netting's drag model per triangle, and
-the shielding of the netting behind a catch front (the front held fixed, as :mod:`jaxnet.assemble` says), and
+the shielding of the netting behind a catch front (the front held fixed, as :mod:`jaxnet.model.assemble` says), and
 at a free surface the wetted share of each vertex's drag (:func:`wetted_stiffness`). No automatic
 differentiation here either.
 """
@@ -37,7 +37,7 @@ def wetted_stiffness(stiffness, force, x, band, env):
     return w.repeat(3)[:, None] * stiffness - own
 
 
-def _water(x, env):
+def water_at_centroid(x, env):
     """The current at the centroid of the element's vertices x (k, 3), as the static drag sees it
     (:func:`jaxnet.terms.drag.water_velocity`), and its slope dc/dz there (m/s per m of height); the slope is
     None for a uniform current (a profile of fewer than 2 points: known from the shapes, when tracing)."""
@@ -83,7 +83,7 @@ def netting_drag_on_element_stiffness(x, state, uv, l0, diameter, cd_normal, cd_
         w, gradient = _water_at_vertices(x, env, waves)
         relative = w - velocity
     else:
-        c, slope = _water(x, env)
+        c, slope = water_at_centroid(x, env)
     # the product rules of the shielding and of the wetted share need the drag itself
     needs_force = shielded or wetted
     stiffness, force = 0.0, 0.0
@@ -124,7 +124,7 @@ def bar_drag_on_element_stiffness(x, state, rest_length, diameter, cd_normal, cd
         stiffness = moving_bar_drag_stiffness(x, rest_length, diameter, cd_normal, cd_tangential, w - velocity,
                                               gradient, time_step, env.water_density)
     else:
-        c, slope = _water(x, env)
+        c, slope = water_at_centroid(x, env)
         stiffness = bar_drag_stiffness(x, rest_length, diameter, cd_normal, cd_tangential, c, env.water_density, slope,
                                        env.up)
     if wetted:
@@ -142,7 +142,7 @@ def node_drag_on_element_stiffness(x, state, drag_area, env, moving=False, waves
         stiffness = moving_node_drag_stiffness(drag_area, w[0] - velocity[0], gradient[0], time_step,
                                                env.water_density)
     else:
-        c, slope = _water(x, env)
+        c, slope = water_at_centroid(x, env)
         stiffness = node_drag_stiffness(drag_area, c, env.water_density, slope, env.up)
     if wetted:
         drag = drag_term.node_drag_on_element(x, state, drag_area, env, moving, waves, velocity)

@@ -133,7 +133,7 @@ def catch_pressure_stiffness(x, pressure, front, axis, sign=1.0):
 
 def catch_pressure_on_element_stiffness(x, state, sign):
     """(9, 9) stiffness (N/m) of :func:`jaxnet.terms.pressure.catch_pressure_on_element` (same arguments): the
-    catch front of ``state`` held fixed (:mod:`jaxnet.assemble` says why)."""
+    catch front of ``state`` held fixed (:mod:`jaxnet.model.assemble` says why)."""
     return catch_pressure_stiffness(x, state["pressure"], state["front"], state["axis"], sign)
 
 

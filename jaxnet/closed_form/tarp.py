@@ -24,7 +24,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 from jaxnet import geometry
-from jaxnet.closed_form.drag_elements import _water
+from jaxnet.closed_form.drag_elements import water_at_centroid
 from jaxnet.closed_form.pressure import surface_vector_jacobian
 from jaxnet.terms.tarp import tarp_side
 
@@ -52,5 +52,5 @@ def tarp_pressure_stiffness(x, uv, pressure_coefficient, water_velocity, water_d
 def tarp_pressure_on_element_stiffness(x, state, uv, tarp_cd, env):
     """(9, 9) stiffness (N/m) of :func:`jaxnet.terms.tarp.tarp_pressure_on_element` in statics (same
     arguments): the current at the centroid, with its slope over depth when it varies."""
-    c, slope = _water(x, env)
+    c, slope = water_at_centroid(x, env)
     return tarp_pressure_stiffness(x, uv, tarp_cd, c, env.water_density, slope, env.up)

@@ -9,9 +9,9 @@ weighted sums, constraints and penalised objectives that are figures again. Ever
 function of the outcome: jit-able, vmap-able over a batch of positions or scenes, with finite gradients
 everywhere (safe norms and double-``where`` at the degenerate points, stated figure by figure).
 
-Nothing physical is recomputed here: drag forces come from :func:`jaxnet.assemble.forces` restricted to
+Nothing physical is recomputed here: drag forces come from :func:`jaxnet.model.assemble.forces` restricted to
 the model's drag terms, tensions from :mod:`jaxnet.terms.tension`, :mod:`jaxnet.terms.cable` and
-:mod:`jaxnet.terms.hexagonal`, volumes from :func:`jaxnet.catch.enclosed_volume`, twine counts from
+:mod:`jaxnet.terms.hexagonal`, volumes from :func:`jaxnet.model.catch.enclosed_volume`, twine counts from
 :mod:`jaxnet.geometry` (|d| twines per triangle, eqs 4.25-4.26), so a figure agrees with the solver's
 own physics by construction.
 
@@ -39,7 +39,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxnet import assemble, catch as catch_lib, geometry, model as model_lib
+from jaxnet import geometry, model as model_lib
+from jaxnet.model import assemble, catch as catch_lib
 from jaxnet.scene import mirror_copies
 from jaxnet.terms import cable, hexagonal, tension, term as term_lib
 
@@ -173,7 +174,7 @@ def drag(direction=None, terms=None, whole_net=False) -> Drag:
       its mirror copies (:func:`jaxnet.scene.mirror_copies`: 2 for a half trawl; ``direction`` should then lie in
       the symmetry planes, as the current of a symmetric model does, for the copies' drags to add up).
     Differentiated through everything the forces depend on, the catch front's position included (implicit
-    function theorem, :func:`jaxnet.catch.catch_front`). Smooth, except with a catch: C¹ where the front
+    function theorem, :func:`jaxnet.model.catch.catch_front`). Smooth, except with a catch: C¹ where the front
     sweeps a node, a kink where an edge lies in the front plane (:mod:`jaxnet.terms.pressure`) and where the
     net just holds the catch (the front jumps to the mouth); gradients finite throughout.
     """
@@ -216,7 +217,7 @@ class Volume(Figure):
 
 def volume(center=None, axis=None) -> Volume:
     """Volume (m³) enclosed by the netting behind the plane through ``center`` (3,) normal to ``axis`` (3,),
-    the axis pointing into the net (:func:`jaxnet.catch.enclosed_volume`, divergence theorem).
+    the axis pointing into the net (:func:`jaxnet.model.catch.enclosed_volume`, divergence theorem).
 
     Default plane: the scene's enclosure (a cage's collar plane), else its catch's (the opening of a cod-end,
     then the whole cod-end: × ``Catch.symmetry``). The netting must close the volume with the plane (and
@@ -333,8 +334,8 @@ class CatchDiameter(Figure):
 def catch_diameter() -> CatchDiameter:
     """The catch's largest diameter (m): twice the largest distance from the cod-end's axis, along either
     transverse direction, of the netting nodes on or behind the catch front (FEMNET's "maximal catch
-    diameter", :func:`jaxnet.catch.catch_summary`; result.json's ``catch.diameter_m``). The front moves with
-    the net (:func:`jaxnet.catch.catch_front`, differentiated through). A maximum over nodes: its gradient is
+    diameter", :func:`jaxnet.model.catch.catch_summary`; result.json's ``catch.diameter_m``). The front moves with
+    the net (:func:`jaxnet.model.catch.catch_front`, differentiated through). A maximum over nodes: its gradient is
     that of the node farthest out, with a kink where two are."""
     return CatchDiameter()
 

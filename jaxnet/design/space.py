@@ -76,7 +76,7 @@ import numpy as np
 from jaxnet import model
 from jaxnet.case import Case
 from jaxnet.design import cut as cut_lib
-from jaxnet.net import CableEnd, CableNodes, CableRef, Corner, HexTwine, Nearest, Net, PanelRef, Side
+from jaxnet.net import HexTwine, Net, Side, describe_reference
 from jaxnet.scene import Scene
 from jaxnet.solve import programs
 
@@ -115,24 +115,6 @@ class Mounting:
     def hanging_ratio(self):
         """E at the reference design."""
         return self.mounted_length / self.stretched_length
-
-
-def _label(ref):
-    """A readable name of a place in a net (a reference of :mod:`jaxnet.net` or a point)."""
-    if isinstance(ref, Corner):
-        return f"{ref.panel} corner {ref.index}"
-    if isinstance(ref, Side):
-        return f"{ref.panel} side {ref.index}"
-    if isinstance(ref, Nearest):
-        return f"{ref.panel} near ({ref.point[0]:g}, {ref.point[1]:g}, {ref.point[2]:g})"
-    if isinstance(ref, CableEnd):
-        return f"{ref.cable} {'start' if ref.end == 0 else 'end'}"
-    if isinstance(ref, CableNodes):
-        return ref.cable
-    if isinstance(ref, (CableRef, PanelRef)):
-        return ref.name
-    x = np.asarray(ref, dtype=float).ravel()
-    return "(" + ", ".join(f"{v:g}" for v in x) + ")"
 
 
 def _unique_names(labels):
@@ -288,7 +270,7 @@ class DesignSpace:
         self._mounting_of_cable = {}  # cable -> (mounting name, index of its side in _mounted_sides)
         fixed_nodes, fixed_group, fixed_offset = [], [], []
         for sides, nodes, offset, mounted in _fixed_borders(scene, layout, self.panels):
-            name = _label(sides[0])
+            name = describe_reference(sides[0], short=True)
             side_index = list(range(len(self._mounted_sides), len(self._mounted_sides) + len(sides)))
             self._mounted_sides += [(s.panel, s.index) for s in sides]
             cables = tuple(c for c, s in layout.cable_sides.items() if s in sides)
@@ -337,11 +319,11 @@ class DesignSpace:
             share = np.concatenate([np.full(len(n), 1.0 / len(n)) for n in nodes]) if nodes else np.zeros(0)
             return node, call, share
 
-        self.sinkers = tuple(_unique_names([_label(where[i]) for i, _, _ in layout.sinkers]))
+        self.sinkers = tuple(_unique_names([describe_reference(where[i], short=True) for i, _, _ in layout.sinkers]))
         self._sinker_mass_ref = np.array([m for _, m, _ in layout.sinkers], dtype=float)
         self._sinker_density = np.array([d for _, _, d in layout.sinkers], dtype=float)
         self._sinker_shares = shares([i for i, _, _ in layout.sinkers])
-        self.floats = tuple(_unique_names([_label(where[i]) for i, *_ in layout.floats]))
+        self.floats = tuple(_unique_names([describe_reference(where[i], short=True) for i, *_ in layout.floats]))
         self._buoyancy_ref = np.array([b for _, b, _, _, _ in layout.floats], dtype=float)
         self._float_gravity_rho = np.array([g * rho for _, _, g, rho, _ in layout.floats], dtype=float)
         # a float's volume (B / g + own mass) / rho must stay >= 0: B >= -its own weight

@@ -41,7 +41,7 @@ Each key is the argument of the :class:`~jaxnet.net.Net` method of the same mean
 in the same units. A panel meshed as numerical twines or on a lattice of mesh diagonals needs no ``step``;
 a hexagonal-mesh panel names its material with ``hex_twine`` (l0, ea and ea_compression one number or one
 per twine family [l, m, n]) instead of ``twine``. Regular waves' ``model`` is "airy" (the default), "stokes2"
-or "stokes3" (:class:`jaxnet.waves.Airy`, ``Stokes2``, ``Stokes3``); all waves take the environment's surface
+or "stokes3" (:class:`jaxnet.water.waves.Airy`, ``Stokes2``, ``Stokes3``); all waves take the environment's surface
 level (0 where it has none), gravity and vertical. The solver's ``stall_window = false`` is Newton's None (no
 stiffness continuation), which TOML, having no null, cannot write otherwise.
 
@@ -353,10 +353,10 @@ _IRREGULAR = {"hs", "tp", "spectrum", "gamma", "spreading", "components", "band"
 
 def _waves(spec, env_spec, where):
     """The environment's waves of the file: regular ({height, period, direction?, depth?, phase?}:
-    :class:`jaxnet.waves.Airy`) or an irregular sea ({hs, tp, spectrum?, gamma?, spreading?, components?, band?,
-    seed?, direction?, depth?, stretching?}: :func:`jaxnet.waves.sea_state`), on the environment's surface
+    :class:`jaxnet.water.waves.Airy`) or an irregular sea ({hs, tp, spectrum?, gamma?, spreading?, components?, band?,
+    seed?, direction?, depth?, stretching?}: :func:`jaxnet.water.waves.sea_state`), on the environment's surface
     level (0 where it has none), gravity and vertical; a bad value is a SceneError naming it."""
-    from jaxnet import waves
+    from jaxnet.water import waves
 
     if spec is None:
         return None
@@ -1058,7 +1058,7 @@ def _environment_spec(env):
 
 def _waves_spec(w, env):
     """Regular waves as the file's table; a SceneError for what the file cannot hold."""
-    from jaxnet import waves
+    from jaxnet.water import waves
 
     where = "environment.waves"
     models = {waves.Airy: "airy", waves.Stokes2: "stokes2", waves.Stokes3: "stokes3"}

@@ -51,7 +51,8 @@ import math
 
 import numpy as np
 
-from jaxnet.mesh.polygon import REL_EPS, panel_error, validate_panel
+from jaxnet.mesh.polygon import (REL_EPS, distance_to_boundary, inside, mean_value_coordinates, panel_error,
+                                 validate_panel)
 
 __all__ = ["PanelMesh", "lattice_coordinates", "lattice_divisions", "mesh_panel"]
 
@@ -60,8 +61,6 @@ MAX_NODES = 5_000_000
 
 # Lattice points closer than this fraction of h to the boundary are dropped.
 _CLEARANCE = 0.6
-# Points processed per chunk in the vectorised (points x corners) kernels.
-_CHUNK = 100_000
 # Shear of the lattice coordinates in which a lattice mesh is triangulated (see the module docstring).
 _LATTICE_SHEAR = 0.25
 
@@ -110,64 +109,6 @@ class PanelMesh:
 # --------------------------------------------------------------------------
 # geometry kernels (vectorised)
 # --------------------------------------------------------------------------
-
-def _inside(points, poly):
-    """Crossing-number point-in-polygon test, points (m, 2) -> bool (m,)."""
-    out = np.zeros(len(points), dtype=bool)
-    x0, y0 = poly[:, 0], poly[:, 1]
-    x1, y1 = np.roll(x0, -1), np.roll(y0, -1)
-    dy = y1 - y0
-    safe_dy = np.where(dy == 0.0, 1.0, dy)
-    for s in range(0, len(points), _CHUNK):
-        x = points[s:s + _CHUNK, 0:1]
-        y = points[s:s + _CHUNK, 1:2]
-        straddle = (y0 > y) != (y1 > y)
-        xint = x0 + (y - y0) * (x1 - x0) / safe_dy
-        out[s:s + _CHUNK] = (np.count_nonzero(straddle & (x < xint), axis=1) % 2) == 1
-    return out
-
-
-def _dist_to_boundary(points, poly):
-    """Distance of points (m, 2) to the closed polygon boundary (m,)."""
-    a = poly
-    e = np.roll(poly, -1, axis=0) - poly
-    ee = (e * e).sum(axis=1)
-    out = np.empty(len(points))
-    for s in range(0, len(points), _CHUNK):
-        p = points[s:s + _CHUNK]
-        ap = p[:, None, :] - a[None, :, :]
-        t = np.clip((ap * e[None]).sum(axis=2) / ee[None], 0.0, 1.0)
-        q = ap - t[:, :, None] * e[None]
-        out[s:s + _CHUNK] = np.sqrt(np.min((q * q).sum(axis=2), axis=1))
-    return out
-
-
-def _mean_value_coordinates(points, poly):
-    """Mean value coordinates (Floater) of points (m, 2) w.r.t. polygon (C, 2).
-
-    Valid for points strictly inside a simple polygon (convex or not, either
-    orientation); points must not lie on the boundary.  Returns (m, C), rows
-    summing to 1, with ``w @ poly == points`` up to rounding.
-    """
-    C = len(poly)
-    out = np.empty((len(points), C))
-    for s in range(0, len(points), _CHUNK):
-        p = points[s:s + _CHUNK]
-        d = poly[None, :, :] - p[:, None, :]            # (m, C, 2)
-        r = np.hypot(d[..., 0], d[..., 1])
-        d1 = np.roll(d, -1, axis=1)
-        r1 = np.roll(r, -1, axis=1)
-        cross = d[..., 0] * d1[..., 1] - d[..., 1] * d1[..., 0]
-        dot = (d * d1).sum(axis=2)
-        # tan(alpha_k / 2), signed, alpha_k the angle from d_k to d_{k+1}; the
-        # two equivalent forms avoid cancellation near alpha = 0 and alpha = pi
-        rr = r * r1
-        with np.errstate(divide="ignore", invalid="ignore"):
-            tan_half = np.where(dot >= 0.0, cross / (rr + dot), (rr - dot) / cross)
-        w = (np.roll(tan_half, 1, axis=1) + tan_half) / r
-        out[s:s + _CHUNK] = w / w.sum(axis=1, keepdims=True)
-    return out
-
 
 def _signed_d(uv, tri):
     a, b, c = uv[tri[:, 0]], uv[tri[:, 1]], uv[tri[:, 2]]
@@ -254,10 +195,10 @@ def _interior_points(uv, area, h, seg, div, convex, bpts, segs, pts=None):
         pts = _lattice(uv, area, h, seg, div)
     if len(pts) == 0:
         return pts
-    pts = pts[_inside(pts, uv)]
+    pts = pts[inside(pts, uv)]
     if len(pts) == 0:
         return pts
-    pts = pts[_dist_to_boundary(pts, uv) >= _CLEARANCE * h]
+    pts = pts[distance_to_boundary(pts, uv) >= _CLEARANCE * h]
     if not convex and len(pts):
         # keep every boundary segment Gabriel with respect to the interior points
         a, b = bpts[segs[:, 0]], bpts[segs[:, 1]]
@@ -286,6 +227,15 @@ def _is_convex(uv, area, scale):
     e = np.roll(uv, -1, axis=0) - uv
     turn = e[:, 0] * np.roll(e[:, 1], -1) - e[:, 1] * np.roll(e[:, 0], -1)
     return bool(np.all(turn * np.sign(area) >= -REL_EPS * scale * scale))
+
+
+def _outline(corners, area, scale, div):
+    """The outline of a polygon (C, 2) of signed ``area`` divided into ``div`` segments a side: whether it is
+    convex, its boundary nodes' weights on the corners, the sides' node lists, the boundary segments, and the
+    boundary nodes (the first steps of both meshers)."""
+    convex = _is_convex(corners, area, scale)
+    w_b, sides, segs = _boundary(corners, div)
+    return convex, w_b, sides, segs, w_b @ corners
 
 
 def mesh_panel(corners_uv, corners_xyz, step, l0, divisions=None, name="panel", lattice=None) -> PanelMesh:
@@ -346,12 +296,9 @@ def mesh_panel(corners_uv, corners_xyz, step, l0, divisions=None, name="panel", 
         raise panel_error(name, f"step={step} m with l0={l0} m gives h={h:g} twines and about "
                          f"{estimate:.3g} nodes (limit {MAX_NODES}); use a larger step")
 
-    convex = _is_convex(uv_c, area, scale)
-
-    w_b, sides, segs = _boundary(uv_c, div)
-    b_pts = w_b @ uv_c
+    convex, w_b, sides, segs, b_pts = _outline(uv_c, area, scale, div)
     i_pts = _interior_points(uv_c, area, h, seg, div, convex, b_pts, segs)
-    w_i = _mean_value_coordinates(i_pts, uv_c) if len(i_pts) else np.zeros((0, C))
+    w_i = mean_value_coordinates(i_pts, uv_c) if len(i_pts) else np.zeros((0, C))
     weights = np.concatenate([w_b, w_i], axis=0)
     nodes = weights @ uv_c
     tri = _triangulate(nodes, uv_c, area, segs, scale, name)
@@ -416,10 +363,7 @@ def _mesh_on_lattice(corners_uv, corners_xyz, lattice, divisions, name) -> Panel
         raise panel_error(name, f"lattice of {nu:g} x {nv:g} meshes gives about {estimate:.3g} nodes (limit "
                           f"{MAX_NODES}); use a coarser lattice")
 
-    convex = _is_convex(s_c, area, scale)
-
-    w_b, sides, segs = _boundary(s_c, div)
-    b_pts = w_b @ s_c
+    convex, w_b, sides, segs, b_pts = _outline(s_c, area, scale, div)
     # the lattice's nodes over the panel's bounding box, row by row (V, then U), from FEMNET's origin: the
     # floors of the smallest mesh coordinates U, V of the corners
     mesh_uv = s_c * np.array([nu, nv])
@@ -428,7 +372,7 @@ def _mesh_on_lattice(corners_uv, corners_xyz, lattice, divisions, name) -> Panel
     J, I = np.meshgrid(np.arange(extent[1] + 1), np.arange(extent[0] + 1), indexing="ij")
     candidates = origin + np.stack([I.reshape(-1), J.reshape(-1)], axis=1).astype(float)
     i_pts = _interior_points(s_c, area, h, seg, div, convex, b_pts, segs, pts=candidates)
-    w_i = _mean_value_coordinates(i_pts, s_c) if len(i_pts) else np.zeros((0, C))
+    w_i = mean_value_coordinates(i_pts, s_c) if len(i_pts) else np.zeros((0, C))
     weights = np.concatenate([w_b, w_i], axis=0)
 
     shear = np.array([[1.0, _LATTICE_SHEAR], [0.0, 1.0]])
@@ -605,8 +549,8 @@ def _triangulate(nodes, uv_c, area, segs, scale, name):
 
     d = _signed_d(nodes, tri)
     cen = nodes[tri].mean(axis=1)
-    inside = _inside(cen, uv_c)
-    tri, d = tri[inside], d[inside]
+    kept = inside(cen, uv_c)
+    tri, d = tri[kept], d[kept]
 
     # orientation: same sign as the polygon
     if area < 0:

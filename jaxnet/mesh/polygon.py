@@ -198,3 +198,67 @@ def side_divisions(corners_uv, step, l0) -> np.ndarray:
     l0 = _positive_scalar(l0, "l0", "side_divisions")
     seg = np.hypot(*(np.roll(uv, -1, axis=0) - uv).T)
     return _default_divisions(seg, step / l0)
+
+
+# -- points against a polygon (vectorised, in chunks of CHUNK points) ---------------------------------------
+
+#: points handled at once by the polygon kernels (bounds their (points, corners) temporaries)
+CHUNK = 100_000
+
+
+def inside(points, poly):
+    """Crossing-number point-in-polygon test, points (m, 2) -> bool (m,)."""
+    out = np.zeros(len(points), dtype=bool)
+    x0, y0 = poly[:, 0], poly[:, 1]
+    x1, y1 = np.roll(x0, -1), np.roll(y0, -1)
+    dy = y1 - y0
+    safe_dy = np.where(dy == 0.0, 1.0, dy)
+    for s in range(0, len(points), CHUNK):
+        x = points[s:s + CHUNK, 0:1]
+        y = points[s:s + CHUNK, 1:2]
+        straddle = (y0 > y) != (y1 > y)
+        xint = x0 + (y - y0) * (x1 - x0) / safe_dy
+        out[s:s + CHUNK] = (np.count_nonzero(straddle & (x < xint), axis=1) % 2) == 1
+    return out
+
+
+def distance_to_boundary(points, poly):
+    """Distance of points (m, 2) to the closed polygon boundary (m,)."""
+    a = poly
+    e = np.roll(poly, -1, axis=0) - poly
+    ee = (e * e).sum(axis=1)
+    out = np.empty(len(points))
+    for s in range(0, len(points), CHUNK):
+        p = points[s:s + CHUNK]
+        ap = p[:, None, :] - a[None, :, :]
+        t = np.clip((ap * e[None]).sum(axis=2) / ee[None], 0.0, 1.0)
+        q = ap - t[:, :, None] * e[None]
+        out[s:s + CHUNK] = np.sqrt(np.min((q * q).sum(axis=2), axis=1))
+    return out
+
+
+def mean_value_coordinates(points, poly):
+    """Mean value coordinates (Floater) of points (m, 2) w.r.t. polygon (C, 2).
+
+    Valid for points strictly inside a simple polygon (convex or not, either
+    orientation); points must not lie on the boundary.  Returns (m, C), rows
+    summing to 1, with ``w @ poly == points`` up to rounding.
+    """
+    C = len(poly)
+    out = np.empty((len(points), C))
+    for s in range(0, len(points), CHUNK):
+        p = points[s:s + CHUNK]
+        d = poly[None, :, :] - p[:, None, :]            # (m, C, 2)
+        r = np.hypot(d[..., 0], d[..., 1])
+        d1 = np.roll(d, -1, axis=1)
+        r1 = np.roll(r, -1, axis=1)
+        cross = d[..., 0] * d1[..., 1] - d[..., 1] * d1[..., 0]
+        dot = (d * d1).sum(axis=2)
+        # tan(alpha_k / 2), signed, alpha_k the angle from d_k to d_{k+1}; the
+        # two equivalent forms avoid cancellation near alpha = 0 and alpha = pi
+        rr = r * r1
+        with np.errstate(divide="ignore", invalid="ignore"):
+            tan_half = np.where(dot >= 0.0, cross / (rr + dot), (rr - dot) / cross)
+        w = (np.roll(tan_half, 1, axis=1) + tan_half) / r
+        out[s:s + CHUNK] = w / w.sum(axis=1, keepdims=True)
+    return out

@@ -47,8 +47,7 @@ import math
 import numpy as np
 
 from jaxnet.materials import Rope, Twine
-from jaxnet.mesh.panel import _dist_to_boundary, _inside, _mean_value_coordinates
-from jaxnet.mesh.polygon import panel_error, validate_panel
+from jaxnet.mesh.polygon import distance_to_boundary, inside, mean_value_coordinates, panel_error, validate_panel
 
 __all__ = ["NumericalTwines", "TwineMesh", "mesh_twines", "numerical_twine_rope"]
 
@@ -160,7 +159,7 @@ def _line_intervals(poly, c, tol):
         if b - a <= tol:
             continue
         mid = np.array([[c, 0.5 * (a + b)]])
-        if _inside(mid, poly)[0] and _dist_to_boundary(mid, poly)[0] > tol:
+        if inside(mid, poly)[0] and distance_to_boundary(mid, poly)[0] > tol:
             if out and abs(out[-1][1] - a) <= tol:
                 out[-1][1] = b
             else:
@@ -276,7 +275,7 @@ def mesh_twines(corners_uv, corners_xyz, twines: NumericalTwines, divisions=None
     inner = sorted(interior, key=lambda ij: interior[ij])
     inner_uv = origin + np.array(inner, dtype=float).reshape(-1, 2) * h
     if len(inner_uv):
-        rows.append(_mean_value_coordinates(inner_uv, uv_c))
+        rows.append(mean_value_coordinates(inner_uv, uv_c))
     for ij in inner:
         index[("i", interior[ij])] = n
         n += 1

@@ -27,7 +27,7 @@ import inspect
 import equinox as eqx
 import numpy as np
 
-from jaxnet import forcing, waves
+from jaxnet.water import forcing, waves
 from jaxnet.case import Case, TimeSettings, from_net
 from jaxnet.net import Net, PanelRef, Rope, Twine
 from jaxnet.scene import Environment
@@ -99,11 +99,11 @@ def cage_in_waves(wave_height: float = 2.0, wave_period: float = 6.0, water_dept
     """The cage of :func:`fish_cage` (its keyword arguments ``cage``) in regular waves along x, for dynamics.
 
     wave_height H (m, crest to trough), wave_period T (s), water_depth (m): linear (Airy) waves
-    (:class:`jaxnet.waves.Airy`); current (m/s) along x; ramp: time (s) over which the waves and the collar's
-    heave grow together from still water to their full height (:attr:`jaxnet.forcing.Loading.ramp`; None:
+    (:class:`jaxnet.water.waves.Airy`); current (m/s) along x; ramp: time (s) over which the waves and the collar's
+    heave grow together from still water to their full height (:attr:`jaxnet.water.forcing.Loading.ramp`; None:
     one wave period), so that the run starts from the static equilibrium without a shock. A
     :class:`~jaxnet.case.Case` whose time settings run it to ``end_time`` (s) with steps of ``time_step`` (s), a
-    record every ``record_every`` (s), the collar's heave its :class:`~jaxnet.forcing.Loading`.
+    record every ``record_every`` (s), the collar's heave its :class:`~jaxnet.water.forcing.Loading`.
     """
     options = {k: v.default for k, v in inspect.signature(fish_cage).parameters.items() if k != "current"}
     unknown = set(cage) - set(options)

@@ -73,7 +73,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxnet import assemble, catch as catch_lib, model as model_lib
+from jaxnet import model as model_lib
+from jaxnet.model import assemble, catch as catch_lib
 from jaxnet.solve import dynamics, implicit, kernel, masses as masses_lib
 from jaxnet.solve.options import Implicit, Newton
 from jaxnet.terms import term as term_lib

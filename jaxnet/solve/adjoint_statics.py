@@ -44,7 +44,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxnet import assemble, checks, linalg
+from jaxnet import linalg
+from jaxnet.model import assemble
+from jaxnet.scene import checks
 from jaxnet.solve import implicit, programs, statics
 from jaxnet.solve.options import DIFFERENTIABLE, Newton
 from jaxnet.solve.results import CONVERGED, Equilibrium

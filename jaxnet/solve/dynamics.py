@@ -50,10 +50,10 @@ factorisation a host callback, which keeps it from the disk: compiled by every p
 By default a run of many steps takes the compiled loop, a shorter one the host's
 (:data:`jaxnet.solve.options.AUTO_COMPILED_STEPS`); ``validation/dynamics_loops.py`` measures both.
 
-Loading in time (:class:`Loading`): a current whose speed follows a history (:mod:`jaxnet.forcing`),
-waves (``Environment.waves``, :mod:`jaxnet.waves`: regular, Stokes, an irregular sea), and prescribed motions
+Loading in time (:class:`Loading`): a current whose speed follows a history (:mod:`jaxnet.water.forcing`),
+waves (``Environment.waves``, :mod:`jaxnet.water.waves`: regular, Stokes, an irregular sea), and prescribed motions
 of nodes (a towing speed or speed table, the heave of a collar): those nodes are held (fixed in the scene) at
-start + displacement(t); winches (:class:`jaxnet.forcing.Winch`) set their cables' rest lengths at t, the
+start + displacement(t); winches (:class:`jaxnet.water.forcing.Winch`) set their cables' rest lengths at t, the
 lumped masses following them at every step. A run grows the waves and the motions in over its start ramp
 (:func:`with_start_ramp`: one wave period by default), so that it leaves its static start without a shock.
 
@@ -71,8 +71,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxnet import assemble, catch as catch_lib, checks, forcing, linalg, model as model_lib, scene as scene_lib
-from jaxnet.forcing import Loading  # simulate's argument, offered here as dynamics.Loading too
+from jaxnet import linalg, model as model_lib, scene as scene_lib
+from jaxnet.model import assemble, catch as catch_lib
+from jaxnet.scene import checks
+from jaxnet.water import forcing
+from jaxnet.water.forcing import Loading  # simulate's argument, offered here as dynamics.Loading too
 from jaxnet.solve import newton, options as options_lib, programs, results, statics
 from jaxnet.solve.masses import lumped_masses
 from jaxnet.solve.options import Implicit, Newton
@@ -185,7 +188,7 @@ def _ramped_motion(motion, ramp):
 
 def with_start_ramp(scene, loading: Loading):
     """(scene, loading, ramp in s): the scene's waves and the loading's motions given the run's start ramp
-    (:attr:`jaxnet.forcing.Loading.ramp`, its default resolved: one period of the waves, 0 without). What
+    (:attr:`jaxnet.water.forcing.Loading.ramp`, its default resolved: one period of the waves, 0 without). What
     :func:`simulate` runs; applying it twice changes nothing more. Raises SceneError for waves that have no
     ``ramp`` to set when a ramp is asked for."""
     waves = scene.environment.waves
@@ -499,7 +502,7 @@ class Trajectory:
     ``figures`` name -> (R, ...), the last :class:`State` (its ``status`` DONE, or STEP_FAILED for a run that
     stopped, ``throw=False``: the records then end at the last one before the failure), and its
     :class:`~jaxnet.solve.results.Timing` (``compile_s``: the first record interval, which compiles), and the
-    time (s) over which its waves and motions grew in (:attr:`jaxnet.forcing.Loading.ramp`); ``reaction_nodes``
+    time (s) over which its waves and motions grew in (:attr:`jaxnet.water.forcing.Loading.ramp`); ``reaction_nodes``
     (F,): the node indices of the rows of ``figures["reaction_N"]`` (the nodes held on some axis); ``loop``: the
     loop that drove its steps, "host" or "compiled" (:func:`chosen_loop`)."""
 

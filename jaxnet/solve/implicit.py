@@ -29,7 +29,7 @@ factorise once.
 
 The matrix. K is the exact Jacobian -∂F/∂x for every term whose tangent is exact: all of them except the
 catch pressure, whose tangent holds the catch front fixed (the front moves with the net so that the
-volume behind it stays the catch's: :mod:`jaxnet.assemble`). With a catch the linear solve is therefore
+volume behind it stays the catch's: :mod:`jaxnet.model.assemble`). With a catch the linear solve is therefore
 *iterated*: x ← x + K⁻¹ (b - J x), J the exact Jacobian-vector product of F (``jax.jvp`` through the
 front's own implicit differentiation), until the relative residual is below 1e-12; the sparse K is then a
 preconditioner, each refinement one residual evaluation and one solve with the stored factor.
@@ -60,7 +60,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxnet import assemble, checks, linalg, model as model_lib
+from jaxnet import linalg, model as model_lib
+from jaxnet.model import assemble
+from jaxnet.scene import checks
 from jaxnet.solve import kernel, newton, statics
 from jaxnet.solve.options import DIFFERENTIABLE, Newton
 from jaxnet.solve.results import CONVERGED, REASONS, Equilibrium

@@ -78,7 +78,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxnet import assemble, linalg
+from jaxnet import linalg
+from jaxnet.model import assemble
 from jaxnet.solve import kernel, newton, programs
 from jaxnet.solve.options import Newton
 from jaxnet.solve.results import CONVERGED, MAX_ITERATIONS, NON_FINITE, RUNNING, STALLED, Equilibrium, Timing

@@ -1,6 +1,6 @@
 """The residual, energy and tangent of a scene at free coordinates: what every solver iterates on.
 
-The unknowns are the free coordinates x (m) of the nodes (:class:`jaxnet.assemble.Pattern` ``free``; the
+The unknowns are the free coordinates x (m) of the nodes (:class:`jaxnet.model.assemble.Pattern` ``free``; the
 fixed ones keep the scene's positions). At x the Newton iteration needs
 
 * the out-of-balance force F = L - ∂E/∂x + F_nc (N): the constant loads L (:func:`loads`), minus the
@@ -30,7 +30,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxnet import assemble
+from jaxnet.model import assemble
 from jaxnet.solve import spring_network
 
 
@@ -64,7 +64,7 @@ def evaluate(x, f_frozen, load, scale, scene, pattern, model, step=None, previou
     factor on the elastic energies (1, or less during the stiffness continuation); ``step``: None in
     statics, in a time step its past and masses (the inertia energy joins the stored energy, the drag takes
     the vertices' velocities); ``previous``: the force terms' states at the last accepted iterate (what this
-    returns as ``state``), which start their solutions here (:func:`jaxnet.assemble.states`), or None.
+    returns as ``state``), which start their solutions here (:func:`jaxnet.model.assemble.states`), or None.
 
     Returns (energy, force, f_nc, merit, state): the stored energy (J); the out-of-balance force (N, 3)
     at every node (at fixed coordinates minus the reactions); the non-conservative nodal forces (N, 3);
@@ -107,10 +107,10 @@ def tangent(x, state, scale, scene, pattern, model, stiffness="autodiff", step=N
 
 def tangent_blocks(x, state, scale, scene, pattern, model, stiffness="autodiff", step=None):
     """The tangent's element matrices at free coordinates x, {family: (E, 3k, 3k)} (N/m,
-    :func:`jaxnet.assemble.tangent_blocks`): what :func:`tangent` sums into the pattern, without the inertia's
+    :func:`jaxnet.model.assemble.tangent_blocks`): what :func:`tangent` sums into the pattern, without the inertia's
     diagonal of a time step (``step``: its drag's dependence on the velocities is in). The host loop
     (:func:`jaxnet.solve.statics.host_loop`) sums them in a program of its own
-    (:func:`jaxnet.assemble.scatter_stiffnesses`), which XLA runs faster than the pair compiled as one
+    (:func:`jaxnet.model.assemble.scatter_stiffnesses`), which XLA runs faster than the pair compiled as one
     (``tangent_blocks`` says why; ``validation/femnet_cases.py`` times the solves)."""
     X = assemble.positions(x, scene, pattern)
     return assemble.tangent_blocks(X, scene, model, state, scale, stiffness, None if step is None else step.motion)
@@ -129,7 +129,7 @@ def nodal_norm(f_free, pattern, n_nodes):
 
 
 def state_shapes(scene, pattern, model):
-    """The shapes and dtypes of the force terms' states (:func:`jaxnet.assemble.states`, the catch front) of
+    """The shapes and dtypes of the force terms' states (:func:`jaxnet.model.assemble.states`, the catch front) of
     ``scene``, found by tracing them alone (``jax.eval_shape``: no computation)."""
     x = jax.ShapeDtypeStruct(pattern.free.shape, jnp.float64)
     return jax.eval_shape(lambda x: assemble.states(assemble.positions(x, scene, pattern), scene, model), x)

@@ -75,7 +75,9 @@ import numpy as np
 import optimistix as optx
 import scipy.sparse as sp
 
-from jaxnet import assemble, checks, linalg, model as model_lib
+from jaxnet import linalg, model as model_lib
+from jaxnet.model import assemble
+from jaxnet.scene import checks
 from jaxnet.solve import dynamics, programs
 from jaxnet.solve.masses import lumped_masses
 from jaxnet.solve.results import Timing
@@ -159,7 +161,7 @@ def greedy_colouring(indptr, indices):
 
 def stage_pattern(scene, model) -> StagePattern:
     """The :class:`StagePattern` of ``scene``: ∂F/∂x and ∂F/∂v couple the coordinates of the nodes of one
-    element (:func:`jaxnet.assemble.build_pattern`'s tangent pattern P, n free coordinates), so with
+    element (:func:`jaxnet.model.assemble.build_pattern`'s tangent pattern P, n free coordinates), so with
     y = (x, v) the stage Jacobian I - c [[0, I], [M⁻¹ ∂F/∂x, M⁻¹ ∂F/∂v]] has the blocks [[I, I], [P, P]].
     Columns x_j and v_j have the same rows, and x_j, x_k share a row exactly when v_j, v_k do: the colours
     are P's distance-2 colouring for the x columns and the same shifted by its count for the v columns."""

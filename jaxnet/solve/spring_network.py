@@ -23,7 +23,8 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
-from jaxnet import assemble, geometry
+from jaxnet import geometry
+from jaxnet.model import assemble
 
 
 def _netting_springs(x, p, env):

@@ -56,16 +56,16 @@ import time
 import jax
 import numpy as np
 
-from jaxnet import assemble, checks, linalg, model as model_lib
+from jaxnet import linalg, model as model_lib
+from jaxnet.model import assemble
+from jaxnet.scene import checks
 from jaxnet.memo import Memo
 from jaxnet.solve import diagnosis, interior, kernel, newton, programs
 from jaxnet.solve.options import STATIC, Newton
-from jaxnet.solve.results import (CONVERGED, MAX_ITERATIONS, NON_FINITE, REASONS, RUNNING, STALLED,  # noqa: F401
-                                  Equilibrium, SolveError, Timing)
+from jaxnet.solve.results import CONVERGED, NON_FINITE, RUNNING, STALLED, Equilibrium, SolveError, Timing
 
 __all__ = ["solve", "host_loop", "damped_loop", "compile_pieces", "damped_pieces", "start_coordinates",
-           "FreeCoordinates", "step_loads", "constant_loads", "Newton", "Equilibrium", "SolveError", "Timing",
-           "REASONS", "RUNNING", "CONVERGED", "MAX_ITERATIONS", "NON_FINITE", "STALLED"]
+           "FreeCoordinates", "step_loads", "constant_loads"]
 
 
 # -- the compiled pieces ----------------------------------------------------------------------------------

@@ -224,7 +224,7 @@ def _floor(scene):
     """(axis, floor sense) of the sea bed where some node has it as a floor, else None."""
     where = scene_lib.bottom_axis(scene.environment)
     if where is None:
-        return None  # jaxnet.checks.validate names the problem where friction needs it
+        return None  # jaxnet.scene.checks.validate names the problem where friction needs it
     axis, floor = where
     return where if np.any(np.asarray(scene.nodes.limit_sense)[:, axis] == floor) else None
 

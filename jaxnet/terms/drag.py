@@ -45,7 +45,7 @@ Conventions and choices:
   column.
 * Relative velocity. ``water_velocity`` is the water velocity relative to the element (m/s): the current
   in statics (evaluated by the caller where it chooses, e.g. at the element's centroid, with
-  :func:`jaxnet.current.current_velocity`); in dynamics the current minus the element's velocity. The
+  :func:`jaxnet.water.current.current_velocity`); in dynamics the current minus the element's velocity. The
   force is along the relative velocity's components, i.e. it drags the net *with* the water.
 
 Bodies at nodes. A float or sinker is either given a drag area Cd·A, whose drag ½ ρ (Cd A) |c| c is
@@ -133,7 +133,7 @@ The drag of the cables (``courantelem8``) and of the node bodies (``traineecoura
 
 These are forces (N), not energies: drag is not conservative. Its tangent -d force/dx (book 4.136-4.210)
 is obtained by ``jax.jacfwd`` of these functions and is not symmetric; when the current depends on depth
-the caller composes :func:`jaxnet.current.current_velocity` inside the differentiated function so that
+the caller composes :func:`jaxnet.water.current.current_velocity` inside the differentiated function so that
 the tangent sees dc/dz too (the book's 4.157 takes c constant).
 """
 
@@ -146,7 +146,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxnet import current, geometry
+from jaxnet import geometry
+from jaxnet.water import current
 from jaxnet.terms import pressure, screen, surface
 from jaxnet.scene import has_free_surface
 from jaxnet.terms.term import (DRAG_CABLES, DRAG_NETTING, DRAG_NODES, FORCE, ClosedForm, Term, any_nonzero, flowing, moving_options, register)
@@ -459,7 +460,7 @@ def netting_drag_on_element(x, state, uv, l0, diameter, cd_normal, cd_tangential
     some triangles have a model not in ``models``, which gives them no drag, static). In statics the water's
     velocity is the current at the centroid; in dynamics (``moving``) each vertex takes its share with the
     velocity relative to it (:func:`per_vertex`). ``shielded``: the scene has a catch, whose front is in
-    ``state`` (:func:`jaxnet.catch.catch_state`). ``wetted``: the scene has a free surface; each vertex's share
+    ``state`` (:func:`jaxnet.model.catch.catch_state`). ``wetted``: the scene has a free surface; each vertex's share
     is then that of its wetted part (:func:`wetted_shares`, the twine diameter its band)."""
     rho = env.water_density
     total = jnp.zeros((3, 3))
@@ -531,7 +532,7 @@ def wetted_shares(x, band, env):
     differs from the ramp by at most e/4 (at the corners) and nowhere beyond them, and keeps the ramp's integral
     over the heights (the two corners' differences cancel). The surface is ``env.surface_level``, as for buoyancy:
     the mean water plane, or in a time step in waves the wave's surface over each vertex
-    (:func:`jaxnet.assemble.element_environment`), as FEMNET's ``dyna`` weighs its drags
+    (:func:`jaxnet.model.assemble.element_environment`), as FEMNET's ``dyna`` weighs its drags
     (``miseajourPondFS_dyna.c``)."""
     t = (x @ env.up - env.surface_level) / band
     e = WETTED_ROUNDING
@@ -561,8 +562,7 @@ def box_drag_on_element(x, state, length, drag_coefficient, env, floating, movin
 def _netting_arguments(p, env, models, shielded, **motion):
     # a tarp's triangles (tarp_cd > 0, jaxnet.terms.tarp) have no twine drag: the water does not flow
     # through them, and its pressure replaces the drag, as in FEMNET (trainee_front skips them)
-    tarp_cd = getattr(p, "tarp_cd", None)  # a row made by hand may have no such column
-    cd_normal = p.cd_normal if tarp_cd is None else jnp.where(tarp_cd > 0, 0.0, p.cd_normal)
+    cd_normal = pressure.off_tarps(p, p.cd_normal)
     return {"uv": p.uv, "l0": p.l0, "diameter": p.diameter, "cd_normal": cd_normal,
             "cd_tangential": p.tangential_ratio * cd_normal, "drag_model": p.drag_model, "env": env,
             "models": models, "shielded": shielded, **motion}
@@ -626,7 +626,7 @@ def _box_active(scene, dynamic):
 
 NETTING_DRAG = register(Term(
     name="netting_drag", family="netting", kind=FORCE, element=netting_drag_on_element, arguments=_netting_arguments,
-    active=_netting_active, group=DRAG_NETTING, moving=True, state="jaxnet.catch:catch_state",
+    active=_netting_active, group=DRAG_NETTING, moving=True, state="jaxnet.model.catch:catch_state",
     closed_form=ClosedForm("jaxnet.closed_form.drag_elements:netting_drag_on_element_stiffness",
                            covers=lambda options: all(NETTING_DRAG_MODELS[c].closed_form for c in options["models"]))))
 BAR_DRAG = register(Term(

@@ -12,7 +12,7 @@ computes it (source files of ``unix_2004/`` in FEMNET's repository):
 * ``prise.c``, ``changement_variable_catch``: with a gravity catch the catch's axis is the vertical downward (its
   abscissa is -z), instead of the current's direction. The level is then found by the catch's own front search
   (``surface_volume2``, ``nouveau_front2``) on that axis: the same volume law as a catch in a current
-  (:mod:`jaxnet.catch`, axis a = -up, front abscissa s = -level).
+  (:mod:`jaxnet.model.catch`, axis a = -up, front abscissa s = -level).
 * ``prise.c``, ``pression_prise3``: each netting triangle takes the uniform pressure
 
       p_e = ρ_c g (h_1 + h_2 + h_3) / 3        (Pa),     h_i = x_i · a - s = level - z_i,
@@ -100,7 +100,7 @@ def hydrostatic_resultant(x, specific_weight, front, axis, sign=1.0):
 
 def gravity_catch_on_element(x, state, sign):
     """:func:`gravity_catch_pressure` of one triangle at the level and specific weight of ``state``
-    (:func:`jaxnet.catch.catch_state`)."""
+    (:func:`jaxnet.model.catch.catch_state`)."""
     return gravity_catch_pressure(x, state["specific_weight"], state["front"], state["axis"], sign)
 
 
@@ -113,5 +113,5 @@ def _active(scene, dynamic):
 
 GRAVITY_CATCH = register(Term(
     name="gravity_catch", family="netting", kind=FORCE, element=gravity_catch_on_element,
-    arguments=lambda p, env: {"sign": p.outward}, active=_active, group=CATCH_WEIGHT, state="jaxnet.catch:catch_state",
+    arguments=lambda p, env: {"sign": p.outward}, active=_active, group=CATCH_WEIGHT, state="jaxnet.model.catch:catch_state",
     closed_form=ClosedForm("jaxnet.closed_form.gravity_catch:gravity_catch_on_element_stiffness")))

@@ -3,7 +3,7 @@
 A trawl with twin cod-ends, or a grid section whose compartments each collect fish, holds several catches at
 once. Each catch k (:class:`jaxnet.scene.PanelCatches`) fills the netting of its own panels from the rear: its
 front is the plane {y · a = s_k} normal to the catches' axis a (downstream) placed so that the netting of its
-panels behind it encloses its volume (:func:`jaxnet.catch.panel_catch_state`: :func:`jaxnet.catch.catch_front`
+panels behind it encloses its volume (:func:`jaxnet.model.catch.panel_catch_state`: :func:`jaxnet.model.catch.catch_front`
 on those triangles only, as FEMNET's ``catch2_volume.c`` places each front on the triangles of its listed
 panels). That netting carries the catch pressure p = ½ ρ Cd v² (4.246) behind the front, with the consistent
 nodal load of :func:`jaxnet.terms.pressure.catch_pressure` (the same law as the scene's main catch, which
@@ -22,13 +22,13 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
-from jaxnet.terms.pressure import catch_pressure
+from jaxnet.terms.pressure import catch_pressure, off_tarps
 from jaxnet.terms.term import CATCH, FORCE, ClosedForm, Term, register
 
 
 def panel_catch_pressure(x, state, sign, panel):
     """(3, 3) nodal forces (N) of the panel catches' pressure on one triangle of panel ``panel``: the pressure
-    of the catch its panel holds, behind that catch's front (``state``: :func:`jaxnet.catch.panel_catch_state`),
+    of the catch its panel holds, behind that catch's front (``state``: :func:`jaxnet.model.catch.panel_catch_state`),
     or zero where the panel holds none. ``sign``: the triangle's orientation (+1 where 12 ^ 13 points out of the
     cod-end, :func:`jaxnet.terms.pressure.catch_pressure`)."""
     k = state["catch_of_panel"][panel]
@@ -46,12 +46,10 @@ def _active(scene, dynamic):
 
 def _arguments(p, env):
     # as the main catch's: a tarp takes the current's pressure on its whole surface by its own term
-    tarp_cd = getattr(p, "tarp_cd", None)
-    sign = p.outward if tarp_cd is None else jnp.where(tarp_cd > 0, 0.0, p.outward)
-    return {"sign": sign, "panel": p.panel}
+    return {"sign": off_tarps(p, p.outward), "panel": p.panel}
 
 
 PANEL_CATCH_PRESSURE = register(Term(
     name="panel_catch_pressure", family="netting", kind=FORCE, element=panel_catch_pressure,
-    arguments=_arguments, active=_active, group=CATCH, state="jaxnet.catch:panel_catch_state",
+    arguments=_arguments, active=_active, group=CATCH, state="jaxnet.model.catch:panel_catch_state",
     closed_form=ClosedForm("jaxnet.closed_form.pressure:panel_catch_pressure_stiffness")))

@@ -6,7 +6,7 @@ The catch is modelled as a uniform pressure (4.246)
 
 on the netting *behind the catch front*: the plane normal to the cod-end axis ``a`` (a unit vector
 pointing downstream, the direction of the current) placed so that the netting behind it encloses the
-catch volume (see :mod:`jaxnet.catch`). A point y is behind the front when its height
+catch volume (see :mod:`jaxnet.model.catch`). A point y is behind the front when its height
 
     h(y) = (y - f) · a        (m; f a point of the front plane, or f·a = s an abscissa)
 
@@ -169,7 +169,7 @@ def catch_volume(x, front, axis, sign=1.0):
 
 
 def catch_pressure_on_element(x, state, sign):
-    """:func:`catch_pressure` of one triangle at the front of ``state`` (:func:`jaxnet.catch.catch_state`)."""
+    """:func:`catch_pressure` of one triangle at the front of ``state`` (:func:`jaxnet.model.catch.catch_state`)."""
     return catch_pressure(x, state["pressure"], state["front"], state["axis"], sign)
 
 
@@ -182,15 +182,21 @@ def _active(scene, dynamic):
     return {}
 
 
+def off_tarps(p, value):
+    """``value`` (per netting triangle) on the netting's triangles, 0 on a tarp's (``tarp_cd > 0``,
+    :mod:`jaxnet.terms.tarp`: the water does not flow through a tarp, whose own term takes the pressure on its
+    whole surface); ``value`` itself where the rows ``p`` have no ``tarp_cd`` column (rows made by hand)."""
+    tarp_cd = getattr(p, "tarp_cd", None)
+    return value if tarp_cd is None else jnp.where(tarp_cd > 0, 0.0, value)
+
+
 def _arguments(p, env):
-    # a tarp (jaxnet.terms.tarp) takes the pressure on its whole surface by its own term; the catch's, behind
-    # the front, is for the netting only (FEMNET's pres_pris_elem2: Surface[elem].tarp == 0)
-    tarp_cd = getattr(p, "tarp_cd", None)  # a row made by hand may have no such column
-    sign = p.outward if tarp_cd is None else jnp.where(tarp_cd > 0, 0.0, p.outward)
-    return {"sign": sign}
+    # the catch's pressure, behind the front, is for the netting only (FEMNET's pres_pris_elem2:
+    # Surface[elem].tarp == 0)
+    return {"sign": off_tarps(p, p.outward)}
 
 
 CATCH_PRESSURE = register(Term(
     name="catch_pressure", family="netting", kind=FORCE, element=catch_pressure_on_element,
-    arguments=_arguments, active=_active, group=CATCH, state="jaxnet.catch:catch_state",
+    arguments=_arguments, active=_active, group=CATCH, state="jaxnet.model.catch:catch_state",
     closed_form=ClosedForm("jaxnet.closed_form.pressure:catch_pressure_on_element_stiffness")))

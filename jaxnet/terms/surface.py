@@ -77,7 +77,7 @@ slack netting at the surface, pass ``thickness`` >= rho g V_vertex / k to :func:
 
 Waves. In a time step in waves the water plane is the wave's surface: ``surface_level`` is then the surface's
 height over each vertex (one per vertex, the elevation η over its node at the step's start added to the mean
-level: :attr:`jaxnet.scene.Environment.surface_elevation`, :func:`jaxnet.assemble.element_environment`), so a
+level: :attr:`jaxnet.scene.Environment.surface_elevation`, :func:`jaxnet.model.assemble.element_environment`), so a
 float rides the wave and a collar under a crest is more immersed than under a trough, as in FEMNET's ``dyna``
 (``flotteurelement_dyna2.c``). Within the step η is held (a number per vertex, not a function of the position),
 so the energy above stays an energy and its gradient is vertical.

@@ -29,7 +29,7 @@ Each module of :mod:`jaxnet.terms` declares its terms once, at its end: ``regist
   x (N, 3) computed once per evaluation and handed to its elements (the catch front); ``previous`` is its
   value at nearby positions, a start for its solution, or None. Terms sharing a state function share its
   value. Like a closed form it may be named ``"module:name"``: the catch front is solved by
-  :mod:`jaxnet.catch`, which is built on the catch pressure's element functions;
+  :mod:`jaxnet.model.catch`, which is built on the catch pressure's element functions;
 * ``rods``: for an elastic energy that is a sum of tension-only rods (:class:`Rods`), their lengths, rest lengths
   and axial stiffnesses: the tension form the primal-dual static solver gives unknowns of their own
   (:mod:`jaxnet.solve.interior`).

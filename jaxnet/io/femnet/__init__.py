@@ -131,10 +131,10 @@ Conventions established from the files (see ``tests/test_femnet.py``):
   ``output NAME ...`` commands (prints and drawings) are read and listed in ``info["outputs"]``; they change
   nothing.
 * **Commands of the tail.** ``input wave_model N`` picks the waves' theory (1 Airy, 2 Stokes second order:
-  :class:`jaxnet.waves.Stokes2`; 3 is refused); ``input speed_type_node2`` (towing speeds, its time table on
+  :class:`jaxnet.water.waves.Stokes2`; 3 is refused); ``input speed_type_node2`` (towing speeds, its time table on
   the next lines) moves the nodes of its type in a dynamic run (:func:`.mapping.towing_of`). FEMNET's winches
   (``hauling_cable4``/``6``, with their tables) change their cables' rest lengths in a dynamic run
-  (:func:`.mapping.winches_of`, :class:`jaxnet.forcing.Winch`); ``info["dynamic_only"]`` names them, left out
+  (:func:`.mapping.winches_of`, :class:`jaxnet.water.forcing.Winch`); ``info["dynamic_only"]`` names them, left out
   of a static run; ``node_position``, which FEMNET's current
   code has no handler for, is read and ignored (``info["ignored"]``); the table of a command commented out
   is skipped with it. A drag coefficient left out of its line (``Normal Cd:`` then the next label) is

@@ -15,7 +15,7 @@ import equinox as eqx
 import numpy as np
 
 from jaxnet import geometry
-from jaxnet import waves as waves_lib
+from jaxnet.water import waves as waves_lib
 from jaxnet.io.femnet.grammar import INPUTS, DonCable, DonFile, DonPanel, twine_coordinates
 from jaxnet.io.femnet.links import MERGE_TOLERANCE, JoinPlan, all_panels, at_joined_positions, plan_joins
 from jaxnet.io.femnet.parse import parse_don
@@ -755,12 +755,12 @@ TOWING = "speed_type_node2"
 
 def towing_of(case: DonFile, node_type) -> tuple:
     """The prescribed motions of FEMNET's ``input speed_type_node2 TYPE K`` and its table (times, then the speeds
-    along x, y and z at them): the nodes of TYPE moved by a :class:`jaxnet.forcing.SpeedTable`, as FEMNET's
+    along x, y and z at them): the nodes of TYPE moved by a :class:`jaxnet.water.forcing.SpeedTable`, as FEMNET's
     ``dyna`` moves them (``mvb``: the interpolated speed within the table's times, standing still outside). A
     case without it, or read without node types, has none. FEMNET holds the towed coordinates while it moves
     them; jaxnet holds its prescribed nodes throughout, so the type must hold them on every axis: a
     SceneError naming the line says so otherwise."""
-    from jaxnet import forcing
+    from jaxnet.water import forcing
 
     if TOWING not in case.inputs or node_type is None:
         return ()
@@ -820,7 +820,7 @@ def cable_in_order(case: DonFile, scene, k: int, where: str) -> np.ndarray:
 
 
 def winches_of(case: DonFile, scene, warnings: list) -> tuple:
-    """The winches (:class:`jaxnet.forcing.Winch`) of FEMNET's ``input hauling_cable4 CABLE MIN MAX K`` and its
+    """The winches (:class:`jaxnet.water.forcing.Winch`) of FEMNET's ``input hauling_cable4 CABLE MIN MAX K`` and its
     table (the times, the hauling speeds in m/s, > 0 hauling in, < 0 paying out, the extremity hauled from), as
     FEMNET's ``dyna`` applies them (``hauling_cable``/``find_bar``): hauling in shortens the cable's bars from the
     extremity given, each down to MIN; paying out lengthens them from the other extremity, each up to MAX (the
@@ -828,7 +828,7 @@ def winches_of(case: DonFile, scene, warnings: list) -> tuple:
     sign, or whose extremity changes, is refused naming its line (FEMNET then changes the bar it starts from;
     jaxnet's winch takes its bars in one order). ``hauling_cable6`` (in the corpus, not in FEMNET's manual) is
     read as ``hauling_cable4``, which has the same line, with a warning."""
-    from jaxnet import forcing
+    from jaxnet.water import forcing
 
     out = []
     for name, values, line in case.commands:
@@ -873,7 +873,7 @@ def time_settings(case: DonFile, solver: Newton, node_type=None, scene=None, war
     n = case.numeric
     if not n["record_end"].value > 0:
         return None
-    from jaxnet.forcing import Loading
+    from jaxnet.water.forcing import Loading
 
     newton = dataclasses.replace(TIME_STEP, tol=solver.tol, max_iter=solver.max_iter, max_step=solver.max_step)
     return TimeSettings(end_time=n["record_end"].value, record_every=n["record_dt"].value,

@@ -19,8 +19,8 @@ from jaxnet.io.femnet.mapping import (catch_of, check_types, environment_of, fem
 from jaxnet.io.femnet.parse import parse_don
 from jaxnet.io.femnet.twines import mdg_twine_bars, numerical_twines
 from jaxnet.materials import bar_rows, netting_rows
-from jaxnet.net import outward
-from jaxnet.checks import validate
+from jaxnet.build import outward
+from jaxnet.scene.checks import validate
 from jaxnet.scene import Bars, Catch, Netting, Nodes, Scene, SceneError
 
 

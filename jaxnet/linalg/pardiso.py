@@ -25,7 +25,7 @@ Availability. MKL comes as the ``mkl`` wheel on x86-64 (``pyproject.toml``); :fu
 ``mkl_rt`` library where pip puts it (the environment's or the user's ``lib``), then where the system's
 loader finds it. Where it is absent (other processors) jaxnet factorises with SuperLU alone.
 ``JAXNET_SPARSE_SOLVER=superlu`` in the environment makes jaxnet use SuperLU even where MKL is installed (to
-compare the two); ``cudss`` asks for NVIDIA's cuDSS on a GPU (:mod:`jaxnet.cudss`;
+compare the two); ``cudss`` asks for NVIDIA's cuDSS on a GPU (:mod:`jaxnet.linalg.cudss`;
 :func:`jaxnet.linalg.solver_choice` says which applies).
 """
 

@@ -225,13 +225,13 @@ def _check_environment(env):
     if not (np.isfinite(ca) and ca >= 0):
         raise SceneError(f"environment: added_mass_coefficient must be finite and >= 0, got {env.added_mass_coefficient!r}")
     if env.waves is not None and not (hasattr(env.waves, "velocity") and hasattr(env.waves, "acceleration")):
-        raise SceneError(f"environment: waves must be None or waves such as jaxnet.waves.Airy, got {env.waves!r}")
+        raise SceneError(f"environment: waves must be None or waves such as jaxnet.water.waves.Airy, got {env.waves!r}")
 
 
 def _check_catch(scene):
     """The catch's numbers (finite volume > 0, Cd >= 0, symmetry >= 1, unit axis, finite centre) and netting to
     hold it. A volume larger than the net holds is allowed: the front then sits at the opening and the whole net
-    carries the pressure (FEMNET's behaviour; :func:`jaxnet.catch.catch_front` reports ``holds`` False)."""
+    carries the pressure (FEMNET's behaviour; :func:`jaxnet.model.catch.catch_front` reports ``holds`` False)."""
     catch = scene.catch
     volume, cd, symmetry = (_scalar(getattr(catch, k), f"catch: {k}") for k in ("volume", "drag_coefficient", "symmetry"))
     if not (np.isfinite(volume) and volume > 0):

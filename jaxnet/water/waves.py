@@ -3,8 +3,8 @@ time, for the drag (relative velocity, book 4.272-4.276) and the force of inerti
 of 4.265) in dynamics. :class:`Airy`, regular linear waves (below); :class:`Stokes2`, regular second-order
 Stokes waves (FEMNET's ``wave_model 2``); :class:`Stokes3`, third-order ones in deep water (``wave_model 3``);
 :class:`Irregular` and :func:`sea_state`, an irregular sea as a sum of linear components drawn from a spectrum
-(:mod:`jaxnet.spectra`). Each takes a ``ramp`` over which a dynamic run grows it in from still water
-(:attr:`jaxnet.forcing.Loading.ramp`).
+(:mod:`jaxnet.water.spectra`). Each takes a ``ramp`` over which a dynamic run grows it in from still water
+(:attr:`jaxnet.water.forcing.Loading.ramp`).
 
 The book gives no wave model (γ_h and the water's velocity c_i are inputs there); this is textbook theory.
 Units: m, s, rad; velocities m/s, accelerations m/s². What follows is :class:`Airy`'s first-order theory, on
@@ -72,7 +72,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxnet import forcing, geometry, spectra
+from jaxnet import geometry
+from jaxnet.water import forcing, spectra
 
 #: Newton steps on y tanh y = x after Fenton & McKee's start: its relative error is below 2 %, Newton
 #: squares it each step, so 4 steps give < 1e-16; one more is a margin.
@@ -164,9 +165,9 @@ class Airy(eqx.Module):
       surface_level: height of the mean free surface along ``up`` (m).
       gravity: g (m/s²).
       up: (3,) the vertical (normalised), z along it.
-      ramp: time (s) over which the waves grow in from still water at t = 0 (:func:`jaxnet.forcing.envelope`:
+      ramp: time (s) over which the waves grow in from still water at t = 0 (:func:`jaxnet.water.forcing.envelope`:
         elevation and velocity times e(t), the acceleration gaining de/dt times the velocity); 0 (default):
-        the textbook field at every t. A dynamic run sets it (:attr:`jaxnet.forcing.Loading.ramp`).
+        the textbook field at every t. A dynamic run sets it (:attr:`jaxnet.water.forcing.Loading.ramp`).
     Raises ValueError naming the parameter for a negative height or ramp, a non-positive period, depth or
     gravity, NaN, a wrong shape or a vertical (or zero) direction, when the values are concrete.
     """
@@ -254,7 +255,7 @@ class Airy(eqx.Module):
 
     @property
     def characteristic_period(self):
-        """T (s): what a dynamic run grows these waves in over by default (:attr:`jaxnet.forcing.Loading.ramp`)."""
+        """T (s): what a dynamic run grows these waves in over by default (:attr:`jaxnet.water.forcing.Loading.ramp`)."""
         return self.period
 
     # -- kinematics at points ----------------------------------------------------------------------------
@@ -468,7 +469,7 @@ class Irregular(eqx.Module):
     """An irregular sea: the sum of linear waves, each a component of :class:`Airy`'s theory with its own
     amplitude a_i, angular frequency ω_i, heading e_i and phase φ_i (a pytree: its numbers can be traced and
     differentiated). Build one from a spectrum with :func:`sea_state`; the components come from
-    :func:`jaxnet.spectra.components`.
+    :func:`jaxnet.water.spectra.components`.
 
         η = e(t) Σ a_i cos θ_i,    θ_i = k_i e_i·x - ω_i t + φ_i,    ω_i² = g k_i tanh(k_i h)
         u = e(t) Σ a_i ω_i [C_i(z*) cos θ_i e_i + S_i(z*) sin θ_i up]
@@ -548,7 +549,7 @@ class Irregular(eqx.Module):
 
     @property
     def characteristic_period(self):
-        """Tp (s): what a dynamic run grows this sea in over by default (:attr:`jaxnet.forcing.Loading.ramp`)."""
+        """Tp (s): what a dynamic run grows this sea in over by default (:attr:`jaxnet.water.forcing.Loading.ramp`)."""
         return self.peak_period
 
     def _phase(self, x, t):
@@ -602,7 +603,7 @@ def sea_state(hs, tp, direction=(1.0, 0.0, 0.0), spectrum="jonswap", gamma=None,
     """An irregular sea of significant height ``hs`` (m) and peak period ``tp`` (s) travelling along the
     horizontal ``direction``: an :class:`Irregular` of ``components`` linear waves realised from a JONSWAP
     (``gamma``: its peak enhancement, None for DNV's from Hs and Tp) or Pierson-Moskowitz spectrum with the
-    generator's ``seed`` (:func:`jaxnet.spectra.components`: the same seed, the same sea). ``spreading``: None
+    generator's ``seed`` (:func:`jaxnet.water.spectra.components`: the same seed, the same sea). ``spreading``: None
     for a long-crested sea, else the exponent n of DNV's cos^n spreading about ``direction`` (2-4 for a wind
     sea): a short-crested one. ``band``: the frequencies covered, in multiples of the peak's. ``depth`` (m, inf
     for deep water), ``surface_level`` (m), ``gravity``, ``up``, ``stretching``: as :class:`Irregular`'s. The

@@ -3,9 +3,9 @@
 The tangent of a net is sparse, often nearly singular (slack twines, a flat membrane has no out-of-plane
 stiffness) and badly conditioned (EA/l0 against small geometric stiffness): Krylov methods with cheap
 preconditioners do not converge on it (``docs/solvers.md``), so it is factorised on the
-host: by oneMKL's PARDISO where MKL is installed (:class:`PardisoSolver`, :mod:`jaxnet.pardiso` says why),
+host: by oneMKL's PARDISO where MKL is installed (:class:`PardisoSolver`, :mod:`jaxnet.linalg.pardiso` says why),
 else by SuperLU (scipy, :class:`HostSolver`), which is also PARDISO's fallback; where JAX computes on a GPU, by
-cuDSS on the device (:class:`CudssSolver`, :mod:`jaxnet.cudss`); :func:`direct_solver` picks
+cuDSS on the device (:class:`CudssSolver`, :mod:`jaxnet.linalg.cudss`); :func:`direct_solver` picks
 (:func:`solver_choice`). Jitted code calls them through ``jax.pure_callback``, on a Python thread of this module's
 (:func:`on_solver_thread`: SuperLU's memory is freed only there). What follows is SuperLU's. The structure
 (indptr, indices) is passed as arguments, so one compiled program serves every scene of the same shape. The
@@ -47,7 +47,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from jaxnet import pardiso
+from jaxnet.linalg import pardiso
 from jaxnet.memo import Memo
 
 #: A diagonal entry is the pivot of its column when it is at least this fraction of the column's largest
@@ -454,7 +454,7 @@ class _LibrarySolver(HostSolver):
 
 
 class PardisoSolver(_LibrarySolver):
-    """The tangents factorised by oneMKL's PARDISO (:mod:`jaxnet.pardiso`) on the host, behind
+    """The tangents factorised by oneMKL's PARDISO (:mod:`jaxnet.linalg.pardiso`) on the host, behind
     :class:`HostSolver`'s checks and fallback (:class:`_LibrarySolver`); a factor with a perturbed pivot (the
     matrix singular or nearly so) is handed to the fallback too."""
 
@@ -470,22 +470,22 @@ class PardisoSolver(_LibrarySolver):
 
 
 class CudssSolver(_LibrarySolver):
-    """The tangents factorised by NVIDIA's cuDSS on the GPU (:mod:`jaxnet.cudss`), behind :class:`HostSolver`'s
+    """The tangents factorised by NVIDIA's cuDSS on the GPU (:mod:`jaxnet.linalg.cudss`), behind :class:`HostSolver`'s
     checks and fallback (:class:`_LibrarySolver`)."""
 
     def make_factor(self, indptr, indices):
-        from jaxnet import cudss
+        from jaxnet.linalg import cudss
 
         return cudss.Factor(indptr, indices)
 
 
 def solver_choice():
     """The sparse direct solver :func:`direct_solver` makes: ``"cudss"``, ``"pardiso"`` or ``"superlu"``.
-    ``JAXNET_SPARSE_SOLVER`` (:data:`jaxnet.pardiso.CHOICE`) names one; unset (or empty), cuDSS where JAX
-    computes on a GPU and it is installed (:func:`jaxnet.cudss.available`), else PARDISO where MKL is
+    ``JAXNET_SPARSE_SOLVER`` (:data:`jaxnet.linalg.pardiso.CHOICE`) names one; unset (or empty), cuDSS where JAX
+    computes on a GPU and it is installed (:func:`jaxnet.linalg.cudss.available`), else PARDISO where MKL is
     installed, else SuperLU. A name that is not one of these three, or ``cudss`` or ``pardiso`` where it
     cannot run, is a ValueError that says why."""
-    from jaxnet import cudss
+    from jaxnet.linalg import cudss
 
     asked = os.environ.get(pardiso.CHOICE, "").strip().lower()
     if asked == "":

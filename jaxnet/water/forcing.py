@@ -100,7 +100,7 @@ def envelope(t, duration):
     multiplied by it starts with zero velocity *and acceleration*: the inertia of what it moves rises from 0
     instead of jumping, as it would under a half-cosine (whose second derivative jumps to (π/duration)²/2 at
     t = 0). ``duration`` 0 means no envelope (e = 1, de/dt = 0 at every t). What :class:`Harmonic`'s ``ramp``
-    and the waves' (:mod:`jaxnet.waves`) use."""
+    and the waves' (:mod:`jaxnet.water.waves`) use."""
     t = jnp.asarray(t, dtype=float)
     ramped = jnp.asarray(duration) > 0.0
     safe = jnp.where(ramped, duration, 1.0)
@@ -396,7 +396,7 @@ class Sum(eqx.Module):
             raise ValueError("Sum: parts must not be empty")
         for k, part in enumerate(parts):
             if not isinstance(part, (AbstractHistory, AbstractMotion, Sum)):
-                raise ValueError(f"Sum: parts[{k}] must be a history or a motion of jaxnet.forcing, got "
+                raise ValueError(f"Sum: parts[{k}] must be a history or a motion of jaxnet.water.forcing, got "
                                  f"{type(part).__name__}")
         self.parts = tuple(parts)
 
@@ -556,7 +556,7 @@ class Loading(eqx.Module):
       a shock: the waves (their ``ramp``: elevation and velocity times :func:`envelope`) and the
       :class:`Towing` and :class:`Harmonic` motions that have no ramp of their own (theirs set to it: a towing
       speed rises to its value, a heave's amplitude grows, its phase kept). None (default): one period of the
-      waves (:attr:`jaxnet.waves.Airy.characteristic_period`, an irregular sea's peak period), 0 without
+      waves (:attr:`jaxnet.water.waves.Airy.characteristic_period`, an irregular sea's peak period), 0 without
       waves; 0: nothing ramped. The current is not ramped: the run starts from the static equilibrium in it.
       :func:`jaxnet.solve.dynamics.with_start_ramp` applies it, in :func:`jaxnet.solve.dynamics.simulate` and
       :func:`jaxnet.solve.reference.reference`; the run's records state it. The differentiable runs of

@@ -1,5 +1,5 @@
 """Wave spectra of irregular seas: Pierson-Moskowitz and JONSWAP, the directional spreading, and the
-realisation of a sea state as a sum of linear wave components (what :class:`jaxnet.waves.Irregular` moves).
+realisation of a sea state as a sum of linear wave components (what :class:`jaxnet.water.waves.Irregular` moves).
 
 Spectra (DNV-RP-C205, *Environmental conditions and environmental loads*, section 3.5), as one-sided
 spectral densities of the free surface's elevation in angular frequency ω (rad/s), S(ω) in m² s/rad, for a

@@ -18,7 +18,7 @@ Nodes carry fixity per axis, lumped mass and displaced volume (sinkers, floats) 
 optionally the box-shaped body of FEMNET's node types (anisotropic node drag) and limits per axis (the
 sea bed, a ceiling).
 
-:func:`jaxnet.checks.validate` checks a scene and raises :class:`SceneError` naming the culprit (node,
+:func:`jaxnet.scene.checks.validate` checks a scene and raises :class:`SceneError` naming the culprit (node,
 element, cable, parameter) — always before anything is compiled.
 """
 
@@ -264,7 +264,7 @@ class Environment(eqx.Module):
     gravity: g (m/s²); water_density (kg/m³); up: unit vertical (weight acts along -up).
     current_speed (m/s) and current_direction (unit vector, normalised by the builders): a uniform
       current, scaled with depth by profile_factor (dimensionless) at profile_depth (m below the surface,
-      increasing; linear in between, constant beyond; empty: uniform). See :mod:`jaxnet.current`.
+      increasing; linear in between, constant beyond; empty: uniform). See :mod:`jaxnet.water.current`.
     surface_level: height of the free surface along ``up`` (m); NaN (default) for none: everything is
       fully immersed and weight is a constant load.
     floating: the element families whose weight and buoyancy feel the free surface (:data:`FLOATING`, the
@@ -282,14 +282,14 @@ class Environment(eqx.Module):
       default, whose statics have no friction at all). Static (it decides which terms a scene has).
     time: the time (s) at which the surroundings are taken (dynamics: the current's history and the waves
       are evaluated at it; 0 in statics).
-    waves: regular waves (:class:`jaxnet.waves.Airy`), or None for none. Only dynamics feels them: their
+    waves: regular waves (:class:`jaxnet.water.waves.Airy`), or None for none. Only dynamics feels them: their
       velocity adds to the current's in the drag, their acceleration gives the inertia force of the water.
     surface_elevation: (N,) height (m) of the free surface above ``surface_level`` over each node, or None
       (default) for the mean level everywhere. A time step in waves sets it to the waves' elevation η at the
       nodes' positions at the step's start (:func:`jaxnet.solve.dynamics.scene_at`), so that buoyancy and the
       wetted share of the drags follow the wave's surface, as FEMNET's ``dyna`` does (its immersion is taken
       from the wave's height at each node, ``miseajourPondFS_dyna.c``). Each element sees the level over its
-      own vertices (:func:`jaxnet.assemble.element_environment`).
+      own vertices (:func:`jaxnet.model.assemble.element_environment`).
     added_mass_coefficient: Ca (dimensionless): the added mass of twines and bars is Ca rho V, V their
       volume (book 4.265's M_a, for which the book gives no formula; 1 is the potential-flow value of a
       cylinder moving across its axis, taken in every direction). Dynamics only.

@@ -4,7 +4,7 @@ The terms are declared once each, in their modules of :mod:`jaxnet.terms` (:mod:
 how). For a given scene, :func:`active_terms` keeps the registered terms whose parameters are present and
 non-zero and fixes their static options (e.g. whether any twine has a compression stiffness), so the
 residual traced for that scene contains only those terms: a weightless net compiles no weight, a net with
-EA_c = 0 everywhere no compressive branch. :mod:`jaxnet.assemble` wraps each term's element function in a
+EA_c = 0 everywhere no compressive branch. :mod:`jaxnet.model.assemble` wraps each term's element function in a
 ``jax.named_scope`` of its name, so what was compiled can be read back from the lowered program (the tests
 do).
 

@@ -19,7 +19,7 @@ backward error is checked on the host, refined, and the factorisation handed to 
 when it stays inaccurate or cuDSS fails.
 
 Availability. :func:`available` is True where JAX's default backend is a GPU and nvmath-python with cuDSS
-imports. ``JAXNET_SPARSE_SOLVER`` (:data:`jaxnet.pardiso.CHOICE`) chooses otherwise: ``cudss`` asks for it
+imports. ``JAXNET_SPARSE_SOLVER`` (:data:`jaxnet.linalg.pardiso.CHOICE`) chooses otherwise: ``cudss`` asks for it
 (an error says why where it cannot run), ``pardiso`` or ``superlu`` keep the factorisations on the host.
 
 Memory. JAX takes 75 % of the GPU's memory at its start by default; cuDSS's factors and CuPy's arrays need
