@@ -40,7 +40,7 @@ Compiled programs are kept on disk (in ``--cache DIR``, default ``$XDG_CACHE_HOM
 persistent compilation cache; ``--no-cache`` to switch both off; a ``JAX_COMPILATION_CACHE_DIR`` set by the
 user wins): a second run of a case of the same shape and terms — another current speed, another catch, the
 same case again — loads them instead of tracing and compiling, most of a first run's time
-(``validation/whole_process.py`` times whole runs cold and with them). The program of the outputs' figures is
+(``benchmarks/whole_process.py`` times whole runs cold and with them). The program of the outputs' figures is
 obtained in a thread of its own while the solver iterates.
 """
 

@@ -103,7 +103,7 @@ def test_a_solve_stopped_while_converging_is_told_to_take_more_iterations():
 def links(off=1e-7):
     """Two links of 0.01 m and EA 1.6e6 N between held ends, each drawn ``off`` (m) longer than at rest (strain
     off / 0.01), the joint pulled sideways by 0.1 N: FEMNET's short links that carry little (1pelagic_trawl/toto1's,
-    validation/newton_chaos.py)."""
+    docs/investigations.md)."""
     pos = np.array([[0.0, 0.0, 0.0], [0.01 + off, 0.0, 0.0], [0.02 + 2 * off, 0.0, 0.0]])
     force = np.zeros((3, 3))
     force[1, 1] = 0.1

@@ -318,7 +318,8 @@ def test_an_accelerating_current_pushes_by_the_waters_inertia():
 def test_the_cage_in_waves_starts_from_its_static_equilibrium_without_a_shock(tmp_path):
     """Issue 26's start-up shock: the built-in cage in 2 m, 6 s waves with its collar heaving. By default
     the waves and the heave grow in over one wave period (C² envelope), so the reactions leave the static
-    equilibrium smoothly (with no ramp the first record was 10.7 kN off it: validation/REPORT.md)."""
+    equilibrium smoothly (with no ramp the first second strayed 14 kN from it: docs/investigations.md, "The start
+    of a dynamic run")."""
     import json
 
     from jaxnet.scenes import cage_in_waves

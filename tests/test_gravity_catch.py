@@ -18,7 +18,8 @@ from jaxnet import figures, model
 from jaxnet.model.catch import catch_front, catch_state
 from jaxnet.closed_form.gravity_catch import gravity_catch_stiffness
 from jaxnet.io import femnet
-from jaxnet.net import Net, outward
+from jaxnet.build import outward
+from jaxnet.net import Net
 from jaxnet.scene import Environment, SceneError
 from jaxnet.terms import gravity_catch as gc
 

@@ -16,11 +16,11 @@ README = pathlib.Path(__file__).parents[1] / "README.md"
 
 
 def test_the_solve_subpackage_is_not_shadowed():
-    import jaxnet.solve.dynamics as dynamics  # failed while jaxnet.solve was bound to a function
-    import jaxnet.solve.statics as statics
+    import jaxnet.run as run
+    import jaxnet.solve.dynamics  # noqa: F401  (failed while jaxnet.solve was bound to a function)
 
     assert jaxnet.solve is importlib.import_module("jaxnet.solve")
-    assert jaxnet.simulate is dynamics.simulate and jaxnet.solve_static is statics.solve
+    assert jaxnet.simulate is run.simulate and jaxnet.solve_static is run.solve_static
 
 
 def test_every_public_name_resolves():

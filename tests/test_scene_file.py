@@ -218,7 +218,7 @@ def test_a_scene_built_by_hand_with_a_zero_stiffness_row_is_refused_naming_the_e
     bad = jn.Scene(nodes=scene.nodes, netting=scene.netting.__class__(**{**scene.netting.__dict__, "ea_traction": ea}),
                    bars=scene.bars, panel_names=scene.panel_names, cable_names=scene.cable_names)
     with pytest.raises(SceneError, match=r"^triangle 5 \(wall 0\): traction stiffness EA must be > 0, got 0\.0$"):
-        jn.checks.validate(bad)
+        jn.validate(bad)
 
 
 def test_json_duplicate_and_nested_paths_are_named_in_the_files_notation(tmp_path):

@@ -88,7 +88,7 @@ ANGLES = (0, 30, 60, 90)
 #: the panels: meshes a side, mesh side (m), and the node counts aimed at, per size
 PANEL_MESHES, PANEL_L0 = 40, 0.025
 PANEL_NODES = {"test": (100,), "quick": (100, 1000), "full": (100, 1000, 10_000)}
-#: nodes per step² of netting that the mesher's lattice holds (validation/bench_statics.py)
+#: nodes per step² of netting that the mesher's lattice holds (benchmarks/statics.py)
 NODES_PER_STEP2 = 1.15
 #: the fish cage's meshing steps (m) per size (0.5: 1161 nodes; nodes ~ 1/step²) and its currents (m/s)
 CAGE_STEPS = {"test": (), "quick": (0.5,), "full": (0.5, 0.23, 0.11, 0.05)}

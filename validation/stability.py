@@ -353,7 +353,7 @@ def _size_cases():
 
         n = _size(size, 1000, 10_000, 100_000)
         width = 100 * 0.025 * math.sqrt(2.0)
-        # the mesher's lattice holds about 1.15 nodes per step² (validation/bench_statics.py)
+        # the mesher's lattice holds about 1.15 nodes per step² (benchmarks/statics.py)
         return framed_panel(meshes=100, step=width / math.sqrt(n / 1.15), twine=_twine()).scene
 
     return [CatalogueCase("large framed panel", "size", _static(framed),

@@ -46,7 +46,7 @@ Row block i of K = -∂F/∂x then holds the same twine terms as above taken at 
 (:func:`moving_netting_drag_stiffness`, :func:`moving_bar_drag_stiffness`, :func:`moving_node_drag_stiffness`).
 Why a closed form: the autodiff path differentiates the element's drag once per vertex (``jax.jacfwd`` of a
 k-fold ``vmap``), most of a time step's tangent; the closed form takes about half of it
-(``validation/dynamics_cost.py`` times both). The helpers work on stacks (leading axes), so one call takes both
+(``benchmarks/dynamics.py`` times both). The helpers work on stacks (leading axes), so one call takes both
 twine families at the three vertices' velocities. The book's dynamic stiffness is the inertia's alone (4.271),
 its 4.272-4.276 give the force only: without the drag's damping -(1/Δt) ∂F/∂c Newton needs tens of times more
 iterations per step on a net in waves, and most steps are retried at half the step.

@@ -33,12 +33,12 @@ SuperLU (scipy) on the host (:mod:`jaxnet.linalg`), then the solution goes back 
   ones included, one callback after the other (``vmap_method="sequential"``): designs of 4 to 13 Newton
   iterations make the batch factorise several times what they need, where ``method="map"`` factorises
   exactly what each design needs and is as fast as a Python loop of single solves; even where the
-  callbacks are a small part (a small panel), vmap is the slower (``validation/design_batch.py`` times
+  callbacks are a small part (a small panel), vmap is the slower (``benchmarks/design_batch.py`` times
   both). Until the Newton loop tells the host which designs need a factorisation (a flag to the
   callback), prefer ``method="map"``.
 * *sharded over several devices.* Each device runs its own loop over its own designs (it stops at its own
   slowest) and makes its own callbacks, from its own thread, so the callbacks of different devices run on
-  the host at the same time. With emulated CPU devices on a host of few cores (``validation/design_batch.py``)
+  the host at the same time. With emulated CPU devices on a host of few cores (``benchmarks/design_batch.py``)
   the factorisations of ``method="map"`` overlap, but each takes longer than alone, the cores and Python's
   GIL being shared: sharded can be slower than one device (``validation/REPORT.md``). With ``method="vmap"`` sharding
   helps because it cuts the batched waste (each device stops at its own slowest design). Emulated devices

@@ -11,7 +11,7 @@ compiled again. This is what :func:`jaxnet.design.optimize.optimize` calls at ea
 
 ``jax.grad`` of a function of :func:`jaxnet.solve.implicit.equilibrium` gives the same derivative, inside a
 caller's ``jit``/``vmap`` and for any function of the equilibrium; its program holds the sparse solve's host
-callbacks, which no persistent cache keeps. ``validation/design_cost.py`` compiles and runs both.
+callbacks, which no persistent cache keeps. ``benchmarks/design.py`` compiles and runs both.
 
 Units: the objective's, per unit of each entry of θ (:data:`jaxnet.design.space.FAMILIES`).
 """

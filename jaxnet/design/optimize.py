@@ -284,7 +284,7 @@ def optimize(space, objective, start, *, design: Callable | None = None, optimiz
         step some milliseconds of dispatch slower. ``"traced"``: ``jax.value_and_grad`` of one jitted program
         around :func:`jaxnet.solve.implicit.equilibrium`, its steps faster and its compilation longer, in every
         process (its host callbacks keep it out of any cache): for runs of hundreds of steps.
-        ``validation/design_cost.py`` times both.
+        ``benchmarks/design.py`` times both.
     Returns:
       a :class:`DesignResult`.
     Raises:

@@ -8,8 +8,8 @@ on one machine or many, one design a task:
 * **the engine** is Dask's distributed scheduler (``distributed``): a :class:`distributed.LocalCluster` of
   worker processes (one thread each) by default, started and closed by :func:`sweep`, or any running
   cluster by its scheduler's address (``dask scheduler`` and ``dask worker tcp://HOST:8786`` on the
-  machines) or an existing :class:`distributed.Client`. Chosen over Ray (``validation/cluster_engines.py``
-  measures both; ``validation/REPORT.md``, "Design sweeps on a cluster", has the figures): Dask is pure
+  machines) or an existing :class:`distributed.Client`. Chosen over Ray (``docs/investigations.md``
+  has the figures of both): Dask is pure
   Python and small to install, its local cluster starts several times faster, and its larger per-task
   overhead is nothing next to a solve; its workers are plain processes running Python functions, which
   suits JAX (each worker its own XLA client, no object store between them). It is an optional dependency:
@@ -31,7 +31,7 @@ on one machine or many, one design a task:
   an earlier worker or sweep compiled. Each design is solved by the static solver's host loop with the
   differentiable solve's options (:meth:`jaxnet.solve.adjoint_statics.Adjoint.solve`), whose programs hold no
   host callback, so nothing of a design's solve is compiled again by a later worker (the first-task times of
-  ``validation/design_sweep.py``, cold and warm, show what each part costs).
+  ``benchmarks/design_sweep.py``, cold and warm, show what each part costs).
 * **results as they arrive.** Each design's row (its θ entries, each figure, Newton iterations, residual,
   status, wall time, worker) is appended to ``out/sweep.jsonl`` as its task completes (one JSON object a
   line) and gathered in a :class:`SweepTable`, returned at the end in the designs' order. A design that

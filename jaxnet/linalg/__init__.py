@@ -59,18 +59,18 @@ TOLERANCE = 1e-12
 #: Steps of iterative refinement tried before refactorising with partial pivoting.
 REFINEMENTS = 2
 #: SuperLU's panel size (columns updated together): 1 is faster than scipy's default on the FEMNET
-#: tangents (their supernodes are small; ``validation/superlu_options.py``); it changes neither the pivots
+#: tangents (their supernodes are small; ``docs/investigations.md``); it changes neither the pivots
 #: nor the fill.
 PANEL_SIZE = 1
 #: SuperLU's relaxed-supernode size (subtrees of the elimination tree of at most this many columns are
 #: merged into one supernode). SuperLU's default, 10, is slower on the FEMNET tangents and on the cage,
 #: and several times slower on the cage meshed finely, at the same fill; 1, 2 and 3 are alike on all of
-#: them (``validation/superlu_options.py``).
+#: them (``docs/investigations.md``).
 RELAX = 2
 
 
 #: bytes of the block :func:`keep_factor_memory` allocates and frees once per process (0: none, the heap
-#: left as glibc starts; ``validation/superlu_memory.py`` compares the two)
+#: left as glibc starts; ``docs/investigations.md`` compares the two)
 MALLOC_PRIMER = 16 << 20
 _PRIMED = []
 
@@ -83,7 +83,7 @@ def keep_factor_memory():
     to the system on free, and every page of the next factor is then faulted in again. glibc raises that
     threshold (and the trim threshold, to twice it) to the size of any mmapped block freed, up to 32 MB:
     freeing one 16 MB block makes the later factors come from the heap and stay there: a factorisation
-    then takes fewer page faults and less time (``validation/superlu_memory.py`` measures both). Elsewhere
+    then takes fewer page faults and less time (``docs/investigations.md``). Elsewhere
     than glibc this is one allocation and its release, nothing more. The process may keep up to 32 MB more
     heap. Called by every :class:`HostSolver`.
     """
@@ -118,7 +118,7 @@ def _structure_digest(indptr, indices):
 #: (structure digest -> :class:`_Ordering`, at most 64): the ordering depends on the structure only, so a
 #: second solve of a scene of the same shape (another load, another start: a warm solve) skips SuperLU's
 #: ordering step and the permutation's set-up, the larger part of a first factorisation
-#: (``validation/femnet_cases.py`` times cold and warm solves)
+#: (``benchmarks/femnet_cases.py`` times cold and warm solves)
 _ORDERINGS = Memo(64)
 
 
@@ -196,7 +196,7 @@ def solve(data, rhs, indptr, indices, transpose=False, reuse=False):
     host = functools.partial(_host_solve_packed, nnz=data.shape[0], rhs_shape=tuple(rhs.shape), transpose=transpose,
                              reuse=reuse)
     # One argument, not four: the callback hands each argument to the host through its own device_put, a
-    # large part of a small solve's cost (``validation/dynamics_cost.py --breakdown`` times the solve through
+    # large part of a small solve's cost (``benchmarks/dynamics.py --breakdown`` times the solve through
     # the callback). The structure travels as float64 values, exact below 2**53.
     packed = jnp.concatenate([data.astype(jnp.float64), rhs.astype(jnp.float64).ravel(),
                               indptr.astype(jnp.float64), indices.astype(jnp.float64)])

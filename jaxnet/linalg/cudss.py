@@ -5,7 +5,7 @@ Why. On a GPU the tangent's assembly runs on the device while PARDISO or SuperLU
 cores, and at 10^4-10^5 nodes the factorisation is what an iteration costs. cuDSS factorises the same tangents
 on the device, faster than SuperLU on the host from 10^4 unknowns, with backward errors at rounding, its time
 growing more slowly with the unknowns (the cage's and a trawl's Newton tangents, and whole solves:
-``validation/bench_device_factorisation.py``; the figures in the section "cuDSS on a GPU" of
+``benchmarks/device_factorisation.py``; the figures in the section "cuDSS on a GPU" of
 ``validation/REPORT.md``).
 
 How. Through ``nvmath-python`` (NVIDIA's Python interface to its math libraries;

@@ -13,7 +13,7 @@ several times more. A perturbed factor is of a nearby matrix: :class:`jaxnet.lin
 such a matrix to SuperLU with partial pivoting, and checks and refines every solution, as it does SuperLU's.
 It runs in oneMKL's reproducible mode (:data:`CNR`), so that one scene gives one answer to the last bit.
 
-Why it. Measured side by side on the static solver's own tangents (``validation/bench_factorisation.py``):
+Why it. Measured side by side on the static solver's own tangents (``benchmarks/factorisation.py``):
 against SuperLU with a minimum-degree ordering, PARDISO factorises as fast on FEMNET's cod-end (10³ nodes)
 and faster on the cage from 10⁴ to 10⁵ nodes, with less fill (the figures: ``validation/REPORT.md``);
 SuperLU with METIS's ordering, UMFPACK, KLU and MUMPS are slower than PARDISO at every size there, and the
@@ -53,8 +53,8 @@ REAL_NONSYMMETRIC = 11
 #: on one machine: PARDISO's threads otherwise sum in an order that varies, and a Newton iteration sensitive to
 #: rounding (the 10⁴-node cage) then gave one scene two iteration counts. "AUTO": the code branch MKL chooses
 #: for this processor, kept for the whole run. Set through MKL's own environment variable, which MKL reads at
-#: its first call; a value the user gave is left as it is. Its cost: ``validation/REPORT.md``, "PARDISO's
-#: reproducible mode".
+#: its first call; a value the user gave is left as it is. Its cost: ``docs/investigations.md``,
+#: "PARDISO's reproducible mode".
 CNR = ("MKL_CBWR", "AUTO")
 
 _LIBRARY = []  # [library or None], once per process

@@ -458,7 +458,7 @@ def tangent_blocks(x, scene, model, state=None, elastic_scale=1.0, stiffness="au
     :func:`tangent` is :func:`scatter_stiffnesses` of these. Why they are also offered apart: compiled
     into one program, XLA's CPU backend runs the pair about twice slower than as two programs, apparently
     because it fuses the element computation into the scatter and computes it again entry by entry (an
-    ``optimization_barrier`` between them does not help; ``validation/compile_options.py`` times the
+    ``optimization_barrier`` between them does not help; ``docs/investigations.md`` (XLA's CPU options) has the times of the
     tangent both ways). The static solver's host loop runs the two programs one after the other."""
     if stiffness not in STIFFNESS_PATHS:
         raise ValueError(f"stiffness must be one of {STIFFNESS_PATHS}, not {stiffness!r}")

@@ -329,10 +329,39 @@ def _check_cable_joints(scene, n):
 def validate(scene: Scene, dynamic: bool = False) -> None:
     """Raise :class:`SceneError` if the scene cannot be solved; the message names the culprit. ``dynamic``: for
     a run in time, where the nodes' masses hold a net that nothing fixes (along an axis, or at all): the
-    checks that a static equilibrium is held are left out."""
+    checks that a static equilibrium is held are left out. The checks run in this order: the nodes, the
+    environment, each element family (the nodes each uses and the edges joining them), the cable joints and
+    catches, and then that every node and every piece of the net is held."""
     if not isinstance(scene, Scene):
         raise TypeError(f"expected a jaxnet Scene, got a {type(scene).__name__}: a Case is run by "
                         "jaxnet.solve_static(case) or jaxnet.simulate(case) (jaxnet.run), its scene is case.scene")
+    n = _check_nodes(scene)
+    _check_environment(scene.environment)
+    _check_symmetry_planes(scene)
+    _check_current_profile(scene.environment)
+    _check_node_bodies(scene.nodes, n)
+    _check_limits(scene, n)
+    used = np.zeros(n, dtype=bool)
+    edges = []
+    for family in (_check_netting, _check_hexagonal, _check_bars):
+        nodes_of_elements = family(scene, n)
+        if nodes_of_elements is not None:
+            elements, family_edges = nodes_of_elements
+            used[elements.ravel()] = True
+            edges += family_edges
+    if scene.cable_joints is not None:
+        _check_cable_joints(scene, n)
+    if scene.catch is not None:
+        _check_catch(scene)
+    if scene.panel_catches is not None:
+        _check_panel_catches(scene)
+    if scene.enclosure is not None:
+        _check_enclosure(scene.enclosure)
+    _check_held(scene, used, edges, dynamic)
+
+
+def _check_nodes(scene):
+    """The nodes' arrays: shapes, finite values, masses and volumes >= 0. Returns the number of nodes."""
     nodes = scene.nodes
     pos = np.asarray(nodes.position, dtype=float)
     if pos.ndim != 2 or pos.shape[1] != 3:
@@ -347,106 +376,110 @@ def validate(scene: Scene, dynamic: bool = False) -> None:
             raise SceneError(f"node {int(bad[0][0])}: {name} is not finite ({float(arr[tuple(bad[0])])!r})")
     _check_positive(nodes.mass, "mass", lambda i: f"node {i}", strict=False)
     _check_positive(nodes.volume, "displaced volume", lambda i: f"node {i}", strict=False)
-    env = scene.environment
-    _check_environment(env)
-    _check_symmetry_planes(scene)
+    for name in ("drag_area", "size"):
+        if getattr(nodes, name) is not None:
+            _check_positive(getattr(nodes, name), name, lambda i: f"node {i}", strict=False)
+    return n
+
+
+def _check_current_profile(env):
+    """The current's profile: factors at strictly increasing depths, finite, of one length."""
     depth, factor = np.asarray(env.profile_depth, dtype=float), np.asarray(env.profile_factor, dtype=float)
     if depth.shape != factor.shape or depth.ndim != 1:
         raise SceneError(f"environment: profile_depth and profile_factor must be 1-D of one length, got "
                          f"{depth.shape} and {factor.shape}")
     if not (np.all(np.isfinite(depth)) and np.all(np.isfinite(factor)) and np.all(np.diff(depth) > 0)):
         raise SceneError("environment: the current profile needs finite factors at strictly increasing depths")
-    for name in ("drag_area", "size"):
-        if getattr(nodes, name) is not None:
-            _check_positive(getattr(nodes, name), name, lambda i: f"node {i}", strict=False)
-    _check_node_bodies(nodes, n)
-    _check_limits(scene, n)
 
-    used = np.zeros(n, dtype=bool)
-    edges = []
-    if scene.netting is not None:
-        net = scene.netting
-        culprit = lambda e: f"triangle {e} ({_panel_name(scene, net, e)})"  # noqa: E731
-        tri = _check_triangles(net, n, culprit, "netting")
-        per_triangle = {f.name: (len(tri),) for f in dataclasses.fields(Netting) if f.name not in ("vertices", "uv")}
-        _check_shapes(net, "netting", per_triangle)
-        _check_positive(net.l0, "unstretched twine length l0", culprit)
-        _check_positive(net.ea_traction, "traction stiffness EA", culprit)
-        _check_positive(net.ea_compression, "compression stiffness EA", culprit, strict=False)
-        _check_positive(net.diameter, "twine diameter", culprit, strict=False)
-        _check_positive(net.density, "volumic mass", culprit, strict=False)
-        for name in ("cd_normal", "tangential_ratio", "opening_stiffness", "knot_size", "knot_stiffness", "bending_stiffness",
-                     "tarp_cd"):
-            if getattr(net, name) is not None:
-                _check_positive(getattr(net, name), name.replace("_", " "), culprit, strict=False)
-        if net.rest_angle is not None:
-            a = np.asarray(net.rest_angle, dtype=float)
-            bad = np.flatnonzero(~((a > 0) & (a <= np.pi / 2)))
+
+def _check_netting(scene, n):
+    """The netting's triangles and their parameters; (triangles, edges) or None without netting."""
+    if scene.netting is None:
+        return None
+    net = scene.netting
+    culprit = lambda e: f"triangle {e} ({_panel_name(scene, net, e)})"  # noqa: E731
+    tri = _check_triangles(net, n, culprit, "netting")
+    per_triangle = {f.name: (len(tri),) for f in dataclasses.fields(Netting) if f.name not in ("vertices", "uv")}
+    _check_shapes(net, "netting", per_triangle)
+    _check_positive(net.l0, "unstretched twine length l0", culprit)
+    _check_positive(net.ea_traction, "traction stiffness EA", culprit)
+    _check_positive(net.ea_compression, "compression stiffness EA", culprit, strict=False)
+    _check_positive(net.diameter, "twine diameter", culprit, strict=False)
+    _check_positive(net.density, "volumic mass", culprit, strict=False)
+    for name in ("cd_normal", "tangential_ratio", "opening_stiffness", "knot_size", "knot_stiffness", "bending_stiffness",
+                 "tarp_cd"):
+        if getattr(net, name) is not None:
+            _check_positive(getattr(net, name), name.replace("_", " "), culprit, strict=False)
+    if net.rest_angle is not None:
+        a = np.asarray(net.rest_angle, dtype=float)
+        bad = np.flatnonzero(~((a > 0) & (a <= np.pi / 2)))
+        if bad.size:
+            raise SceneError(f"{culprit(int(bad[0]))}: rest half opening angle must be in (0, pi/2] rad, got {a[bad[0]]!r}")
+    for field, kind, names in (("drag_model", "drag model", [m.name for m in drag.NETTING_DRAG_MODELS]),
+                               ("knot_form", "knot contact form", list(knot.FORMS))):
+        if getattr(net, field) is not None:
+            m = np.asarray(getattr(net, field))
+            bad = np.flatnonzero(~np.isin(m, np.arange(len(names))))
             if bad.size:
-                raise SceneError(f"{culprit(int(bad[0]))}: rest half opening angle must be in (0, pi/2] rad, got {a[bad[0]]!r}")
-        for field, kind, names in (("drag_model", "drag model", [m.name for m in drag.NETTING_DRAG_MODELS]),
-                                   ("knot_form", "knot contact form", list(knot.FORMS))):
-            if getattr(net, field) is not None:
-                m = np.asarray(getattr(net, field))
-                bad = np.flatnonzero(~np.isin(m, np.arange(len(names))))
-                if bad.size:
-                    codes = ", ".join(f"{code} ({name})" for code, name in enumerate(names))
-                    raise SceneError(f"{culprit(int(bad[0]))}: {kind} code must be one of {codes}, got {m[bad[0]]!r}")
-        used[tri.ravel()] = True
-        edges += [tri[:, [0, 1]], tri[:, [1, 2]]]
-    if scene.hexagonal is not None:
-        hexa = scene.hexagonal
-        culprit = lambda e: f"hexagonal triangle {e} ({_panel_name(scene, hexa, e)})"  # noqa: E731
-        tri = _check_triangles(hexa, n, culprit, "hexagonal")
-        _check_shapes(hexa, "hexagonal", {"l0": (len(tri), 3), "ea_traction": (len(tri), 3),
-                                          "ea_compression": (len(tri), 3), "diameter": (len(tri),),
-                                          "density": (len(tri),), "panel": (len(tri),)})
-        for name in ("l0", "ea_traction", "ea_compression"):
-            values = np.asarray(getattr(hexa, name), dtype=float).min(axis=1)   # the smallest of its families
-            _check_positive(values, name, culprit, strict=(name != "ea_compression"))
-        _check_positive(hexa.diameter, "twine diameter", culprit, strict=False)
-        _check_positive(hexa.density, "volumic mass", culprit, strict=False)
-        # say so rather than leave hexagonal netting silently without this load
-        if env.current_speed > 0:
-            raise SceneError(f"{culprit(0)}: hexagonal netting has no drag model yet; it cannot be put in a current")
-        used[tri.ravel()] = True
-        edges += [tri[:, [0, 1]], tri[:, [1, 2]]]
-    if scene.bars is not None:
-        bars = scene.bars
-        ends = np.asarray(bars.ends)
-        if ends.ndim != 2 or ends.shape[1] != 2:
-            raise SceneError(f"bars: ends must have shape (B, 2) (two nodes per bar), got {ends.shape}")
-        _check_indices(ends, "bars: ends")
-        _check_shapes(bars, "bars", {f.name: (len(ends),) for f in dataclasses.fields(Bars) if f.name != "ends"})
-        if ends.size and (ends.min() < 0 or ends.max() >= n):
-            b = int(np.argwhere((ends < 0) | (ends >= n))[0][0])
-            raise SceneError(f"bar {b} ({_cable_name(scene, b)}): end node index outside 0..{n - 1}")
-        culprit = lambda b: f"bar {b} ({_cable_name(scene, b)})"  # noqa: E731
-        _check_positive(bars.rest_length, "unstretched length", culprit)
-        _check_positive(bars.ea_traction, "traction stiffness EA", culprit)
-        _check_positive(bars.ea_compression, "compression stiffness EA", culprit, strict=False)
-        _check_positive(bars.diameter, "diameter", culprit, strict=False)
-        _check_positive(bars.density, "volumic mass", culprit, strict=False)
-        for name in ("cd_normal", "tangential_ratio"):
-            if getattr(bars, name) is not None:
-                _check_positive(getattr(bars, name), name.replace("_", " "), culprit, strict=False)
-        same = np.flatnonzero(ends[:, 0] == ends[:, 1])
-        if same.size:
-            raise SceneError(f"{culprit(int(same[0]))}: both ends on node {ends[same[0], 0]}")
-        used[ends.ravel()] = True
-        edges.append(ends)
+                codes = ", ".join(f"{code} ({name})" for code, name in enumerate(names))
+                raise SceneError(f"{culprit(int(bad[0]))}: {kind} code must be one of {codes}, got {m[bad[0]]!r}")
+    return tri, [tri[:, [0, 1]], tri[:, [1, 2]]]
 
-    if scene.cable_joints is not None:
-        _check_cable_joints(scene, n)
 
-    if scene.catch is not None:
-        _check_catch(scene)
-    if scene.panel_catches is not None:
-        _check_panel_catches(scene)
-    if scene.enclosure is not None:
-        _check_enclosure(scene.enclosure)
+def _check_hexagonal(scene, n):
+    """The hexagonal netting's triangles and their parameters; (triangles, edges) or None without it."""
+    if scene.hexagonal is None:
+        return None
+    hexa = scene.hexagonal
+    culprit = lambda e: f"hexagonal triangle {e} ({_panel_name(scene, hexa, e)})"  # noqa: E731
+    tri = _check_triangles(hexa, n, culprit, "hexagonal")
+    _check_shapes(hexa, "hexagonal", {"l0": (len(tri), 3), "ea_traction": (len(tri), 3),
+                                      "ea_compression": (len(tri), 3), "diameter": (len(tri),),
+                                      "density": (len(tri),), "panel": (len(tri),)})
+    for name in ("l0", "ea_traction", "ea_compression"):
+        values = np.asarray(getattr(hexa, name), dtype=float).min(axis=1)   # the smallest of its families
+        _check_positive(values, name, culprit, strict=(name != "ea_compression"))
+    _check_positive(hexa.diameter, "twine diameter", culprit, strict=False)
+    _check_positive(hexa.density, "volumic mass", culprit, strict=False)
+    # say so rather than leave hexagonal netting silently without this load
+    if scene.environment.current_speed > 0:
+        raise SceneError(f"{culprit(0)}: hexagonal netting has no drag model yet; it cannot be put in a current")
+    return tri, [tri[:, [0, 1]], tri[:, [1, 2]]]
 
-    fixed = np.asarray(nodes.fixed, dtype=bool)
+
+def _check_bars(scene, n):
+    """The bars' ends and parameters; (ends, [ends]) or None without bars."""
+    if scene.bars is None:
+        return None
+    bars = scene.bars
+    ends = np.asarray(bars.ends)
+    if ends.ndim != 2 or ends.shape[1] != 2:
+        raise SceneError(f"bars: ends must have shape (B, 2) (two nodes per bar), got {ends.shape}")
+    _check_indices(ends, "bars: ends")
+    _check_shapes(bars, "bars", {f.name: (len(ends),) for f in dataclasses.fields(Bars) if f.name != "ends"})
+    if ends.size and (ends.min() < 0 or ends.max() >= n):
+        b = int(np.argwhere((ends < 0) | (ends >= n))[0][0])
+        raise SceneError(f"bar {b} ({_cable_name(scene, b)}): end node index outside 0..{n - 1}")
+    culprit = lambda b: f"bar {b} ({_cable_name(scene, b)})"  # noqa: E731
+    _check_positive(bars.rest_length, "unstretched length", culprit)
+    _check_positive(bars.ea_traction, "traction stiffness EA", culprit)
+    _check_positive(bars.ea_compression, "compression stiffness EA", culprit, strict=False)
+    _check_positive(bars.diameter, "diameter", culprit, strict=False)
+    _check_positive(bars.density, "volumic mass", culprit, strict=False)
+    for name in ("cd_normal", "tangential_ratio"):
+        if getattr(bars, name) is not None:
+            _check_positive(getattr(bars, name), name.replace("_", " "), culprit, strict=False)
+    same = np.flatnonzero(ends[:, 0] == ends[:, 1])
+    if same.size:
+        raise SceneError(f"{culprit(int(same[0]))}: both ends on node {ends[same[0], 0]}")
+    return ends, [ends]
+
+
+def _check_held(scene, used, edges, dynamic):
+    """Every free node belongs to an element; for a static solve, something holds the net along every axis
+    and every connected piece of it (``edges``: the node pairs joined by elements) has a fixed node."""
+    fixed = np.asarray(scene.nodes.fixed, dtype=bool)
+    n = scene.n_nodes
     free_unused = np.flatnonzero(~used & ~fixed.all(axis=1))
     if free_unused.size:
         raise SceneError(f"node {int(free_unused[0])} belongs to no element and is not fixed: nothing holds it")
@@ -457,7 +490,7 @@ def validate(scene: Scene, dynamic: bool = False) -> None:
     floating = has_free_surface(scene)
     for axis, label in enumerate("xyz"):
         # a net at the free surface is held vertically by its buoyancy (waterplane stiffness)
-        if floating and abs(float(np.asarray(env.up)[axis])) > 1e-12:
+        if floating and abs(float(np.asarray(scene.environment.up)[axis])) > 1e-12:
             continue
         if not fixed[:, axis].any():
             raise SceneError(f"no node is fixed along {label}: the net is free to translate along {label}")

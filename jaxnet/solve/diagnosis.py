@@ -21,7 +21,7 @@ Bars that carry little. A bar stretched by only ε, turned by an angle θ in one
 about L0 θ²/2 more than the step's linear model expects: a tension EA θ²/2 it was not meant to take, which
 outweighs its own EA ε once θ exceeds √(2ε). Where the net must still turn such bars, each iteration first undoes
 the last one's stretch and turns them a little further: the residual stays at a few newtons for hundreds of
-iterations (the stretch barrier of large rotations; ``validation/newton_chaos.py --trace`` shows it on FEMNET's
+iterations (the stretch barrier of large rotations; ``docs/investigations.md`` shows it on FEMNET's
 1pelagic_trawl/toto1, whose links of 1 cm and EA 1.6e6 N are stretched by 4e-5). :func:`barely_taut_bars` finds
 such bars at the worst node. Where a bar's stretch does not matter (a short link), a lower EA stretches it more
 and lets it turn.

@@ -48,7 +48,7 @@ step, whose programs are kept on disk, so that the next run and a resumed one lo
 program per interval (:func:`advance`: ``lax.while_loop`` over steps, Newton's ``lax.while_loop`` inside, the
 factorisation a host callback, which keeps it from the disk: compiled by every process, cheaper per step).
 By default a run of many steps takes the compiled loop, a shorter one the host's
-(:data:`jaxnet.solve.options.AUTO_COMPILED_STEPS`); ``validation/dynamics_loops.py`` measures both.
+(:data:`jaxnet.solve.options.AUTO_COMPILED_STEPS`); ``benchmarks/dynamics_loops.py`` measures both.
 
 Loading in time (:class:`Loading`): a current whose speed follows a history (:mod:`jaxnet.water.forcing`),
 waves (``Environment.waves``, :mod:`jaxnet.water.waves`: regular, Stokes, an irregular sea), and prescribed motions

@@ -134,7 +134,7 @@ def _tangent_solver(x_free, scene, structure, stiffness, step=None):
     with its sparse entries (differentiable in the design: a second derivative differentiates K); with a
     catch, ``jax.jvp`` of the residual. ``custom_linear_solve`` traces matvec and its transpose whether or not
     the solves use them, and the residual's JVP and its transpose are a program as large as the residual's
-    (``validation/design_cost.py``), where the sparse product is a gather and a segment sum. The solves use
+    (``benchmarks/design.py``), where the sparse product is a gather and a segment sum. The solves use
     K's sparse factorisation (one, kept on the host for all of them) and, where K is not exactly J (a
     catch), refine against J."""
     pattern = structure.pattern

@@ -62,7 +62,7 @@ Where it is used. ``Newton(method="primal-dual")``, the static solve's default (
 but not for FEMNET's cases, whose reader asks for the damped method (:mod:`jaxnet.io.femnet.mapping` says why);
 an implicit time step keeps the damped method (:data:`jaxnet.solve.options.TIME_STEP`: a step starts next to its
 answer, where the damped method takes a few iterations and an interior method, which must centre its tensions
-again, several times more; validation/REPORT.md measures both), as does the jittable iteration
+again, several times more; docs/investigations.md measures both), as does the jittable iteration
 (:func:`jaxnet.solve.newton.newton_loop`). The gradients of an equilibrium (:mod:`jaxnet.solve.implicit`,
 :mod:`jaxnet.solve.adjoint_statics`) are taken at the converged point, whichever method found it.
 
@@ -110,7 +110,7 @@ def suits(model) -> bool:
     which only reads where a catch's front is). The catch's pressure gives a cod-end more than one balanced shape
     (one turned inside out balances too); the method's merit, the out-of-balance force, does not tell a stable one
     from an unstable one, and on jaxnet's small cod-ends it converged to the inverted one where the damped method,
-    which descends the energy, finds the cod-end filled (validation/REPORT.md); a net with a catch is left to the
+    which descends the energy, finds the cod-end filled (docs/investigations.md); a net with a catch is left to the
     damped method."""
     rods, rest = split(model)
     return bool(rods) and not any(t.term.kind == "force" and t.term.state is not None and not t.term.moving

@@ -111,7 +111,7 @@ def tangent_blocks(x, state, scale, scene, pattern, model, stiffness="autodiff",
     diagonal of a time step (``step``: its drag's dependence on the velocities is in). The host loop
     (:func:`jaxnet.solve.statics.host_loop`) sums them in a program of its own
     (:func:`jaxnet.model.assemble.scatter_stiffnesses`), which XLA runs faster than the pair compiled as one
-    (``tangent_blocks`` says why; ``validation/femnet_cases.py`` times the solves)."""
+    (``tangent_blocks`` says why; ``benchmarks/femnet_cases.py`` times the solves)."""
     X = assemble.positions(x, scene, pattern)
     return assemble.tangent_blocks(X, scene, model, state, scale, stiffness, None if step is None else step.motion)
 

@@ -31,12 +31,12 @@ free sides of a curtain hanging from a rope, which gather and close their meshes
 minimum — the energy is flat over every arrangement of the slack netting and the last loads are carried by
 twines a few 1e-7 in strain from their slack kink — and converge linearly, in a few hundred iterations
 (the stability suite, ``validation/stability.py``, holds such nets). Well-held nets converge in a few to a
-few tens of iterations, whatever their size (``validation/bench_statics.py``). A second limit, on FEMNET's
+few tens of iterations, whatever their size (``benchmarks/statics.py``). A second limit, on FEMNET's
 gear: a bar that carries little (a 1 cm link of EA 1.6e6 N stretched by ε = 4e-5) can be turned by only about
 √(2ε) (9e-3 rad) in one step before the stretch the step makes (L0 θ²/2 more than its linear model expects)
 outweighs its tension; where the net must still turn such bars, each iteration undoes the last one's stretch and
 turns them a little further, for hundreds of iterations at a residual of a few newtons, and the path taken around
-that barrier hangs on the last bits of the arithmetic (``validation/newton_chaos.py`` measures both).
+that barrier hangs on the last bits of the arithmetic (``docs/investigations.md``).
 
 Units: m, N, J; damping dimensionless.
 """

@@ -62,8 +62,8 @@ class Newton:
       (``jax.jacfwd`` of every term). Both are the same matrix to rounding (tested per element and on whole
       solves), and the answer does not depend on it: the residual is always the energies' gradient and the
       forces themselves, only the steps towards it are the tangent's. The closed forms are the default
-      because they are cheaper to compile and to run (``validation/femnet_cases.py`` times whole solves
-      with either, ``validation/stiffness_cost.py`` the element matrices).
+      because they are cheaper to compile and to run (``benchmarks/femnet_cases.py`` times whole solves
+      with either, ``benchmarks/stiffness.py`` the element matrices).
     verbose: print one line per iteration.
     method: the static iteration, one of :data:`METHODS`: ``"primal-dual"`` (the default: the tension and gap of
       every tension-only twine and bar as unknowns, an interior-point Newton, :mod:`jaxnet.solve.interior`; where
@@ -124,7 +124,7 @@ STATIC = Newton()
 #: tangent is a large part of its cost, and the moving drag's autodiff tangent (jacfwd through the drag
 #: computed once per vertex) most of it; the drag, which depends on the velocities here, takes its closed
 #: form where the assembly hands it the vertices' velocities (:meth:`jaxnet.model.ActiveTerm.has_closed_form`).
-#: ``validation/dynamics_cost.py`` measures both paths.
+#: ``benchmarks/dynamics.py`` measures both paths.
 TIME_STEP = Newton(tol=TOL_N, max_iter=30, damping=1e-12, stall_window=None, line_search=20, method="damped")
 
 #: the differentiable equilibrium's forward solve (:func:`jaxnet.solve.implicit.equilibrium`, the design
@@ -137,7 +137,7 @@ LOOPS = ("auto", "host", "compiled")
 
 #: ``loop="auto"`` takes the compiled loop for a run of more steps than this still to take: the host loop's
 #: extra cost a step then outweighs the compiled loop's compilation in every process (both measured by
-#: ``validation/dynamics_loops.py`` on the cage in waves and the seine s4: ``validation/REPORT.md``)
+#: ``benchmarks/dynamics_loops.py`` on the cage in waves and the seine s4: ``validation/REPORT.md``)
 AUTO_COMPILED_STEPS = 1500
 
 
@@ -157,7 +157,7 @@ class Implicit:
       on disk may hold: compiled again by every process (seconds), cheaper per step. ``"auto"`` (default): the
       compiled loop for a run of more than :data:`AUTO_COMPILED_STEPS` steps still to take, where the host's
       cost per step outweighs a compilation, the host loop otherwise (``validation/REPORT.md``,
-      "dynamics_loops.py", measures both).
+      "benchmarks/dynamics_loops.py", measures both).
     """
 
     time_step: float = 0.01

@@ -4,7 +4,7 @@ A solve runs a handful of compiled programs (the evaluation of the residual, the
 network, the loads: :func:`jaxnet.solve.statics.solve`). Compiling them is most of a first solve, several
 times the Newton iteration itself on FEMNET's cases. JAX's persistent compilation cache keeps the XLA
 executables, but a new process still traces and lowers every program before it can look one up, about half
-of a second run's time (``validation/femnet_cases.py`` times both). So the programs are kept here as whole
+of a second run's time (``benchmarks/femnet_cases.py`` times both). So the programs are kept here as whole
 executables instead, keyed by everything that decides them:
 
 * the program (a name) and its static arguments (the active terms and their options, the stiffness path;
@@ -52,8 +52,8 @@ SUBDIRECTORY = "jaxnet-programs"
 #: they run as fast: most of a first solve is compilation. And no YNNPACK fusions (an empty list of fusion
 #: types): by default XLA hands the dots of the (E, 3, 3) stacks and the elementwise work around them to
 #: YNNPACK, which is slower on such small matrices, for the same compile time.
-#: ``validation/compile_options.py`` compiles and runs the solver's programs with XLA's defaults and with
-#: these, side by side. Options of the CPU backend only: a GPU backend refuses them ("No such compile option").
+#: ``docs/investigations.md`` (XLA's CPU options) has the solver's programs compiled and run with XLA's
+#: defaults and with these, side by side. Options of the CPU backend only: a GPU backend refuses them ("No such compile option").
 COMPILER_OPTIONS = {"xla_cpu_use_fusion_emitters": False, "xla_cpu_experimental_ynn_fusion_type": ""}
 
 

@@ -36,7 +36,7 @@ the largest residual of the net as it is): a misjudged start costs iterations, n
 continuation that ran out of iterations a stage or two short of the end is not thrown away (the stability
 suite's small curtains in a 1 m/s current from a crumpled start did not converge when plain Newton went
 back to the crumpled start; ``validation/stability.py``). The continuation cuts the iterations of nets that
-start far from their shape several-fold (``validation/femnet_cases.py``: FEMNET's cases); nets that
+start far from their shape several-fold (``benchmarks/femnet_cases.py``: FEMNET's cases); nets that
 converge steadily never soften, nor do slack curtains that stall while carrying their loads (balancing
 scale 0.005-0.1: softened, they take more iterations, not fewer). The jitted
 :func:`~jaxnet.solve.newton.newton_loop` has no continuation.
@@ -65,7 +65,7 @@ from jaxnet.solve.options import STATIC, Newton
 from jaxnet.solve.results import CONVERGED, NON_FINITE, RUNNING, STALLED, Equilibrium, SolveError, Timing
 
 __all__ = ["solve", "host_loop", "damped_loop", "compile_pieces", "damped_pieces", "start_coordinates",
-           "FreeCoordinates", "step_loads", "constant_loads"]
+           "FreeCoordinates", "step_loads", "constant_loads", "Continuation"]
 
 
 # -- the compiled pieces ----------------------------------------------------------------------------------
@@ -132,7 +132,7 @@ def damped_pieces(start, scene, pattern, model, stiffness="autodiff", step=None)
     The order matters on a first solve: tracing holds the GIL, XLA's compilation does not. So the
     evaluation is traced first and alone, and compiles while the tangent is traced, which then compiles
     while the small scatter, spring network and loads are traced (faster from start to all compiled than
-    every program traced at once; ``validation/femnet_cases.py`` times cold solves). Each trace gives the
+    every program traced at once; ``benchmarks/femnet_cases.py`` times cold solves). Each trace gives the
     next one's argument shapes: the evaluation's, the force terms' states (the catch front); the tangent's,
     its element matrices."""
     zero = np.zeros(scene.nodes.position.shape)
@@ -241,6 +241,68 @@ def step_loads(load_device, pattern, step):
     return load_device + step.water_load, inertia, np.asarray(pattern.diagonal)
 
 
+class Continuation:
+    """The stiffness continuation of :func:`damped_loop` (module docstring), a small state machine over the
+    stages of :func:`jaxnet.solve.newton.stiffness_stages`: the net solved at ``scale`` times its stiffness, then
+    stiffened stage by stage. ``stage`` is the index of the scale in use, the last (1, the net as it is) for
+    plain Newton, -1 before the first softened stage.
+
+    It starts when plain Newton overstretches (:func:`jaxnet.solve.newton.overstretched`), with half the
+    iterations left (:meth:`start_if_stalling`); it moves to the next stage when the residual falls below
+    ``stage_rtol`` times the stage's first (:meth:`due_to_stiffen`); it ends when its iterations run out or a
+    softened stage fails (:meth:`due_to_end`), and plain Newton goes on from the iterate it kept or from where
+    it got to. An implicit time step (``static=False``) has plain Newton only."""
+
+    def __init__(self, solver: Newton, static: bool = True):
+        self.solver = solver
+        self.scales = newton.stiffness_stages(solver) if static else [1.0]
+        self.final = len(self.scales) - 1
+        self.stage = self.final
+        self.stage_start = np.inf   # the residual at the start of the stage (N)
+        self.softened = False       # started once (it never starts twice)
+        self.kept = None            # the iterate it started from
+        self.until = None           # the iteration at which it ends
+
+    @property
+    def scale(self):
+        """The stiffness scale of the stage in use."""
+        return self.scales[self.stage]
+
+    def start_if_stalling(self, it, history, balance, iterate):
+        """Starts the continuation at iteration ``it`` if plain Newton is stalling on an overstretched net
+        (``history``: the residuals so far, ``balance``: the balancing scales), keeping ``iterate``."""
+        if not self.softened and self.final > 0 and newton.overstretched(history[1:it + 1], balance, self.solver):
+            self.stage, self.softened = -1, True
+            self.kept, self.until = iterate, it + (self.solver.max_iter - it) // 2
+
+    def due_to_end(self, it):
+        """Whether the softened stages end at iteration ``it`` (out of their iterations, or failed)."""
+        return self.stage < self.final and self.softened and it >= self.until
+
+    def end(self):
+        """Plain Newton from now on; returns the iterate the continuation started from."""
+        self.stage = self.final
+        return self.kept
+
+    def due_to_stiffen(self, residual):
+        """Whether to move to the next stage at this ``residual`` (N)."""
+        return self.stage < self.final and (
+            self.stage < 0 or residual <= max(self.solver.tol, self.solver.stage_rtol * self.stage_start))
+
+    def converged_softened(self, status):
+        """A softened net's equilibrium is not the answer: RUNNING (go on stiffening) where ``status`` says
+        CONVERGED on a softened stage."""
+        return RUNNING if status == CONVERGED and self.stage < self.final else status
+
+    def failed_softened(self, status, it):
+        """A softened stage that stalled or met a non-finite value ends the continuation at the next
+        iteration (:meth:`due_to_end`): RUNNING for now."""
+        if status in (STALLED, NON_FINITE) and self.stage < self.final:
+            self.until = it + 1
+            return RUNNING
+        return status
+
+
 def damped_loop(start, scene, pattern, model, solver: Newton, pieces=None, step=None):
     """The Newton iteration of :func:`jaxnet.solve.newton.newton_loop` with the stiffness continuation,
     driven from Python: each iteration calls the compiled tangent once, factorises on the host and
@@ -281,13 +343,12 @@ def damped_loop(start, scene, pattern, model, solver: Newton, pieces=None, step=
     def matvec(data, v):
         return linalg.host_matvec(data, indptr, indices, v)
 
-    scales = newton.stiffness_stages(solver) if step is None else [1.0]
-    stage = len(scales) - 1  # plain Newton (the net as it is) until the continuation starts
+    continuation = Continuation(solver, static=step is None)
 
     def run(x, f_frozen, previous):
         # previous: the force terms' states at the last accepted iterate, where their solutions start
         t = time.perf_counter()
-        e, force, f_nc, m, state = evaluate(x, f_frozen, load_device, scales[stage], scene_on_device,
+        e, force, f_nc, m, state = evaluate(x, f_frozen, load_device, continuation.scale, scene_on_device,
                                             pattern_on_device, previous, step)
         # one transfer for the four (a float() or asarray per array would wait on the device each)
         e, force, f_nc, m = jax.device_get((e, force, f_nc, m))
@@ -307,20 +368,15 @@ def damped_loop(start, scene, pattern, model, solver: Newton, pieces=None, step=
     hist[0] = res
     it, mu = 0, solver.damping
     st = int(newton.status(0, res, e_stored, solver, np))
-    stage_start, softened = res, False
+    continuation.stage_start = res
     balance = []  # after each iteration, the elastic scale that best balances the loads there
-    final = len(scales) - 1
     tangent_at = None  # (x, state, stage) of the last tangent: held, so a new x or state is a new object
     while st == RUNNING:
-        if not softened and final > 0 and newton.overstretched(hist[1:it + 1], balance, solver):
-            # plain Newton is stalling: the stiffness continuation starts here, with half the iterations
-            # left; if it fails or runs out of them, plain Newton goes on from here or from where it got to
-            stage, softened = -1, True
-            resume, soft_until = (x, f, e_stored, force, f_nc, state, mu), it + (solver.max_iter - it) // 2
-        if stage < final and softened and it >= soft_until:
+        continuation.start_if_stalling(it, hist, balance, (x, f, e_stored, force, f_nc, state, mu))
+        if continuation.due_to_end(it):
             # plain Newton goes on from the better start, by the residual of the net as it is: where the
             # continuation began, or where it got to (a net nearly stiffened back is often much closer)
-            stage = final
+            resume = continuation.end()
             here = run(x, f_nc, state)
             f_here = here[1].ravel()[free]
             if nodal(f_here).max() < nodal(resume[1]).max():
@@ -331,23 +387,24 @@ def damped_loop(start, scene, pattern, model, solver: Newton, pieces=None, step=
             res = nodal(f).max()
             if solver.verbose:
                 print(f"  stiffness continuation abandoned: plain Newton {where}")
-        if stage < final and (stage < 0 or res <= max(solver.tol, solver.stage_rtol * stage_start)):
+        if continuation.due_to_stiffen(res):
             # next stage: the same positions, a stiffer net (the residual jumps, mu is kept)
-            stage += 1
+            continuation.stage += 1
             e_stored, force, f_nc, _, state = run(x, f_nc, state)
             f = force.ravel()[free]
-            res = stage_start = nodal(f).max()
+            res = continuation.stage_start = nodal(f).max()
             if solver.verbose:
-                print(f"  stiffness x {scales[stage]:.3g}")
+                print(f"  stiffness x {continuation.scale:.3g}")
         X = positions(x)
         work = float(np.sum((load + f_nc) * X))
         e = e_stored - work
-        if tangent_at is None or tangent_at[0] is not x or tangent_at[1] is not state or tangent_at[2] != stage:
+        if tangent_at is None or tangent_at[0] is not x or tangent_at[1] is not state or \
+                tangent_at[2] != continuation.stage:
             # an iteration that took no step leaves x as it was: its tangent serves again, only mu changes
             # element matrices, on the device
             t = time.perf_counter()
-            blocks = tangent(x, state, scales[stage], scene_on_device, pattern_on_device, step)
-            data, tangent_at = np.asarray(scatter(blocks, pattern_on_device)), (x, state, stage)
+            blocks = tangent(x, state, continuation.scale, scene_on_device, pattern_on_device, step)
+            data, tangent_at = np.asarray(scatter(blocks, pattern_on_device)), (x, state, continuation.stage)
             if inertia is not None:
                 data = data.copy()
                 data[diagonal] += inertia
@@ -369,14 +426,12 @@ def damped_loop(start, scene, pattern, model, solver: Newton, pieces=None, step=
         res = nodal_now.max()
         st = int(newton.status(it + 1, res, m_new if accepted else e, solver, np,
                                excess=np.max(nodal_now - np.maximum(solver.tol, floor))))
-        if st == CONVERGED and stage < final:
-            st = RUNNING  # a softened net's equilibrium: go on stiffening
+        st = continuation.converged_softened(st)
         mu_next = float(newton.next_damping(mu, accepted, trials, e, m_new, predicted,
                                             res / max(hist[it], 1e-300), solver, np))
         if st == RUNNING and not accepted and mu >= solver.max_damping:
             st = STALLED
-        if st in (STALLED, NON_FINITE) and stage < final:
-            st, soft_until = RUNNING, it + 1  # a softened net failed: abandon the continuation (above)
+        st = continuation.failed_softened(st, it)
         hist[it + 1] = res
         balance.append(newton.balancing_scale((load + f_nc).ravel()[free], f))
         if solver.verbose:

@@ -582,7 +582,7 @@ def read_don(path, femnet_laws=True, refine=1.0):
     mesh): every panel's meshing step and ``Meshing_UV`` lattice divided by it, the bars of every cable and
     of every numerical twine's period multiplied by it (rounded up). Nodes grow about as ``refine²``. For
     studies of mesh convergence (is FEMNET's mesh fine enough for a figure?) and of cost against size on
-    real gear (``validation/bench_statics.py --scene trawl``). Node types go where the file puts them, on the
+    real gear (``benchmarks/statics.py --scene trawl``). Node types go where the file puts them, on the
     finer mesh: a type's mass, force and body are per node, as in FEMNET, so where a side or a panel's interior
     has a loaded type, the finer mesh's more nodes carry more of it in all (as FEMNET's own mesh of a finer step
     would); corners and cable ends keep theirs.

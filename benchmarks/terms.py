@@ -1,6 +1,6 @@
 """Benchmark of the default scene (the fish cage in current) and of what each physical term costs.
 
-    python validation/bench_terms.py [--steps 0.8 0.5 0.3] [--terms-step STEP] [--repeats 11]
+    python benchmarks/terms.py [--steps 0.8 0.5 0.3] [--terms-step STEP] [--repeats 11]
                                      [--compile-repeats 3] [--only sizes|terms]
 
 The scene is :func:`jaxnet.scenes.cage.fish_cage` with its defaults, meshed at the given steps (m): the
@@ -18,7 +18,7 @@ as ratios measured side by side in one run, not as absolute figures). Nothing is
        (``linalg.HostSolver.solve``, wrapped by a timer for this solve), mean per call: the loop factorises
        K + mu S, the tangent damped by the spring network;
      * linear solve at the solution: one sparse LU factorisation + solve of the undamped tangent at the
-       solution (diagonal raised by 1e-9 x max|K|, as in bench_statics.py), median of ``--repeats``.
+       solution (diagonal raised by 1e-9 x max|K|, as in statics.py), median of ``--repeats``.
        This undamped matrix can need off-diagonal pivots where the damped ones of the loop do not (at
        the cage's solution, when this was written: a slightly indefinite symmetric part, rows whose
        diagonal is under a tenth of their largest entry), and then fills and costs more: both are printed;
@@ -305,7 +305,7 @@ def print_sizes(steps, repeats):
     print("1. Fish cage (jaxnet.scenes.cage defaults) at three refinements, solved from the start shape")
     print("   assembly = jitted tangent + out-of-balance force at the solution (median); LU loop = mean time of the")
     print("   factorisation + solve calls made inside the Newton loop (on K + mu S); LU sol. = factorisation + solve")
-    print("   of the tangent at the solution (median; as bench_statics.py); it = run time / iterations;")
+    print("   of the tangent at the solution (median; as statics.py); it = run time / iterations;")
     print("   rest = it - assembly - LU loop (line search energies and forces, the loop's own work; it can come")
     print("   out negative on small nets, where the standalone assembly's dispatch and transfer weigh more)")
     print(f"{'step m':>6} {'nodes':>6} {'dof':>6} {'nnz':>7} {'iter':>4} {'conv':>4} {'resid N':>7} {'compile s':>9} "

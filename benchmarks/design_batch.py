@@ -1,6 +1,6 @@
 """Benchmark of batches of designs (jaxnet.design.batch): vmapped on one device, one by one, sharded.
 
-    python validation/design_batch.py [--sizes 1 4 16] [--meshes 4] [--devices 4] [--repeats 3] [--gradient]
+    python benchmarks/design_batch.py [--sizes 1 4 16] [--meshes 4] [--devices 4] [--repeats 3] [--gradient]
 
 The scene is the hanging panel of ``--meshes`` meshes (jaxnet.scenes.panel, no current, meshing step 0.05 m:
 15 nodes at 4 meshes; its twines resisting compression as traction and its sinker bar hinged, the smooth

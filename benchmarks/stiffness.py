@@ -1,6 +1,6 @@
 """Closed-form against autodiff stiffness: compile time, run time and memory, per term and in total.
 
-    python validation/stiffness_cost.py [--elements 1000 10000 100000] [--repeats 7] [--json FILE]
+    python benchmarks/stiffness.py [--elements 1000 10000 100000] [--repeats 7] [--json FILE]
 
 For each size the built-in cod-end (:func:`jaxnet.scenes.codend.codend`) is meshed to about that many
 triangles, with a twine that switches on every term the book gives a stiffness for: twine tension (with a

@@ -1,16 +1,16 @@
 """Sparse direct solves on an accelerator against the host's, on the static solver's own tangents.
 
-    python validation/bench_device_factorisation.py [--tangents DIR] [--matrices NAME ...] [--solvers NAME ...]
+    python benchmarks/device_factorisation.py [--tangents DIR] [--matrices NAME ...] [--solvers NAME ...]
                                                     [--repeats 3] [--target 4] [--limit 120]
-    python validation/bench_device_factorisation.py --export-iterates DIR [--tangents DIR] [--matrices ...]
-    python validation/bench_device_factorisation.py --iterates DIR [--corpus DIR] [--tangents DIR] [--build-only]
+    python benchmarks/device_factorisation.py --export-iterates DIR [--tangents DIR] [--matrices ...]
+    python benchmarks/device_factorisation.py --iterates DIR [--corpus DIR] [--tangents DIR] [--build-only]
 
-The tangents are those ``validation/bench_factorisation.py`` computes and keeps (its ``--tangents`` directory,
+The tangents are those ``benchmarks/factorisation.py`` computes and keeps (its ``--tangents`` directory,
 by default ``jaxnet-tangents`` in the system's temporary directory): run it first, on any machine. The
 matrices of 10^5 nodes weigh 60-75 MB each; their Newton iterates (the free coordinates, a few MB) rebuild
 them exactly: ``--export-iterates DIR`` writes the iterates of the kept tangents to ``DIR``, and
 ``--iterates DIR`` on the accelerator's machine rebuilds each tangent there with jaxnet
-(:func:`bench_factorisation.tangent_at`, on JAX's default device: an assembly on the accelerator) into
+(:func:`factorisation.tangent_at`, on JAX's default device: an assembly on the accelerator) into
 ``--tangents`` before measuring (``--build-only``: only that). The trawl's tangents read FEMNET's case from
 ``--corpus`` (default: ``../shared/femnet-corpus``). On each tangent, side by side:
 
@@ -153,7 +153,7 @@ def export_iterates(tangents, names, out):
             continue
         z = np.load(path)
         if "x" not in z:
-            raise SystemExit(f"{path} holds no iterate: recompute it with bench_factorisation.py --regenerate")
+            raise SystemExit(f"{path} holds no iterate: recompute it with factorisation.py --regenerate")
         np.savez(out / path.name, x=z["x"])
         print(f"{path.stem}: {z['x'].size} unknowns -> {out / path.name}")
 
@@ -162,7 +162,7 @@ def build_from_iterates(iterates, corpus, tangents, names):
     """Rebuild each tangent of ``iterates`` (files NAME.npz holding ``x``) into ``tangents``/NAME.npz."""
     import jax
 
-    import bench_factorisation as factorisation
+    import factorisation
 
     factorisation.TRAWL = corpus / factorisation.TRAWL.relative_to(factorisation.ROOT.parent / "shared"
                                                                      / "femnet-corpus")
@@ -211,7 +211,7 @@ def main(argv=None):
     if args.matrices:
         paths = [p for p in paths if p.stem in args.matrices]
     if not paths:
-        raise SystemExit(f"no tangents in {args.tangents}: run validation/bench_factorisation.py first")
+        raise SystemExit(f"no tangents in {args.tangents}: run benchmarks/factorisation.py first")
     signal.signal(signal.SIGALRM, _alarm)
     print("| tangent | n | nnz | solver | first s | median s | backward error | note |")
     print("|---|---|---|---|---|---|---|---|")

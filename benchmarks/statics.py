@@ -1,6 +1,6 @@
 """Benchmark of the static solver against size: panels, the cage in a current, FEMNET's cases, from their drawn start.
 
-    python validation/bench_statics.py [--scene framed|hanging|cage|trawl|femnet] [--sizes 100 1000 10000 100000]
+    python benchmarks/statics.py [--scene framed|hanging|cage|trawl|femnet] [--sizes 100 1000 10000 100000]
                                        [--ea-compression EA_C] [--current U] [--max-iter N]
                                        [--methods damped primal-dual]
 

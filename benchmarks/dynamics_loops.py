@@ -2,7 +2,7 @@
 compiled loop (``loop="compiled"``: one program per run, with the factorisation as a host callback, compiled by
 every process), as a user meets them: whole ``jaxnet run --dynamic`` processes.
 
-    python validation/dynamics_loops.py [--repeat 2]
+    python benchmarks/dynamics_loops.py [--repeat 2]
 
 Per scene and loop, in a fresh compilation cache: a first run to T1, then the same run resumed to T2 in a new
 process (``--resume``), then resumed again to T3. Printed per process: its wall time (s, the interpreter's

@@ -1,6 +1,6 @@
 """`jaxnet run CASE.don` timed as a whole process, as a user meets it, against FEMNET on the same case.
 
-    python validation/whole_process.py [--cases 5catch/c2 1pelagic_trawl/s3 1pelagic_trawl/s3a] [--repeat 3]
+    python benchmarks/whole_process.py [--cases 5catch/c2 1pelagic_trawl/s3 1pelagic_trawl/s3a] [--repeat 3]
                                        [--corpus ../shared/femnet-corpus] [--femnet "COMMAND {case}"]
 
 Per case, each run a fresh process (``python -m jaxnet.cli run CASE.don --quiet``), in alternation:

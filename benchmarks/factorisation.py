@@ -1,6 +1,6 @@
 """Direct sparse factorisations side by side on the static solver's real Newton tangents.
 
-    python validation/bench_factorisation.py [--sizes 1e3 1e4 3e4 1e5] [--matrices NAME ...] [--solvers NAME ...]
+    python benchmarks/factorisation.py [--sizes 1e3 1e4 3e4 1e5] [--matrices NAME ...] [--solvers NAME ...]
         [--repeats 5] [--target 4] [--budget 40] [--tangents DIR] [--regenerate] [--json FILE] [--list]
 
 (``--list`` names the tangents and the solvers; the defaults measure every tangent with every solver but the

@@ -27,7 +27,7 @@ forward and gradient runs (ms) and their ratio, warm and perturbed (Newton itera
 compilation (s) and their ratio, with the compiled programs' HLO instruction counts (a measure of the
 program that does not vary with the machine's load); the second process's compilations (s).
 
-    python validation/design_cost.py [--quick] [--path host|jax|both] [--implicit PATH]
+    python benchmarks/design.py [--quick] [--path host|jax|both] [--implicit PATH]
 
 ``--implicit PATH``: time another version of :mod:`jaxnet.solve.implicit` (e.g. ``git show
 HEAD:jaxnet/solve/implicit.py > /tmp/implicit_before.py``), loaded in its place: before/after a change.

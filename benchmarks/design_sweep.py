@@ -1,7 +1,7 @@
 """Benchmark of design sweeps on a cluster (jaxnet.design.sweep): one process against a local Dask cluster,
 cold and warm.
 
-    python validation/design_sweep.py [--scene cage|cage:STEP|panel] [--designs 24] [--workers 2]
+    python benchmarks/design_sweep.py [--scene cage|cage:STEP|panel] [--designs 24] [--workers 2]
 
 The same N designs are solved (each from the reference design's equilibrium, by
 :func:`jaxnet.design.sweep.solve_design`, the figures the drag and the netting's deployed area):

@@ -1,6 +1,6 @@
 """Error against run time of jaxnet's dynamics: the book's implicit scheme and the diffrax reference.
 
-    python validation/dynamics_cost.py [--sizes 1.6 1.0 0.5 0.3 0.16] [--cage-end 3.0] [--no-cage]
+    python benchmarks/dynamics.py [--sizes 1.6 1.0 0.5 0.3 0.16] [--cage-end 3.0] [--no-cage]
                                        [--cage-reference-end 1.0] [--plot FILE.png] [--breakdown]
 
 1. Pendulum (a 1.5 kg mass on an elastic bar, EA = 2e4 N, released horizontal under gravity): the mass's

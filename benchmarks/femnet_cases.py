@@ -1,6 +1,6 @@
 """FEMNET's worked cases solved by jaxnet, figure by figure, with run times against FEMNET's.
 
-    python validation/femnet_cases.py [--cases nr_netting c2] [--data tests/data/femnet] [--repeat 3]
+    python benchmarks/femnet_cases.py [--cases nr_netting c2] [--data tests/data/femnet] [--repeat 3]
                                       [--stiffness autodiff closed_form]
 
 Per case and per mesh (FEMNET's own `.mdg` mesh, and jaxnet's mesher from the `.don`): FEMNET's summary
