@@ -40,10 +40,12 @@ _CACHE_HOME = pytest.StashKey[pathlib.Path]()
 
 
 def seed_of(nodeid):
-    """The seed of a test's generator: CRC-32 of its node id (``tests/test_x.py::test_y[param]``, relative to the
-    repository root wherever pytest starts), the same in every process and run (Python's ``hash`` of a string is
-    salted per process)."""
-    return zlib.crc32(nodeid.encode())
+    """The seed of a test's generator: CRC-32 of its node id without the test file's folder
+    (``tests/test_x.py::test_y[param]`` for ``tests/solve/test_x.py::test_y[param]``), the same in every process
+    and run (Python's ``hash`` of a string is salted per process), and the same when a test file moves between
+    the folders that mirror the package."""
+    file, _, rest = nodeid.partition("::")
+    return zlib.crc32(f"tests/{file.rsplit('/', 1)[-1]}::{rest}".encode())
 
 
 @pytest.fixture

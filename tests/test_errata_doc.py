@@ -10,7 +10,7 @@ DOC = (ROOT / "docs" / "errata.md").read_text()
 def test_every_cited_test_exists():
     cited = set(re.findall(r"`(?:tests/[\w/]+\.py::)?(test_\w+)", DOC))
     assert len(cited) > 50
-    defined = set(re.findall(r"def (test_\w+)", "\n".join(p.read_text() for p in (ROOT / "tests").glob("*.py"))))
+    defined = set(re.findall(r"def (test_\w+)", "\n".join(p.read_text() for p in (ROOT / "tests").rglob("*.py"))))
     # a citation may abbreviate a long name with "..." (its prefix, ending in "_")
     missing = [c for c in cited if c not in defined and not (c.endswith("_") and any(d.startswith(c) for d in defined))]
     assert not missing, missing

@@ -10,7 +10,7 @@ and never as a bare numpy or JAX exception, a NaN result or a hang.
 :data:`CASES` is the catalogue: one :class:`BadInput` per kind of mistake, with how to make it (``attempt``,
 given a scratch folder), the exception type expected and a regular expression the message must match, which
 names the culprit (the line numbers of ``.don`` cases are found in FEMNET's case files, not typed). Both this
-report section and ``tests/test_bad_input_sweep.py`` run it. :func:`attempt` runs one case with the solver's
+report section and ``tests/validation/test_bad_input_sweep.py`` run it. :func:`attempt` runs one case with the solver's
 compiled programs replaced by tripwires (:func:`solver_compilation_watched`), so that a case also records
 whether the solver was about to be compiled when the error came.
 
@@ -910,7 +910,7 @@ def run(report, quick: bool) -> None:
     ones seconds) and tabulate what each got, per level."""
     report.text(
         "Each row is one kind of malformed input (the catalogue `validation.bad_input.CASES`, also run by "
-        "`tests/test_bad_input_sweep.py`). *exception* and *message* are what jaxnet raised; *names the culprit* "
+        "`tests/validation/test_bad_input_sweep.py`). *exception* and *message* are what jaxnet raised; *names the culprit* "
         "is whether the message matches the case's regular expression, which names the panel, cable, node, "
         "triangle or parameter at fault (for a `.don` file: `file:LINE` of the culprit line, found in FEMNET's "
         "case file); *before compilation* is whether the error came before the solver compiled anything (the "

@@ -19,7 +19,7 @@ shape). FEMNET's target is its current code's answer where ``ANSWERS.md`` has on
 
 The records are JSON lines, written as each case ends (``--resume`` skips the cases already in ``--out``); the
 table is printed at the end (``--table`` prints it from a records file without running anything). This is a
-benchmark, not a test: the suite holds one representative case per family (``tests/test_femnet_corpus.py``).
+benchmark, not a test: the suite holds one representative case per family (``tests/io/test_femnet_corpus.py``).
 """
 
 from __future__ import annotations
@@ -192,7 +192,7 @@ def table(records, answers):
 
 #: the report section's title (``python -m validation``)
 TITLE = "FEMNET's corpus: the worked cases from their .don"
-#: the quick set: one case per family, the ones tests/test_femnet_corpus.py also reads
+#: the quick set: one case per family, the ones tests/io/test_femnet_corpus.py also reads
 QUICK = ("0simple/a1", "0simple/nr_20_0_0_3_2", "1pelagic_trawl/s2", "3bottom_trawl/b1", "5catch/d5a",
          "6flexion/c1", "11bottom_seine/s1", "14tarp/s3", "15grid/nephrop_1")
 

@@ -31,7 +31,7 @@ FEMNET either stopped at its cap or stopped by its mean rule, jaxnet's mean noda
 versions* (its current code, the target, differs from its ``.sta``); "not traced" where none does
 (``docs/femnet.md`` traces those by hand from the records). Records are JSON lines written as each case ends
 (``--resume`` skips those in ``--out``). A benchmark, not a test: the suite holds the checks on single cases
-(``tests/test_femnet_corpus.py``, ``tests/test_tarp.py``).
+(``tests/io/test_femnet_corpus.py``, ``tests/terms/test_tarp.py``).
 """
 
 from __future__ import annotations

@@ -22,7 +22,7 @@ step); a scene refused by validation records its ``SceneError``.
 The catalogue is a list of :class:`CatalogueCase`; ``case.build(size)`` returns the :class:`Problem` at a size:
 ``"test"`` (the unit tests: seconds), ``"quick"`` (``--quick``: nets of about 10⁴ nodes at most) or
 ``"full"`` (10⁵ nodes). :func:`run_case` runs one case from one start and returns its record (a dict);
-``tests/test_stability.py`` runs a subset of the catalogue at the test size.
+``tests/validation/test_stability.py`` runs a subset of the catalogue at the test size.
 """
 
 from __future__ import annotations

@@ -18,7 +18,7 @@ as well as through alpha, so the book's forces are not the gradient of an energy
 largest entry on random folded hinges, O(theta) on a pure fold). Against jaxnet's K below, on a pure fold of
 an unstretched net, K_book = K + sum_f N_f 2 EI / (A_f + B_f) dkappa_f dkappa_f^T + O(theta), kappa_f =
 phi_af - phi_bf the in-plane kink of the twine: the book's angle makes the hinge resist an in-plane kink of
-the twines (0.67 of K's largest entry on the test hinge of ``tests/test_closed_form_bending.py``), which
+the twines (0.67 of K's largest entry on the test hinge of ``tests/closed_form/test_closed_form_bending.py``), which
 jaxnet does not count as bending. jaxnet's model
 (:mod:`jaxnet.terms.bending`) differs in three stated ways: only the out-of-plane part of alpha bends the
 twine, alpha_f = |theta| sqrt(sin(phi_a) sin(phi_b)) (theta the fold angle, phi the angles of the twine to

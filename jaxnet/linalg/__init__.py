@@ -161,7 +161,7 @@ def on_solver_thread(function, *args, **kwargs):
     (scipy's ``_superlu_utils.c``, a record per thread). A :class:`HostSolver` keeps its last factor until
     the next factorisation, so the factor made in one callback was dropped in the next, under another thread
     state, and never freed: the size of L and U lost per factorisation, so that a dynamic run or a diffrax
-    reference grew without bound (``tests/test_linalg.py`` checks that the memory does not grow with the
+    reference grew without bound (``tests/linalg/test_linalg.py`` checks that the memory does not grow with the
     calls). A thread Python made keeps one thread state,
     so every factor is freed where it was made. One such thread per calling thread: the callbacks of
     several devices (``jaxnet.design.batch``) still solve at the same time, and the per-thread solvers

@@ -30,7 +30,7 @@ Jacobian (a catch: its front moves with the net), λ is refined against the exac
 
 What it does not do: it is not a JAX transformation, so it is called from Python (a design loop,
 :mod:`jaxnet.design.gradient`), not inside a caller's ``jit``, ``vmap`` or ``grad``: those
-use :func:`jaxnet.solve.implicit.equilibrium`. Both give the same derivative (``tests/test_adjoint_statics.py``).
+use :func:`jaxnet.solve.implicit.equilibrium`. Both give the same derivative (``tests/solve/test_adjoint_statics.py``).
 
 Units: m, N; the gradient in units of J per unit of each array of θ.
 """

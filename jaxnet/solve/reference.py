@@ -18,7 +18,7 @@ Euler on x and v): first order, its error proportional to Δt, and a numerical d
 A-L-stable ESDIRK of order 5 with an order-4 error estimate) adapts its step so that the estimated local
 error stays within ``atol + rtol |y|`` in every component: tighten rtol and atol and the solution converges
 at high order, so a tight-tolerance run is "the exact solution" against which the scheme's error at a given
-Δt is measured (``tests/test_reference.py`` does this and finds the scheme's first order). Both integrate
+Δt is measured (``tests/solve/test_reference.py`` does this and finds the scheme's first order). Both integrate
 the same F, so the difference is the time discretisation alone, not the model.
 
 Save times. The solution is saved at ``saveat`` and the steps are made to land on those times
@@ -43,7 +43,7 @@ control resolves every vibration whose amplitude exceeds ``atol`` (a twine of EA
 netting rings at 1e3-1e5 rad/s after any sudden load). Keep a reference to small nets and short runs, and
 start it from a state close to equilibrium where possible.
 
-The sparse solvers are the fastest of these on the hanging panel of ``tests/test_reference.py`` (with
+The sparse solvers are the fastest of these on the hanging panel of ``tests/solve/test_reference.py`` (with
 and without the host's SuperLU alike), GMRES several times slower, and diffrax's chord iteration the
 slowest: it keeps its Jacobian across steps, the stiff twines make it fail to converge, and diffrax answers
 by cutting the step, an order of magnitude more steps than with a fresh Newton linearisation

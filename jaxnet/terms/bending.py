@@ -22,7 +22,7 @@ exactly as :mod:`jaxnet.terms.tension` does. Three choices make it finite and co
 
        4 sin²(alpha/2) = 4 sin²((phi_a - phi_b)/2) + sin(phi_a) sin(phi_b) 4 sin²(theta/2),
 
-   an in-plane kink plus the fold (``tests/test_bending.py`` checks the identity). The in-plane kink is
+   an in-plane kink plus the fold (``tests/terms/test_bending.py`` checks the identity). The in-plane kink is
    a change of mesh shape between neighbouring elements; it is not twine flexion *outside* the netting
    plane (the section's subject) and the book's alpha would make a flat net bend itself. It is dropped:
    the twine's bending angle here is ``alpha_out = sqrt(sin(phi_a) sin(phi_b)) |theta|``, and a flat
@@ -80,7 +80,7 @@ to the energy and the Hessian to the gradient, so ``jax.grad`` evaluates the fir
 the second (several times faster to run and to compile than autodiff of the same formula). Nothing in
 the value changes: same formula, same guards (where a guard holds a quantity at 0, so are its derivatives).
 Tangents in uv, never taken by the solver, fall back on autodiff of the same function; derivatives of
-higher order in x differentiate the closed forms. ``tests/test_bending.py`` checks energy, forces and
+higher order in x differentiate the closed forms. ``tests/terms/test_bending.py`` checks energy, forces and
 stiffness against autodiff of an independent transcription of the formula.
 
 Conventions

@@ -30,7 +30,7 @@ the derivative of |U ^ V| is taken as 0 (``geometry.safe_norm``), so energy, for
 finite there. A twine of zero length has no direction and carries no couple: the energy of such a
 collapsed element is taken as 0.
 
-Errata found in 4.211-4.219 (the mathematics above is what is implemented; tests/test_opening.py checks
+Errata found in 4.211-4.219 (the mathematics above is what is implemented; tests/terms/test_opening.py checks
 each): 4.214 with C_v = -C_u gives zero work, the V twine turns by -∂α; 4.215 is -d of 4.7; 4.218 has
 sin(α) for sin(2α) (d acos(c)/dc = -1/sin(2α) when c = cos 2α), and its two u_i terms carry the same
 sign where the derivative of U.V/(|U||V|) gives them opposite signs, as its two v_i terms have. With d of

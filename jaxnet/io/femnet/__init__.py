@@ -12,7 +12,7 @@ the ``.mdg`` mesh; its solver the ``.sta`` equilibrium. Two readers:
 and one writer: :func:`write_design` writes a design of a ``.don`` case (its cuts, twines and rope lengths,
 :mod:`jaxnet.design.space`) back as a ``.don`` file, a copy of the source with the design's numbers.
 
-Conventions established from the files (see ``tests/test_femnet.py``):
+Conventions established from the files (see ``tests/io/test_femnet.py``):
 
 * **Twine coordinates.** A ``.don`` corner's (U, V), and the (U, V) of a triangle corner in the
   ``.mdg``, count *meshes* along the two *diagonals* of the meshes (U along the first diagonal, V

@@ -23,7 +23,7 @@ One difference is not reproduced: FEMNET's insertion into such a rope keeps the 
 whose end it moves are shortened) *and* adds a new bar between each pair of consecutive nodes (its search for
 the bar to reuse forgets a match found before the last bar), so that rope is doubled in its ``.mdg`` (FEMNET's
 ``0simple/nr_*`` cases: the sinker rope, cable 5, has 57 + 60 bars), with twice its weight, drag and stiffness.
-jaxnet's rope is single; ``tests/test_numerical_twines.py`` measures what the second copy adds to FEMNET's answer.
+jaxnet's rope is single; ``tests/mesh/test_numerical_twines.py`` measures what the second copy adds to FEMNET's answer.
 """
 
 from __future__ import annotations

@@ -21,7 +21,7 @@ from jaxnet.io import femnet
 from jaxnet.scene.checks import validate
 from jaxnet.scene import SceneError
 
-DATA = pathlib.Path(__file__).parent / "data" / "femnet"
+DATA = pathlib.Path(__file__).parents[1] / "data" / "femnet"
 CASES = {name: (DATA / f"{name}.don").read_text() for name in
          ("nr_netting", "c2", "links_hub", "links_cable", "hexagonal")}
 NUMBER = re.compile(r"(?<![\w.])[-+]?\d+\.?\d*(?:[eE][-+]?\d+)?(?![\w.])")

@@ -383,7 +383,7 @@ def test_the_host_loop_takes_the_compiled_loops_steps(case):
     """``Implicit(loop="host")`` (the default: the steps driven from Python, each Newton the static solver's host
     loop) and ``loop="compiled"`` (one program per record interval) take the same steps: a body settling in a
     current, and a swinging pendulum whose big steps fail and are halved. The same times, step counts, retries
-    and Newton iterations; positions to rounding (tests/test_winch.py: the same with a winch)."""
+    and Newton iterations; positions to rounding (tests/solve/test_winch.py: the same with a winch)."""
     newton = TIGHT
     if case == "current":
         scene, end, h = spring_mass(m=3.0, ea=500.0, delta=0.0, drag_area=0.2, current=1.0), 2.0, 0.05

@@ -1,6 +1,6 @@
 """Reduced design vectors (jaxnet.design.reduced) and the account of an optimisation (jaxnet.design.report).
 
-A small panel (4 x 4 meshes, the rig of tests/test_design_optimize.py) hangs in a current. The design vector
+A small panel (4 x 4 meshes, the rig of tests/design/test_design_optimize.py) hangs in a current. The design vector
 z = {"size": (across, along) factors of the panel's cut, "diameter": its twine diameter (m)} maps to θ by the
 ready-made maps. The maps are checked against their definitions, their derivatives against the chain rule
 through the full θ and against central differences, an optimisation on z recovers a target design whose cut

@@ -18,7 +18,7 @@ from jaxnet.design.space import DesignSpace
 from jaxnet.io import femnet
 from jaxnet.solve import implicit, statics
 
-CORPUS = pathlib.Path(__file__).parents[2] / "shared" / "femnet-corpus"
+CORPUS = pathlib.Path(__file__).parents[3] / "shared" / "femnet-corpus"
 B1 = CORPUS / "3bottom_trawl" / "b1.don"
 
 

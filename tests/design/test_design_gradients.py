@@ -1,6 +1,6 @@
 """Design gradients end to end: θ -> scene -> equilibrium -> figure, for every design family.
 
-The rig of tests/test_design_space.py (a tapered panel on two bridles with a headline, a footrope, a float
+The rig of tests/design/test_design_space.py (a tapered panel on two bridles with a headline, a footrope, a float
 and two sinkers, in a current) carries every family of the design space; its twines here have no knots and
 no bending (not design families; their element Hessians triple the compile time). Twines across the current
 are slack (in compression, against a compression stiffness of a tenth of EA: checked), so the derivative is
@@ -8,7 +8,7 @@ taken on a design with slack twines, away from the kink at zero strain. Along on
 direction per family (the cut: every corner but corner 0 moved; the others: a relative change of each
 entry), the derivative of two figures of the equilibrium (the drag, N, and the mean depth of the net, m) by
 forward mode and by reverse mode (the adjoint) is compared with fourth-order central differences of the full
-solve (step 1e-3, solves to 1e-10 N: see tests/test_implicit.py), to 1e-6 relative."""
+solve (step 1e-3, solves to 1e-10 N: see tests/solve/test_implicit.py), to 1e-6 relative."""
 
 import functools
 

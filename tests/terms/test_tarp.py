@@ -22,7 +22,7 @@ from jaxnet.scene import Environment, SceneError
 from jaxnet.solve.statics import solve
 from jaxnet.terms import tarp, term as term_lib
 
-CORPUS = pathlib.Path(__file__).resolve().parent / "data" / "femnet-corpus"
+CORPUS = pathlib.Path(__file__).resolve().parents[1] / "data" / "femnet-corpus"
 RHO, C, U = 1025.0, 1.4, 1.9
 P = C * 0.5 * RHO * U**2  # 2590.0 Pa: 14tarp/c2's tarp pressure
 C2_FEMNET_X = 3350.90959  # N, ANSWERS.md

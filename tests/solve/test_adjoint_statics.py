@@ -3,8 +3,8 @@ in every float array of the scene, against jax.grad through the traced implicit 
 differences of re-solved equilibria; and its programs compiled in one process, loaded by the next.
 
 The scene is small (a hanging panel of 4 meshes in a current, 15 nodes). The design-level gradient (through a
-DesignSpace) is tested on the cage and the trawl (tests/test_design_optimize.py, tests/test_design_trawl.py),
-the refinement where K is not exact (a catch) in tests/test_panel_catch.py."""
+DesignSpace) is tested on the cage and the trawl (tests/design/test_design_optimize.py, tests/design/test_design_trawl.py),
+the refinement where K is not exact (a catch) in tests/terms/test_panel_catch.py."""
 
 import json
 import os
@@ -113,14 +113,14 @@ def test_a_scene_of_another_net_is_refused_before_anything_compiles():
 
 
 _SCRIPT = r"""
-import json, sys
+import json, os, sys
 import jax
 events = {"hits": 0, "misses": 0}
 def listen(event, **_):
     if event == "/jax/compilation_cache/cache_hits": events["hits"] += 1
     if event == "/jax/compilation_cache/cache_misses": events["misses"] += 1
 jax.monitoring.register_event_listener(listen)
-sys.path.insert(0, sys.argv[1])
+sys.path[:0] = [sys.argv[1], os.path.dirname(sys.argv[1])]  # this module, and the tests' helpers
 import test_adjoint_statics as t
 from jaxnet.solve import adjoint_statics, programs
 scene, x0 = t.panel_in_current()

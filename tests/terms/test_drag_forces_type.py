@@ -27,7 +27,7 @@ jax.config.update("jax_enable_x64", True)
 
 RHO = 1025.0
 L0, D = 0.02, 0.002          # m: twine length and diameter
-B2 = pathlib.Path(__file__).resolve().parent / "data" / "femnet-corpus" / "3bottom_trawl" / "b2.don"
+B2 = pathlib.Path(__file__).resolve().parents[1] / "data" / "femnet-corpus" / "3bottom_trawl" / "b2.don"
 C1, C2, C3, C4, C5 = 0.137, 1.002, 2.230, -0.211, 0.947   # FEMNET's calculeffort_Zhan.c
 ZHAN = {"normal": (C1, C2, C3), "tangential": (C4, C5)}
 

@@ -24,7 +24,7 @@ from jaxnet.net import Net, Twine
 from jaxnet.scene import Environment, SceneError
 from jaxnet.solve.statics import solve
 
-DATA = pathlib.Path(__file__).parent / "data" / "femnet"
+DATA = pathlib.Path(__file__).parents[1] / "data" / "femnet"
 SINKER_ROPE = 4  # cable 5 of nr_netting (0-based in the scene): 57 bars of 22.5 mm, 5665 kg/m3, 2.02 m
 K_BOTTOM = 5e6  # N/m, nr_netting's "stiffness of the insertion in the sea bottom"
 

@@ -23,7 +23,7 @@ from jaxnet.net import Net
 from jaxnet.scene import Environment, SceneError
 from jaxnet.terms import gravity_catch as gc
 
-CORPUS = pathlib.Path(__file__).resolve().parent / "data" / "femnet-corpus"
+CORPUS = pathlib.Path(__file__).resolve().parents[1] / "data" / "femnet-corpus"
 G1 = CORPUS / "13gravity_catch" / "g1.don"
 RHO_C, G = 1000.0, 9.81
 GAMMA = RHO_C * G  # specific weight of the catch (N/m³)

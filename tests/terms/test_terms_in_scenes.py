@@ -15,8 +15,8 @@ balance of the solved net, a draft, an angle. Two solved scenes carry most terms
 (tensions, weights, an external force, the three netting drag models, rope and body drag) and pieces in
 still water with a free surface (mesh opening, knot contact, a stretched panel, a floating pipe, a float,
 a hanging rope, netting under and above the water). Twine bending and hexagonal tension are checked at a
-given shape: a Newton program with either compiles ~10 s longer (tests/test_hexagonal_panel.py solves a
-hexagonal panel). The catch pressure's solved check is the pressurised tube (tests/test_pressurised_tube.py);
+given shape: a Newton program with either compiles ~10 s longer (tests/scenes/test_hexagonal_panel.py solves a
+hexagonal panel). The catch pressure's solved check is the pressurised tube (tests/scenes/test_pressurised_tube.py);
 here its resultant on a closed cod-end is checked at a given shape.
 
 Scenes are a few dozen to ~150 nodes so that tracing and compiling stay short.
@@ -580,7 +580,7 @@ def test_hexagonal_netting_weighs_its_three_twine_families():
 
 def test_stretched_hexagonal_panel_has_uniform_tension_and_the_virial_of_its_forces():
     # A regular honeycomb drawn at 1.2 times the size of its twines (a given shape: a Newton solve with the
-    # hexagonal element compiles for ~10 s more; tests/test_hexagonal_panel.py solves one). Every twine of
+    # hexagonal element compiles for ~10 s more; tests/scenes/test_hexagonal_panel.py solves one). Every twine of
     # the three families is at strain 0.2: the interior knots are in balance, and the virial of the
     # tension forces is minus the sum of T L over the 6 M² twines (2 M² per family), T = 0.2 EA.
     m, a = HEX_MESHES, HEX_TWINE * STRETCH

@@ -23,7 +23,7 @@ from jaxnet.net import Net, Rope, Twine
 from jaxnet.scene import Environment, PanelCatches, SceneError
 from jaxnet.terms import panel_catch
 
-DATA = pathlib.Path(__file__).resolve().parent / "data"
+DATA = pathlib.Path(__file__).resolve().parents[1] / "data"
 AXIS = np.array([1.0, 0.0, 0.0])
 CURRENT = 1.5
 TWINE = Twine(l0=0.06, ea=1e5, diameter=4e-3, density=1025.0)

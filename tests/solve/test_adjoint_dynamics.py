@@ -11,7 +11,7 @@ Two scenes and few programs (compiling the Newton iteration dominates this file)
   ramping up: the run against ``dynamics.simulate``, and reverse-mode gradients of two figures (the mean
   and the smooth peak of the mooring force) with respect to the twine diameter, the twine EA, the sinkers'
   mass and the current, against fourth-order central differences of the whole run (step 1e-3 relative,
-  every step converged to 1e-10 N: see tests/test_implicit.py for why these settings).
+  every step converged to 1e-10 N: see tests/solve/test_implicit.py for why these settings).
 """
 
 import functools

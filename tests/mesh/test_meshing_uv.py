@@ -19,7 +19,7 @@ from jaxnet.mesh import lattice_coordinates, lattice_divisions, mesh_panel
 from jaxnet.net import Net, Twine
 from jaxnet.scene import SceneError
 
-H1 = pathlib.Path(__file__).resolve().parent / "data" / "femnet-corpus" / "9gill_net" / "h1"
+H1 = pathlib.Path(__file__).resolve().parents[1] / "data" / "femnet-corpus" / "9gill_net" / "h1"
 #: FEMNET's answer on h1's stored mesh (ANSWERS.md): force on the fixings (N)
 FEMNET_H1 = np.array([1960.30541, -0.00046, 535.77364])
 

@@ -18,7 +18,7 @@ from jaxnet.solve.statics import solve
 from jaxnet.terms.cable_bending import joint_energy, joint_moment
 
 # FEMNET's 6flexion/c1 (.don and .sta), copied with FEMNET's licence (tests/data/femnet-corpus/LICENSE)
-C1 = pathlib.Path(__file__).resolve().parent / "data" / "femnet-corpus" / "6flexion" / "c1.don"
+C1 = pathlib.Path(__file__).resolve().parents[1] / "data" / "femnet-corpus" / "6flexion" / "c1.don"
 
 
 def _joint(alpha, a=0.7, b=1.3, tilt=0.3):

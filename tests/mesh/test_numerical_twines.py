@@ -23,7 +23,7 @@ from jaxnet.solve.statics import solve
 from jaxnet.terms import cable, tension
 from validation.numerical_twines import with_femnets_second_rope
 
-DATA = pathlib.Path(__file__).parent / "data" / "femnet"
+DATA = pathlib.Path(__file__).parents[1] / "data" / "femnet"
 CASE = "nr_20_0_0_3_2"
 FEMNET_TOTAL = np.array([158.10718, -0.00104, -60.45722])   # N, FEMNET's current code (ANSWERS.md)
 
@@ -167,7 +167,7 @@ def _total(scene, case):
 def test_nr_20_0_0_3_2_solved_gives_femnets_total_force():
     case = femnet.read_don(DATA / f"{CASE}.don")
     # FEMNET's mesh, solved by jaxnet: its answer to 0.02 % in x and 0.23 % in z (FEMNET stops on the MEAN nodal
-    # residual, 1e-3 N here, as tests/test_femnet.py measures on nr_netting; FEMNET's stored .sta, of an older
+    # residual, 1e-3 N here, as tests/io/test_femnet.py measures on nr_netting; FEMNET's stored .sta, of an older
     # code, is at 158.09964 -0.00095 -60.48545)
     on_femnet_mesh = _total(femnet.read_mdg(DATA / f"{CASE}.mdg", DATA / f"{CASE}.don").scene, case)
     assert abs(on_femnet_mesh[0] / FEMNET_TOTAL[0] - 1) < 5e-4

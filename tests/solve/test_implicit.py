@@ -99,7 +99,7 @@ def jacobian(ea_compression=2000.0):
 def test_jacobian_of_the_equilibrium_matches_finite_differences(ea_compression=2000.0):
     """d x*/d θ for every family (forward mode) against differences of the solve, to 1e-6 of the largest
     entry. (With EA_c = 0 the twines across the current go slack and the same holds, measured; a design with
-    slack twines is in tests/test_design_gradients.py, kept once for the suite's time.)"""
+    slack twines is in tests/design/test_design_gradients.py, kept once for the suite's time.)"""
     positions = solver(ea_compression)
     theta = np.zeros(len(FIELDS))
     forward = jacobian(ea_compression)

@@ -20,7 +20,7 @@ from jaxnet.io import femnet
 from jaxnet.io.femnet import mapping
 from jaxnet.scene import SceneError
 
-CORPUS = pathlib.Path(__file__).resolve().parent / "data" / "femnet-corpus"
+CORPUS = pathlib.Path(__file__).resolve().parents[1] / "data" / "femnet-corpus"
 RHO_G = 1025.0 * 9.81
 
 

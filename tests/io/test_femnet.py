@@ -18,7 +18,7 @@ from jaxnet.io import femnet
 from jaxnet.scene import SceneError
 from jaxnet.solve.statics import solve
 
-DATA = pathlib.Path(__file__).parent / "data" / "femnet"
+DATA = pathlib.Path(__file__).parents[1] / "data" / "femnet"
 CASES = {  # nodes, triangles, bars in the .mdg headers; fixed components in the .efg; symmetry-held ones
     "nr_netting": (446, 770, 110, 6, 0),
     "c2": (657, 1243, 7, 15, 50),
@@ -626,7 +626,7 @@ def test_towing_speed_tables_become_prescribed_motions(tmp_path):
     """FEMNET's ``input speed_type_node2 TYPE K`` and its table (0simple/a1b: type 1 towed at -0.6 m/s along x,
     reached linearly from 0 s to 10 s, to 41 s) are the nodes of that type moved by a SpeedTable; a type that does
     not hold its nodes on every axis is refused at the command's line."""
-    corpus = pathlib.Path(__file__).resolve().parent / "data" / "femnet-corpus" / "0simple"  # FEMNET's, its licence there
+    corpus = pathlib.Path(__file__).resolve().parents[1] / "data" / "femnet-corpus" / "0simple"  # FEMNET's, its licence there
     text = (corpus / "a1b.don").read_text()
     case = femnet.read_don(corpus / "a1b.don")
     assert "speed_type_node2" not in " ".join(case.info["dynamic_only"])
@@ -650,7 +650,7 @@ def test_the_docs_command_table_names_every_input_command_of_the_grammar():
 
     from jaxnet.io.femnet import grammar
 
-    text = (pathlib.Path(__file__).resolve().parents[1] / "docs" / "femnet.md").read_text()
+    text = (pathlib.Path(__file__).resolve().parents[2] / "docs" / "femnet.md").read_text()
     section = text.split("## The `.don` file's `input` commands", 1)[1].split("\n## ", 1)[0]
     rows = [line.split("|")[1] for line in section.splitlines() if line.startswith("| `")]
     named = set()
@@ -670,7 +670,7 @@ def test_a_distance_from_a_node_to_itself_is_a_heading():
     import dataclasses
     from types import SimpleNamespace
 
-    don = femnet.parse_don(pathlib.Path(__file__).parent / "data" / "femnet-corpus" / "1pelagic_trawl" / "s2.don")
+    don = femnet.parse_don(pathlib.Path(__file__).parents[1] / "data" / "femnet-corpus" / "1pelagic_trawl" / "s2.don")
     outputs = [dataclasses.asdict(t) for t in don.text_outputs]
     assert outputs[0]["kind"] == "distances" and outputs[0]["values"] == {"node_1": 1, "node_2": 1}
     n = 60   # global node k is node k - 1 here, each at (k, 2k, 0): boat 48 to door 49 is sqrt(5) m

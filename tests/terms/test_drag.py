@@ -606,7 +606,7 @@ def test_the_wetted_netting_stiffness_behind_a_catch_front_is_its_derivative(mod
     auto = np.asarray(jax.jacfwd(force)(x)).reshape(9, 9)
     closed = np.asarray(netting_drag_on_element_stiffness(x, state, **args))
     # Richardson-extrapolated, 2 D(h/2) - D(h): moving the vertex on the front along the axis, the shielded share is
-    # C1 with a jump of its second derivative (as the catch pressure, tests/test_pressure.py), which leaves an
+    # C1 with a jump of its second derivative (as the catch pressure, tests/terms/test_pressure.py), which leaves an
     # error h/4 times that jump in D(h): over the tolerance on 1 random element in 40, gone once extrapolated
     force_of = lambda y: force(y.reshape(3, 3)).ravel()  # noqa: E731
     fd = 2 * central_differences(force_of, x.ravel(), 5e-9) - central_differences(force_of, x.ravel(), 1e-8)

@@ -124,7 +124,7 @@ def test_where_the_primal_dual_method_stops_short_the_damped_method_solves_from_
     angles from the drawn start): the primal-dual method does not balance it within its budget, and the damped
     method then solves it from the start, along its own path: the same iterations after the budget and the same
     answer, bit for bit."""
-    case = read_don(pathlib.Path(__file__).resolve().parent / "data" / "femnet" / "nr_20_0_0_3_2.don")
+    case = read_don(pathlib.Path(__file__).resolve().parents[1] / "data" / "femnet" / "nr_20_0_0_3_2.don")
     both = jn.solve_static(case, method="primal-dual")
     damped = jn.solve_static(case, method="damped")
     budget = min(interior.BUDGET, case.solver.max_iter * interior.SHARE)

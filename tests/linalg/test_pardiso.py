@@ -1,4 +1,4 @@
-"""PardisoSolver (jaxnet.linalg, jaxnet.linalg.pardiso): the same checks as SuperLU's HostSolver (tests/test_linalg.py)
+"""PardisoSolver (jaxnet.linalg, jaxnet.linalg.pardiso): the same checks as SuperLU's HostSolver (tests/linalg/test_linalg.py)
 on the same matrices: solutions against numpy's dense solve, transposed solves on one factor, several
 right-hand sides, a nearly singular net tangent solved backward stably, a zero diagonal block, singular and
 non-finite matrices refused without NaN; and which solver jaxnet picks.

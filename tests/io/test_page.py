@@ -27,7 +27,7 @@ import jaxnet
 from jaxnet import figures
 from jaxnet.io import page
 
-INSTALL = ("tests/test_page.py opens net.html in a real browser and needs Chromium; none was found (looked for "
+INSTALL = ("tests/io/test_page.py opens net.html in a real browser and needs Chromium; none was found (looked for "
            "$JAXNET_CHROMIUM, chromium, chromium-browser, google-chrome on PATH). On Debian or Ubuntu, as root: "
            "apt-get install -y --no-install-recommends chromium")
 
