@@ -25,7 +25,8 @@ LAYERS = [
     ("solvers", ["jaxnet.solve"]),
     ("description", ["jaxnet.materials", "jaxnet.mesh", "jaxnet.net", "jaxnet.build", "jaxnet.case", "jaxnet.catalogue",
                      "jaxnet.scenes", "jaxnet.io.scene_file", "jaxnet.io.femnet.grammar", "jaxnet.io.femnet.links",
-                     "jaxnet.io.femnet.mapping", "jaxnet.io.femnet.mdg", "jaxnet.io.femnet.parse",
+                     "jaxnet.io.femnet.mapping", "jaxnet.io.femnet.materials", "jaxnet.io.femnet.surroundings",
+                     "jaxnet.io.femnet.motion", "jaxnet.io.femnet.mdg", "jaxnet.io.femnet.parse",
                      "jaxnet.io.femnet.reader", "jaxnet.io.femnet.twines", "jaxnet.io.femnet.writer"]),
     ("results", ["jaxnet.figures", "jaxnet.io", "jaxnet.io.femnet.results"]),
     ("facades", ["jaxnet.io.femnet"]),  # the FEMNET package's public names: its readers and its results

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from jaxnet.io import femnet
-from jaxnet.io.femnet import mapping
+from jaxnet.io.femnet import surroundings
 from jaxnet.scene import SceneError
 
 CORPUS = pathlib.Path(__file__).resolve().parents[1] / "data" / "femnet-corpus"
@@ -139,7 +139,7 @@ def test_node_loads_on_a_symmetry_plane_are_halved_as_femnets_equilibrium_has_th
     don = _don("11bottom_seine/s1")
     parsed = femnet.parse_don(don)
     node_type = [int(line.split()[5]) for line in don.with_suffix(".mdg").read_text().splitlines()[7:158]]
-    share = mapping.symmetry_share(parsed, node_type)
+    share = surroundings.symmetry_share(parsed, node_type)
     assert sorted(set(share.tolist())) == [0.5, 1.0]
     case = femnet.read_mdg(don.with_suffix(".mdg"), don)
     scene = case.scene
@@ -185,7 +185,7 @@ def test_mass_and_box_of_a_node_on_a_symmetry_plane_are_halved(tmp_path):
 def test_translations_move_parts_before_meshing():
     """``input add_z_pan D FIRST LAST`` moves panels FIRST..LAST by D along z (and only those)."""
     case = femnet.parse_don(_don("1pelagic_trawl/s2"))
-    moved = mapping.translated(dataclasses.replace(case, commands=[("add_z_pan", (5.0, 2.0, 3.0), 1),
+    moved = surroundings.translated(dataclasses.replace(case, commands=[("add_z_pan", (5.0, 2.0, 3.0), 1),
                                                                    ("add_x_ele", (-1.0, 1.0, 1.0), 2)]))
     np.testing.assert_array_equal(moved.panels[0].corners, case.panels[0].corners)
     np.testing.assert_allclose(moved.panels[1].corners[:, 2], case.panels[1].corners[:, 2] + 5.0)

@@ -206,4 +206,4 @@ def test_meshing_uv_is_read_strictly(tmp_path):
     path.write_text(text.replace("Meshing type:\t\t\t\t2", "Meshing type:\t\t\t\t1", 1))
     case = femnet.parse_don(path)
     assert any("meshing type 1" in w and f":{line}:" in w for w in case.warnings)
-    assert femnet.mapping.meshing_lattices(case) == {}
+    assert femnet.materials.meshing_lattices(case) == {}

@@ -227,7 +227,7 @@ def test_reader_maps_each_law(tmp_path, law, model):
     don = B2 if law == 3 else _b2_with(tmp_path, f"input drag_forces_type {law}")
     parsed = femnet.parse_don(don)
     assert parsed.inputs["drag_forces_type"].value == law
-    assert femnet.mapping._drag_law(parsed) == model
+    assert femnet.materials.drag_law(parsed) == model
     case = femnet.read_mdg(B2.with_suffix(".mdg"), don)
     assert set(np.asarray(case.scene.netting.drag_model).tolist()) == {DRAG_MODELS[model]}
 

@@ -40,7 +40,7 @@ Conventions established from the files (see ``tests/io/test_femnet.py``):
   node's out-of-plane displacement is zero by symmetry). FEMNET reports no reaction there and zeroes
   the total force along symmetry axes; :func:`femnet_figures` does the same. A type's mass, force and box
   are the whole structure's: a node on a symmetry plane carries half of them (a quarter on two planes;
-  :func:`~jaxnet.io.femnet.mapping.symmetry_share`).
+  :func:`~jaxnet.io.femnet.surroundings.symmetry_share`).
 * **Links** ("Links number", phobos ``chargement_don.c``): one line per link, ``nb_pt: N`` then N
   points ``pa: k nd: c`` (corner c of diamond panel k), ``ha: k nd: c`` (hexagonal panel) or ``el: k
   nd: e`` (end e of cable k); FEMNET goes by the first letter, ``c`` and ``w`` being sliding cables and
@@ -97,7 +97,7 @@ Conventions established from the files (see ``tests/io/test_femnet.py``):
   from FEMNET (``Environment.surface_level``): a box floats by its immersed part, FEMNET's law
   (:func:`jaxnet.terms.surface.box_fraction_integral`), and is dragged by it; bars crossing the surface float
   by jaxnet's profile (:mod:`jaxnet.terms.surface`), and diamond netting stays buoyant wherever it is, as in
-  FEMNET's statics (``Environment.floating``, :func:`.mapping.environment_of` says how each compares). Gear
+  FEMNET's statics (``Environment.floating``, :func:`.surroundings.environment_of` says how each compares). Gear
   drawn above z = 0 (bottom trawls drawn at z > 0 rest on a sea bed at z = -depth) starts with its bars and
   boxes in air and sinks, as in FEMNET. ``info["boxes"]`` lists the
   nodes with a box and the height of its top above them. Widths X, Y must be >= 0 (FEMNET
@@ -105,9 +105,9 @@ Conventions established from the files (see ``tests/io/test_femnet.py``):
 * **Spheres** (``input sphere_element CABLE COUNT D B``; ``sphere_element2`` adds the length L they are spread
   over): COUNT spherical floats of diameter D (m) along the cable, each pulling up with B newtons net of its
   weight, Cd 0.6. FEMNET's laws fold them into the cable (``chargement_don.c``): its diameter, volumic mass and
-  normal Cd become those of cable and spheres together (:func:`~.mapping.spheres_folded`); jaxnet's make them
+  normal Cd become those of cable and spheres together (:func:`~.surroundings.spheres_folded`); jaxnet's make them
   floats of COUNT B newtons and drag area COUNT 0.6 pi D²/4 shared equally by the cable's nodes
-  (:func:`~.mapping.spheres`, ``Net.float``).
+  (:func:`~.surroundings.spheres`, ``Net.float``).
 * **Node re-typing** (``input type_noeud_XYZ_SUPINF MODE BOUNDS... TYPE``): the nodes whose start position
   lies strictly inside FEMNET's window (modes 1-13: one bound, an interval on one, two or three axes) take
   the type. **Translations** (``input add_{x,y,z}_{ele,pan} D FIRST LAST``) move cables or panels FIRST to
@@ -132,9 +132,9 @@ Conventions established from the files (see ``tests/io/test_femnet.py``):
   nothing.
 * **Commands of the tail.** ``input wave_model N`` picks the waves' theory (1 Airy, 2 Stokes second order:
   :class:`jaxnet.water.waves.Stokes2`; 3 is refused); ``input speed_type_node2`` (towing speeds, its time table on
-  the next lines) moves the nodes of its type in a dynamic run (:func:`.mapping.towing_of`). FEMNET's winches
+  the next lines) moves the nodes of its type in a dynamic run (:func:`.motion.towing_of`). FEMNET's winches
   (``hauling_cable4``/``6``, with their tables) change their cables' rest lengths in a dynamic run
-  (:func:`.mapping.winches_of`, :class:`jaxnet.water.forcing.Winch`); ``info["dynamic_only"]`` names them, left out
+  (:func:`.motion.winches_of`, :class:`jaxnet.water.forcing.Winch`); ``info["dynamic_only"]`` names them, left out
   of a static run; ``node_position``, which FEMNET's current
   code has no handler for, is read and ignored (``info["ignored"]``); the table of a command commented out
   is skipped with it. A drag coefficient left out of its line (``Normal Cd:`` then the next label) is
@@ -159,7 +159,7 @@ Conventions established from the files (see ``tests/io/test_femnet.py``):
   netting no drag at all). Each ``input catch2_volume V N P1 .. PN`` is a catch of its own held by the listed
   diamond panels (:meth:`~jaxnet.net.Net.panel_catch`, :mod:`jaxnet.terms.panel_catch`), its front along x as
   FEMNET places it, its netting on FEMNET's side (the catch on the U ^ V side of every panel,
-  :func:`~jaxnet.io.femnet.mapping.femnet_panel_catch_sides`), the main catch's Cd. FEMNET's current statics give
+  :func:`~jaxnet.io.femnet.surroundings.femnet_panel_catch_sides`), the main catch's Cd. FEMNET's current statics give
   a case with such catches no netting drag (their loop calls neither its netting drag nor the drag ahead of the
   fronts); its stored answer of 15grid/avril_4 has it, and so has jaxnet.
 * **Convergence.** FEMNET stops when the *mean* nodal residual norm is below its threshold; jaxnet's
@@ -197,7 +197,8 @@ Modules: :mod:`.reader` (FEMNET's way of reading, strict: labels, numbers, ``fil
 
 from jaxnet.io.femnet.grammar import MAX_BARS, MAX_PANEL_NODES, DonFile, twine_coordinates
 from jaxnet.io.femnet.links import MERGE_TOLERANCE
-from jaxnet.io.femnet.mapping import GRAVITY, WATER_DENSITY, read_don, released_gauge
+from jaxnet.io.femnet.mapping import read_don, released_gauge
+from jaxnet.io.femnet.surroundings import GRAVITY, WATER_DENSITY
 from jaxnet.io.femnet.mdg import read_mdg
 from jaxnet.io.femnet.parse import parse_don
 from jaxnet.io.femnet.reader import MAX_COORDINATE, MAX_MESHES, Value

@@ -494,7 +494,7 @@ def _link_flexion_elem2(values):
 def _towing(values):
     """``input speed_type_node2 TYPE K``: a node type and K >= 2 times in the table that follows (FEMNET's manual,
     "Bottom seine": the speeds vary linearly between times; its times are checked where the table is mapped,
-    :func:`jaxnet.io.femnet.mapping.towing_of`)."""
+    :func:`jaxnet.io.femnet.motion.towing_of`)."""
     node_type, k = values[0], values[1]
     if node_type != int(node_type) or node_type < 1 or k != int(k) or k < 2:
         return f"'input speed_type_node2 TYPE K': TYPE must be a node type and K >= 2 times, got {values[:2]}"
@@ -560,7 +560,7 @@ COMMANDS = (
     Command("input", "hauling_cable6", 4, use="dynamic", table=(3, -1)),
     # towing speeds of a node type: TYPE K, then its time table (times; speeds along x, y, z), run in dynamics
     Command("input", "speed_type_node2", 2, _towing, table=(4, 1)),
-    # the waves' theory (jaxnet.io.femnet.mapping.environment_of): 1 Airy, 2 Stokes second order; felt in dynamics
+    # the waves' theory (jaxnet.io.femnet.surroundings.environment_of): 1 Airy, 2 Stokes second order; felt in dynamics
     Command("input", "wave_model", 1, _wave_model),
     # FEMNET's current code has no handler for it (its reader skips the line)
     Command("input", "node_position", 1, use="ignored"),

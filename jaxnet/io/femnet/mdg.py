@@ -12,10 +12,11 @@ import pathlib
 import numpy as np
 
 from jaxnet.io.femnet.grammar import twine_coordinates
-from jaxnet.io.femnet.mapping import (catch_of, check_types, environment_of, femnet_panel_catch_sides,
-                                      gravity_catch_density, node_type_fields, panel_catches_of, result, rope_of,
-                                      spheres_folded, symmetry_planes, symmetry_share, twine_of,
-                                      with_added_masses, gauge_of)
+from jaxnet.io.femnet.mapping import gauge_of, result
+from jaxnet.io.femnet.materials import rope_of, twine_of
+from jaxnet.io.femnet.surroundings import (catch_of, check_types, environment_of, femnet_panel_catch_sides,
+                                           gravity_catch_density, node_type_fields, panel_catches_of, spheres_folded,
+                                           symmetry_planes, symmetry_share, with_added_masses)
 from jaxnet.io.femnet.parse import parse_don
 from jaxnet.io.femnet.twines import mdg_twine_bars, numerical_twines
 from jaxnet.materials import bar_rows, netting_rows

@@ -78,7 +78,7 @@ def parse_don(path) -> DonFile:
     read_all(r, DISPLAYS)
     inputs, outputs, commands = _commands(r)
     for k, p in enumerate(panels):
-        # FEMNET's maillage_panneau (maillage.c) honours Meshing_UV for meshing type 2 only (mapping.meshing_lattices)
+        # FEMNET's maillage_panneau (maillage.c) honours Meshing_UV for meshing type 2 only (materials.meshing_lattices)
         lattice = inputs.get(f"meshing_uv {k + 1}")
         if lattice is not None and p.material["mesh_type"].value != 2:
             r.warnings.append(f"{path}:{lattice.line}: 'input Meshing_UV {k + 1}': panel {k + 1} has meshing type "
@@ -267,7 +267,7 @@ def _check_body(r, t, length):
     """A node type's box (FEMNET's "Length X,Y,Z"): widths X, Y >= 0 (FEMNET's drag takes them signed, a negative
     one would be a drag against the current), a height Z of either sign (< 0: the box hangs below its node, a
     sinker), sizes in range. A box with a volume floats (``flotteur2.c``: rho g L_x L_y times its immersed height,
-    along z): see :func:`~.mapping.node_type_fields`."""
+    along z): see :func:`~.surroundings.node_type_fields`."""
     for a, v in enumerate(length):
         if a < 2 and v.value < 0:
             raise r.error(f"node type {t}: length {'XYZ'[a]} must be >= 0 m (a width of its box), got {v.value!r}",

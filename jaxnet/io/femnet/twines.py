@@ -67,7 +67,7 @@ def mdg_twine_bars(case: DonFile, twines: dict, rows, node_index, where, femnet_
     "panel k twines", numbered after the case's cables in the order of the panels."""
     import numpy as np
 
-    from jaxnet.io.femnet.mapping import twine_of
+    from jaxnet.io.femnet.materials import twine_of
     from jaxnet.materials import bar_columns
     from jaxnet.mesh.twines import numerical_twine_rope
     from jaxnet.scene import Bars
