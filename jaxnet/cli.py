@@ -631,7 +631,7 @@ def argument_parser() -> argparse.ArgumentParser:
 
 def _export(args):
     """``jaxnet export --scene NAME [--set KEY=VALUE ...] [--force] FILE``: a built-in scene (its numbers changed by
-    ``--set``) written as a scene file (.toml or .json) to edit and run (:func:`jaxnet.io.scene_file.write`); an
+    ``--set``) written as a scene file (.toml or .json) to edit and run (:func:`jaxnet.io.scene_export.write`); an
     existing FILE is kept unless ``--force``."""
     from jaxnet.catalogue import BUILT_IN, DYNAMIC
 
@@ -648,9 +648,9 @@ def _export(args):
         raise CommandError(f"cannot write {path}: {problem}")
     make = scenes[args.builtin].make()
     case = make(**built_in_arguments(make, args.builtin, args.set or []))
-    from jaxnet.io import scene_file
+    from jaxnet.io import scene_export
 
-    written = scene_file.write(path, case)
+    written = scene_export.write(path, case)
     print(f"jaxnet: wrote the built-in scene '{args.builtin}' ({case.label}) to {written}; run it with: "
           f"jaxnet run {written}")
     if case.time is not None:

@@ -490,7 +490,7 @@ class Net:
 
     def description(self) -> dict:
         """What was described, as plain data (copies, in call order), for writers of the description
-        (:func:`jaxnet.io.scene_file.to_dict`) and readers of it that must not reach into the net.
+        (:func:`jaxnet.io.scene_export.to_dict`) and readers of it that must not reach into the net.
 
         Values are the API's own: references (:class:`Corner`, :class:`Side`, :class:`Nearest`,
         :class:`PanelRef`, :class:`CableEnd`, :class:`CableNodes`, :class:`CableRef`, or an (x, y, z) point as

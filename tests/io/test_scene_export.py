@@ -1,4 +1,4 @@
-"""Writing a net as a scene file (``jaxnet.io.scene_file.to_dict``, ``write``; ``Net.description``): every built-in
+"""Writing a net as a scene file (``jaxnet.io.scene_export.to_dict``, ``write``; ``Net.description``): every built-in
 scene, and nets using every part of the description, read back (``scene_file.read``) into the same scene and the
 same solver options, in TOML and in JSON; what a scene file cannot hold is refused, naming it, and nothing is
 written."""
@@ -16,7 +16,7 @@ import pytest
 
 from jaxnet.water import waves
 from jaxnet.case import Case, from_net
-from jaxnet.io import scene_file
+from jaxnet.io import scene_export, scene_file
 from jaxnet.materials import HexTwine
 from jaxnet.mesh.twines import NumericalTwines
 from jaxnet.net import Net, Rope, Twine
@@ -74,7 +74,7 @@ def assert_same_scene(a, b):
 @pytest.mark.parametrize("name", sorted(BUILT_INS))
 def test_every_built_in_scene_reads_back_the_same(name, suffix, tmp_path):
     case = BUILT_INS[name]()
-    path = scene_file.write(tmp_path / f"{name}{suffix}", case)
+    path = scene_export.write(tmp_path / f"{name}{suffix}", case)
     back = scene_file.read(path)
     assert_same_scene(case.scene, back.scene)
     assert back.solver == case.solver
@@ -163,7 +163,7 @@ SOLVER = Newton(tol=1e-4, max_iter=50, max_step=0.2, stall_window=None, stiffnes
 @pytest.mark.parametrize("make", [rich_net, catch_net])
 def test_every_part_of_a_description_reads_back_the_same(make, suffix, tmp_path):
     case = from_net(make(), SOLVER, label="a net of every part")
-    back = scene_file.read(scene_file.write(tmp_path / f"net{suffix}", case))
+    back = scene_file.read(scene_export.write(tmp_path / f"net{suffix}", case))
     assert_same_scene(case.scene, back.scene)
     assert back.solver == SOLVER   # stall_window None included (false in the file: TOML has no null)
     scene = back.scene
@@ -184,14 +184,14 @@ def test_a_written_net_is_its_description_and_the_description_is_a_copy(tmp_path
     assert [s["attached"] for s in d["sinkers"]] == [1] and [f["attached"] for f in d["floats"]] == [2]
     assert d["panels"][0]["step"] is None and d["panels"][0]["lattice"] == (100.0, 5.0)
     d["panels"][0]["corners"][:] = 0.0   # the description is the caller's: the net keeps its own
-    doc = scene_file.to_dict(net)
+    doc = scene_export.to_dict(net)
     assert doc["panels"][0]["corners"][1] == [0.6, 0.0, 0.0, 600.0, 0.0]
     assert doc["sinkers"] == [{"at": {"panel": "square", "side": 2}, "mass": 2.0, "density": 7800.0}]
     assert doc["floats"] == [{"at": {"cable": "a", "end": 1}, "buoyancy_N": 30.0, "mass": 0.5, "size": 0.2,
                               "drag_area": 0.02}]
     assert doc["merge_tolerance"] == 1e-5 and doc["solver"] == {}
     # a bare net (no case to compare with) is written too, and builds the same scene
-    back = scene_file.read(scene_file.write(tmp_path / "net.toml", net))
+    back = scene_file.read(scene_export.write(tmp_path / "net.toml", net))
     assert_same_scene(net.build(), back.scene)
 
 
@@ -200,27 +200,27 @@ def test_what_a_scene_file_cannot_hold_is_refused_and_nothing_is_written(tmp_pat
     net = rich_net()
     net.environment = eqx.tree_at(lambda e: e.waves, net.environment, waves.sea_state(2.0, 8.0, components=8))
     with pytest.raises(SceneError, match=r"environment\.waves: an irregular sea keeps its realised components"):
-        scene_file.write(path, net)
+        scene_export.write(path, net)
     # waves on another level than the environment's surface
     net.environment = eqx.tree_at(lambda e: e.waves, net.environment, waves.Airy(1.0, 5.0, surface_level=1.0))
     with pytest.raises(SceneError, match=r"environment\.waves: the waves' surface_level differ"):
-        scene_file.write(path, net)
+        scene_export.write(path, net)
     # a case whose scene was changed after its net was built (as FEMNET's gauge node is)
     case = BUILT_INS["framed_panel"]()
     fixed = np.array(case.scene.nodes.fixed)
     fixed[0] = False
     changed = dataclasses.replace(case, scene=eqx.tree_at(lambda s: s.nodes.fixed, case.scene, fixed))
     with pytest.raises(SceneError, match=r"its scene is not what its net builds \(scene\.nodes\.fixed\)"):
-        scene_file.write(path, changed)
+        scene_export.write(path, changed)
     with pytest.raises(SceneError, match="read whole"):
-        scene_file.write(path, Case(scene=case.scene, label="a FEMNET mesh"))
+        scene_export.write(path, Case(scene=case.scene, label="a FEMNET mesh"))
     with pytest.raises(SceneError, match=r"unknown scene file type '\.yaml'"):
-        scene_file.write(tmp_path / "net.yaml", case)
+        scene_export.write(tmp_path / "net.yaml", case)
     assert not list(tmp_path.iterdir())
 
 
 def test_the_keys_added_for_writing_are_checked_where_they_are(tmp_path):
-    doc = scene_file.to_dict(BUILT_INS["codend"]().net)
+    doc = scene_export.to_dict(BUILT_INS["codend"]().net)
     for change, message in (
             (lambda d: d["symmetry_planes"][1].update(axis="w"), r"symmetry_planes\[1\]: .*axis must be"),
             (lambda d: d["symmetry_planes"][0].update(hold=1), r"symmetry_planes\[0\]\.hold: expected true or false"),

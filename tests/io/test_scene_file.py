@@ -2,7 +2,7 @@
 nearest key for a misspelt one; a material's error names its table, not a panel that uses it; a stiffness of 0
 or below is bad input (exit status 2 from the command line), refused before anything is built.
 
-The files are those ``jaxnet export`` writes (:func:`jaxnet.io.scene_file.write`) and hand-written ones. The
+The files are those ``jaxnet export`` writes (:func:`jaxnet.io.scene_export.write`) and hand-written ones. The
 messages start with the file's path, a temporary folder's: the tests take that prefix off (the folder's name holds
 the test's name) and check the line against the text they wrote.
 """
@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from jaxnet import cli
-from jaxnet.io import scene_file
+from jaxnet.io import scene_export, scene_file
 from jaxnet.net import Net, Rope, Twine
 from jaxnet.scene import SceneError
 
@@ -36,7 +36,7 @@ def _written(tmp_path, suffix, old=None, new=None):
     """(path, text): the net of :func:`_net` written by ``jaxnet export``'s writer, ``old`` replaced by ``new``
     (found once)."""
     path = tmp_path / f"scene{suffix}"
-    scene_file.write(path, _net())
+    scene_export.write(path, _net())
     text = path.read_text()
     if old is not None:
         assert text.count(old) == 1, old
@@ -184,9 +184,9 @@ def test_every_key_of_an_exported_file_is_found_at_its_line(tmp_path, suffix):
     from jaxnet.scenes import fish_cage
 
     path = tmp_path / f"cage{suffix}"
-    scene_file.write(path, fish_cage())
+    scene_export.write(path, fish_cage())
     text = path.read_text()
-    doc = scene_file._parse(text, suffix)
+    doc = scene_file.parse_text(text, suffix)
     lines = text.split("\n")
 
     def keys(value, where):
