@@ -23,7 +23,6 @@ from jaxnet.net import CableEnd, CableNodes, CableRef, Corner, Layout, Nearest, 
 from jaxnet.scene import Bars, CableJoints, Netting, Nodes, Scene, SceneError, on_symmetry_planes
 
 
-
 def scene_of(net) -> tuple[Scene, Layout]:
     """Mesh every panel, join panels and cables, and return the :class:`Scene` (validated)."""
     if not net.panels and not net.cables:
@@ -435,7 +434,6 @@ def _joints(net, bars):
                        rest_length=np.stack([rest[first], rest[second]], axis=1),
                        stiffness=ei.astype(float), rest_angle=beta.astype(float),
                        cable=np.stack([cable_of[first], cable_of[second]], axis=1))
-
 
 
 def _mesh_length(twine):

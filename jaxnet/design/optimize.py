@@ -292,14 +292,7 @@ def optimize(space, objective, start, *, design: Callable | None = None, optimiz
       map that fails, does not return a valid θ (the space's message: the family, the entry, the corner) or is
       not jnp code, a scale or bounds not shaped like the start, steps or backtracks < 0.
     """
-    if not (isinstance(steps, (int, np.integer)) and steps >= 0):
-        raise ValueError(f"optimize: steps must be a whole number >= 0, got {steps!r}")
-    if not (isinstance(backtracks, (int, np.integer)) and backtracks >= 0):
-        raise ValueError(f"optimize: backtracks must be a whole number >= 0, got {backtracks!r}")
-    if not math.isfinite(float(gtol)) or gtol < 0:
-        raise ValueError(f"optimize: gtol must be a finite number >= 0, got {gtol!r}")
-    if adjoint not in ADJOINTS:
-        raise ValueError(f"optimize: adjoint must be one of {ADJOINTS}, got {adjoint!r}")
+    _check_options(steps, backtracks, gtol, adjoint)
     p0 = _parameters(start)
     if design is None:
         to_theta = lambda p: p  # noqa: E731
@@ -427,44 +420,70 @@ def optimize(space, objective, start, *, design: Callable | None = None, optimiz
     if design is not None:
         result.z, result.z_start = p, jax.tree.map(np.asarray, p0)
     if round_cut and "cut" in theta_start:
-        def solved(rounded):
-            """(objective, constraint violation, equilibrium) of a rounded design, re-solved."""
-            e = sensitivity.value(rounded, x)
-            if not e.converged:  # the static solver's continuation, from the optimum's shape
-                e = sensitivity.value(rounded, statics.solve(space.scene(rounded), x0=x).x)
-            if not e.converged:
-                raise implicit.ImplicitError(f"optimize: the rounded design's equilibrium: {e.reason} after "
-                                             f"{e.iterations} iterations ({e.residual_N:.3g} N at node {e.worst_node})")
-            violation = e.violation
-            if design is None:  # the bounds are on θ: the rounded θ is measured against them (on z, it has no z)
-                optimised = {family: {k: rounded[family][k] for k in entries} for family, entries in p0.items()}
-                violation += float(bounds.violation(optimised))
-            return e.value, violation, e.x
-
-        rounded, cut_report = space.rounded(theta)
-        figures, rounding = solved(rounded), NEAREST
-        if figures[1] > history[step]["violation"] + 1e-12:
-            # the nearest whole meshes need more netting than the optimum had room for: try the cut with the
-            # corners that rounded outward taken one mesh in
-            inward = _rounded_inward(space, theta, rounded)
-            try:
-                inward_figures = None if inward is None else solved(inward[0])
-            except (implicit.ImplicitError, results.SolveError):
-                inward_figures = None  # a candidate whose equilibrium fails is not the design to cut
-            if inward_figures is not None:
-                if inward_figures[1] < figures[1]:
-                    (rounded, cut_report), figures, rounding = inward, inward_figures, INWARD
+        optimised = None if design is not None else p0  # the bounds are on θ: a rounded θ is measured against them
+        rounded, figures, result.rounding, result.cut_report = _rounded_cut(
+            space, sensitivity, theta, x, bounds, optimised, history[step]["violation"])
         result.rounded = _numpy_design(rounded)
         result.rounded_value, result.rounded_violation, result.rounded_x = figures
-        result.rounding = rounding
-        result.cut_report = cut_report
     if out is not None:
-        (out / "design.json").write_text(json.dumps(dict(
-            reason=reason, objective=value, step=step, theta=_json(result.theta),
-            z=None if result.z is None else _json(result.z),
-            rounded=None if result.rounded is None else _json(result.rounded),
-            rounded_objective=result.rounded_value, rounded_violation=result.rounded_violation,
-            rounding=result.rounding,
-            cut_report=None if result.cut_report is None else {p: [str(s) for s in sides] for p, sides in
-                                                                result.cut_report.items()}), indent=1))
+        _write_design(out / "design.json", result)
     return result
+
+
+def _check_options(steps, backtracks, gtol, adjoint):
+    """ValueError naming the option of :func:`optimize` out of its range, before anything is compiled."""
+    if not (isinstance(steps, (int, np.integer)) and steps >= 0):
+        raise ValueError(f"optimize: steps must be a whole number >= 0, got {steps!r}")
+    if not (isinstance(backtracks, (int, np.integer)) and backtracks >= 0):
+        raise ValueError(f"optimize: backtracks must be a whole number >= 0, got {backtracks!r}")
+    if not math.isfinite(float(gtol)) or gtol < 0:
+        raise ValueError(f"optimize: gtol must be a finite number >= 0, got {gtol!r}")
+    if adjoint not in ADJOINTS:
+        raise ValueError(f"optimize: adjoint must be one of {ADJOINTS}, got {adjoint!r}")
+
+
+def _rounded_cut(space, sensitivity, theta, x, bounds, optimised, violation):
+    """The optimum ``theta`` cut to whole meshes and re-solved from its equilibrium ``x``: (rounded θ, (objective,
+    constraint violation, positions), rounding, cut report). The nearest whole meshes first; where they violate
+    the constraints more than the optimum did (``violation``: they need more netting than it had room for), the cut
+    with the corners that rounded outward taken one mesh in, if that does better. ``optimised``: the optimised
+    families and entries of θ, whose ``bounds`` a rounded θ is measured against (None: the bounds are on a design
+    vector z, which a rounded θ does not have)."""
+    def solved(rounded):
+        """(objective, constraint violation, equilibrium) of a rounded design, re-solved."""
+        e = sensitivity.value(rounded, x)
+        if not e.converged:  # the static solver's continuation, from the optimum's shape
+            e = sensitivity.value(rounded, statics.solve(space.scene(rounded), x0=x).x)
+        if not e.converged:
+            raise implicit.ImplicitError(f"optimize: the rounded design's equilibrium: {e.reason} after "
+                                         f"{e.iterations} iterations ({e.residual_N:.3g} N at node {e.worst_node})")
+        excess = e.violation
+        if optimised is not None:
+            excess += float(bounds.violation({family: {k: rounded[family][k] for k in entries}
+                                              for family, entries in optimised.items()}))
+        return e.value, excess, e.x
+
+    rounded, cut_report = space.rounded(theta)
+    figures, rounding = solved(rounded), NEAREST
+    if figures[1] > violation + 1e-12:
+        inward = _rounded_inward(space, theta, rounded)
+        try:
+            inward_figures = None if inward is None else solved(inward[0])
+        except (implicit.ImplicitError, results.SolveError):
+            inward_figures = None  # a candidate whose equilibrium fails is not the design to cut
+        if inward_figures is not None and inward_figures[1] < figures[1]:
+            (rounded, cut_report), figures, rounding = inward, inward_figures, INWARD
+    return rounded, figures, rounding, cut_report
+
+
+def _write_design(path, result):
+    """``design.json``: the run's end (reason, objective, step), its design θ (and z), and its cut to whole
+    meshes with how it was rounded."""
+    path.write_text(json.dumps(dict(
+        reason=result.reason, objective=result.value, step=result.step, theta=_json(result.theta),
+        z=None if result.z is None else _json(result.z),
+        rounded=None if result.rounded is None else _json(result.rounded),
+        rounded_objective=result.rounded_value, rounded_violation=result.rounded_violation,
+        rounding=result.rounding,
+        cut_report=None if result.cut_report is None else {p: [str(s) for s in sides] for p, sides in
+                                                            result.cut_report.items()}), indent=1))

@@ -420,6 +420,26 @@ def from_dict(doc: dict, label: str = "scene document") -> Case:
     solver options. A :class:`SceneError` names the key path of the culprit (``twines."wall 0"``,
     ``panels[2].corners``) and carries it as ``where`` (a tuple of keys and indices, None where the error names
     no entry of the document), which :func:`read` turns into the file's line."""
+    net = Net(environment=_environment(doc), **_merge_tolerance(doc))
+    tables = _materials(doc)
+    _add_panels(net, doc, tables)
+    _add_cables(net, doc, tables)
+    _add_joins(net, doc)
+    references = []   # (reference, its path): where an error of the built net that names a reference is
+    _add_fixings(net, doc, references)
+    _add_attachments(net, doc, references)
+    _add_catches(net, doc)
+    solver = _solver(doc.get("solver", {}))
+    try:
+        return from_net(net, solver, label=label)
+    except SceneError as err:   # the built net's errors name a panel, a cable, ...: located at its entry
+        err.where = _culprit(str(err), doc, references)
+        raise
+
+
+def _environment(doc):
+    """The document's ``environment`` table as an :class:`~jaxnet.scene.Environment`, its keys checked, and first
+    the document's own top-level keys (a misspelt one may be an environment key put at the top)."""
     # the free surface's elevation over each node is the dynamics' to set, step by step, not a file's
     env_fields = {f.name for f in dataclasses.fields(Environment)} - {"surface_elevation"}
     _keys(doc, _TOP, _SCENE, elsewhere=[f"environment.{k}" for k in sorted(env_fields)])
@@ -442,14 +462,21 @@ def from_dict(doc: dict, label: str = "scene document") -> Case:
             env_spec[key] = _number(value, at_env / key)
     if "waves" in env_spec:
         env_spec["waves"] = _waves(env_spec["waves"], env_spec, at_env / "waves")
-    env = Environment(**env_spec)
+    return Environment(**env_spec)
+
+
+def _merge_tolerance(doc):
+    """``{"merge_tolerance": m}`` where the document gives one (m, finite and >= 0), else ``{}``."""
     tolerance = {}
     if "merge_tolerance" in doc:
         tolerance["merge_tolerance"] = _number(doc["merge_tolerance"], _SCENE / "merge_tolerance")
         if not (math.isfinite(tolerance["merge_tolerance"]) and tolerance["merge_tolerance"] >= 0):
             raise _fail(_SCENE / "merge_tolerance", f"must be finite and >= 0 (m), got {doc['merge_tolerance']!r}")
-    net = Net(environment=env, **tolerance)
-    references = []   # (reference, its path): where an error of the built net that names a reference is
+    return tolerance
+
+
+def _materials(doc):
+    """The named materials: ``{"twines": {name: Twine}, "hex_twines": ..., "ropes": ...}``."""
     # the materials are checked as their tables are read: an error names the table, not a panel that uses it
     tables = {}
     for key, make in (("twines", lambda v, w: _material(v, {}, Twine, w)),
@@ -459,6 +486,11 @@ def from_dict(doc: dict, label: str = "scene document") -> Case:
         if not isinstance(entries, dict):
             raise _fail(_SCENE / key, f"expected a table of named materials, got {type(entries).__name__}")
         tables[key] = {name: make(spec, _SCENE / key / name) for name, spec in entries.items()}
+    return tables
+
+
+def _add_panels(net, doc, tables):
+    """The document's panels, added to ``net`` (their materials named in ``tables`` or given inline)."""
     for i, p in enumerate(doc.get("panels", [])):
         where = _SCENE / "panels" / i
         _keys(p, {"name", "corners", "twine", "hex_twine", "step", "numerical_twines", "lattice"}, where, ("corners",))
@@ -479,6 +511,10 @@ def from_dict(doc: dict, label: str = "scene document") -> Case:
                   else None)
         with _within(where, p):   # Net.panel's errors name the panel
             net.panel(p.get("name", f"panel{i}"), corners, material, step, twines=twines, lattice=lattice)
+
+
+def _add_cables(net, doc, tables):
+    """The document's cables, added to ``net``."""
     for i, c in enumerate(doc.get("cables", [])):
         where = _SCENE / "cables" / i
         _keys(c, {"name", "rope", "start", "end", "along", "n_bars", "length"}, where, ("rope",))
@@ -491,6 +527,10 @@ def from_dict(doc: dict, label: str = "scene document") -> Case:
             along=_ref(c["along"], where / "along") if "along" in c else None)
         with _within(where, c):   # Net.cable's errors name the cable
             net.cable(c.get("name", f"cable{i}"), **options)
+
+
+def _add_joins(net, doc):
+    """The document's seams and cable joints, added to ``net``."""
     for i, pair in enumerate(doc.get("seams", [])):
         where = _SCENE / "seams" / i
         if not isinstance(pair, (list, tuple)) or len(pair) != 2:
@@ -506,6 +546,11 @@ def from_dict(doc: dict, label: str = "scene document") -> Case:
         options = {k: _number(j[k], where / k) for k in ("neutral_angle", "stiffness") if k in j}
         with _within(where, j, named=True):
             net.cable_joint(*j["cables"], **options)
+
+
+def _add_fixings(net, doc, references):
+    """The document's fixings and symmetry planes (what holds the net), added to ``net``; each reference and its
+    path appended to ``references``."""
     for i, f in enumerate(doc.get("fix", [])):
         where = _SCENE / "fix" / i
         _keys(f, {"at", "axes"}, where, ("at",))
@@ -521,6 +566,11 @@ def from_dict(doc: dict, label: str = "scene document") -> Case:
         at = _number(plane.get("at", 0.0), where / "at")
         with _within(where, plane, named=True):
             net.symmetry_plane(plane["axis"], at, plane.get("hold", True))
+
+
+def _add_attachments(net, doc, references):
+    """What the document attaches to nodes (masses, sinkers, floats, bodies, limits), added to ``net``; each
+    reference and its path appended to ``references``."""
     for i, a in enumerate(doc.get("attach", [])):
         where = _SCENE / "attach" / i
         _keys(a, {"at", "mass", "volume", "force", "drag_area", "size"}, where, ("at",))
@@ -557,6 +607,10 @@ def from_dict(doc: dict, label: str = "scene document") -> Case:
             references.append((values[0], where / "at"))
             with _within(where, entry, named=True):
                 give(*values)
+
+
+def _add_catches(net, doc):
+    """The document's catch, panel catches and enclosure, added to ``net``."""
     if "catch" in doc:
         where = _SCENE / "catch"
         c = _keys(doc["catch"], {"volume", "drag_coefficient", "symmetry", "center", "axis", "density"}, where,
@@ -582,12 +636,6 @@ def from_dict(doc: dict, label: str = "scene document") -> Case:
         center, axis = _triple(e["center"], where / "center"), _triple(e["axis"], where / "axis")
         with _within(where, e):
             net.enclose(center, axis)
-    solver = _solver(doc.get("solver", {}))
-    try:
-        return from_net(net, solver, label=label)
-    except SceneError as err:   # the built net's errors name a panel, a cable, ...: located at its entry
-        err.where = _culprit(str(err), doc, references)
-        raise
 
 
 def read(path) -> Case:
