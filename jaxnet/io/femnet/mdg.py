@@ -42,48 +42,16 @@ def read_mdg(path, don=None, femnet_laws=True):
     check_types(case)
     if not path.exists():
         raise SceneError(f"FEMNET mesh {path} does not exist")
-    lines = path.read_text(errors="replace").split("\n")
-    where = str(path)
-
-    def section(header, start=0):
-        for i in range(start, len(lines)):
-            if " ".join(lines[i].lower().split()).startswith(header):
-                return i
-        raise SceneError(f"{where}: no '{header}' section (truncated file?)")
-
-    def count_after(header):
-        i = section(header)
-        try:
-            return int(lines[i + 1].split()[0]), i + 1
-        except (IndexError, ValueError):
-            raise SceneError(f"{where}:{i + 2}: expected the count of '{header}'") from None
-
-    def rows(header, count, width, after):
-        i = section(header, after) + 1
-        out = []
-        while len(out) < count:
-            if i >= len(lines):
-                raise SceneError(f"{where}:{i}: the file ends inside '{header}' ({len(out)} of {count} rows; truncated?)")
-            words = lines[i].split()
-            if words:
-                try:
-                    values = [float(w) for w in words]
-                except ValueError:
-                    raise SceneError(f"{where}:{i + 1}: '{header}': expected numbers, found {lines[i].strip()!r}") from None
-                if len(values) < width or not all(math.isfinite(v) for v in values):
-                    raise SceneError(f"{where}:{i + 1}: '{header}': expected {width} finite numbers, found {lines[i].strip()!r}")
-                out.append(values + [i + 1])
-            i += 1
-        return out
-
-    n_nodes, at = count_after("nombre de noeuds")
-    node_rows = rows("description des noeuds", n_nodes, 7, at)
-    n_bars, at = count_after("nombre d'elements")
-    bar_lines = rows("description des elements", n_bars, 6, at)
-    n_tri, at = count_after("nombre de surfaces")
-    tri_rows = rows("description des surfaces", n_tri, 11, at)
+    mdg = MdgText(path)
+    where = mdg.where
+    n_nodes, at = mdg.count_after("nombre de noeuds")
+    node_rows = mdg.rows("description des noeuds", n_nodes, 7, at)
+    n_bars, at = mdg.count_after("nombre d'elements")
+    bar_lines = mdg.rows("description des elements", n_bars, 6, at)
+    n_tri, at = mdg.count_after("nombre de surfaces")
+    tri_rows = mdg.rows("description des surfaces", n_tri, 11, at)
     for header in ("nombre de coulisses", "nombre de surfaces hexagonales"):
-        n, at = count_after(header)
+        n, at = mdg.count_after(header)
         if n:
             raise SceneError(f"{where}:{at + 1}: '{header}' {n}: not supported")
     position = np.array([r[1:4] for r in node_rows])
@@ -113,16 +81,97 @@ def read_mdg(path, don=None, femnet_laws=True):
             raise SceneError(f"{where}:{line}: node number {value!r} outside 1..{n_nodes}")
         return i
 
-    netting = None
-    if n_tri:
-        vertices = np.array([[node_index(v, r[-1]) for v in r[1:4]] for r in tri_rows])
-        uv = twine_coordinates(np.array([r[4:10] for r in tri_rows]).reshape(-1, 3, 2))
-        panel = np.array([int(r[10]) - 1 for r in tri_rows])
-        for r, p in zip(tri_rows, panel):
-            if not 0 <= p < len(case.panels):
-                raise SceneError(f"{where}:{r[-1]}: triangle {int(r[0])} belongs to panel {p + 1}, not in {don}")
-        twines = [twine_of(p, case, femnet_laws) for p in case.panels]
-        netting = Netting(vertices=vertices, uv=uv, panel=panel, **netting_rows(twines, panel))
+    netting = _netting(case, tri_rows, node_index, where, don, femnet_laws) if n_tri else None
+    bars, twine_names = _bars(case, bar_lines, node_index, where, don, femnet_laws)
+    netting_nodes = np.unique(netting.vertices) if netting is not None else np.arange(n_nodes)
+    density = gravity_catch_density(case, env)
+    catch_spec = catch_of(case, position, netting_nodes, planes, env, density)
+    catch = None
+    if catch_spec is not None:
+        volume, cd, copies, center, axis = catch_spec
+        catch = Catch(volume=volume, drag_coefficient=cd, axis=axis, center=center, symmetry=copies, density=density)
+        netting = dataclasses.replace(netting, outward=outward(position, np.asarray(netting.vertices), center,
+                                                               np.asarray(netting.uv), np.asarray(netting.panel)))
+    scene = Scene(nodes=nodes, netting=netting, bars=bars, environment=env, catch=catch,
+                  panel_catches=panel_catches_of(case, planes, len(case.panels)),
+                  panel_names=tuple(f"panel {k + 1}" for k in range(len(case.panels))),
+                  # the mirror planes its .don declares, as on jaxnet's own mesh: the whole net's figures and files
+                  symmetry_planes=tuple((axis, at) for axis, at in sorted(planes.items())),
+                  cable_names=tuple(f"cable {k + 1}" for k in range(len(case.cables))) + twine_names)
+    scene = with_added_masses(case, femnet_panel_catch_sides(scene), node_type, share)
+    validate(scene)
+    out = result(case, scene, None, planes, catch_spec, femnet_laws, label=f"FEMNET case {don} on FEMNET's mesh {path}",
+                  node_type=node_type, warnings=warnings)
+    if gauge is not None:
+        out.info["gauge"] = {"node": gauge[0], "axes": gauge[1]}
+    # FEMNET's global nodes are the first nodes of its .mdg, in order (its text outputs name nodes by them)
+    out.info["global_nodes"] = list(range(scene.n_nodes))
+    return out
+
+
+class MdgText:
+    """The text of a FEMNET mesh file (.mdg), read section by section: FEMNET's French headers ("nombre de noeuds",
+    "description des noeuds", ...), the count on the line after a "nombre de" header, and rows of numbers. A
+    :class:`~jaxnet.scene.SceneError` names the file and the line (``where``: the file)."""
+
+    def __init__(self, path):
+        self.lines = pathlib.Path(path).read_text(errors="replace").split("\n")
+        self.where = str(path)
+
+    def section(self, header, start=0):
+        """The index of the line that starts with ``header`` (case and spacing aside), from line ``start`` on."""
+        for i in range(start, len(self.lines)):
+            if " ".join(self.lines[i].lower().split()).startswith(header):
+                return i
+        raise SceneError(f"{self.where}: no '{header}' section (truncated file?)")
+
+    def count_after(self, header):
+        """(the count on the line after ``header``, the index of that line)."""
+        i = self.section(header)
+        try:
+            return int(self.lines[i + 1].split()[0]), i + 1
+        except (IndexError, ValueError):
+            raise SceneError(f"{self.where}:{i + 2}: expected the count of '{header}'") from None
+
+    def rows(self, header, count, width, after):
+        """``count`` rows of at least ``width`` finite numbers after the ``header`` found from line ``after``, blank
+        lines skipped; each row ends with its line number (1-based)."""
+        lines, where = self.lines, self.where
+        i = self.section(header, after) + 1
+        out = []
+        while len(out) < count:
+            if i >= len(lines):
+                raise SceneError(f"{where}:{i}: the file ends inside '{header}' ({len(out)} of {count} rows; truncated?)")
+            words = lines[i].split()
+            if words:
+                try:
+                    values = [float(w) for w in words]
+                except ValueError:
+                    raise SceneError(f"{where}:{i + 1}: '{header}': expected numbers, found {lines[i].strip()!r}") from None
+                if len(values) < width or not all(math.isfinite(v) for v in values):
+                    raise SceneError(f"{where}:{i + 1}: '{header}': expected {width} finite numbers, found {lines[i].strip()!r}")
+                out.append(values + [i + 1])
+            i += 1
+        return out
+
+
+def _netting(case, tri_rows, node_index, where, don, femnet_laws):
+    """The :class:`~jaxnet.scene.Netting` of the .mdg's triangles: their nodes, their corners' (U, V) as twine
+    coordinates, and the twine of the panel each names."""
+    vertices = np.array([[node_index(v, r[-1]) for v in r[1:4]] for r in tri_rows])
+    uv = twine_coordinates(np.array([r[4:10] for r in tri_rows]).reshape(-1, 3, 2))
+    panel = np.array([int(r[10]) - 1 for r in tri_rows])
+    for r, p in zip(tri_rows, panel):
+        if not 0 <= p < len(case.panels):
+            raise SceneError(f"{where}:{r[-1]}: triangle {int(r[0])} belongs to panel {p + 1}, not in {don}")
+    twines = [twine_of(p, case, femnet_laws) for p in case.panels]
+    return Netting(vertices=vertices, uv=uv, panel=panel, **netting_rows(twines, panel))
+
+
+def _bars(case, bar_lines, node_index, where, don, femnet_laws):
+    """The :class:`~jaxnet.scene.Bars` of the .mdg's elements: the cables' bars (rest length (pro2 - pro1) × L of
+    their cable) and, after them, the numerical twines' (type -PANEL); with the twines' cable names:
+    (bars or None, names)."""
     bars = None
     # FEMNET's numerical twines (input netting2ropes): bars of type -PANEL, kept apart (jaxnet.io.femnet.twines)
     twines = numerical_twines(case, femnet_laws)
@@ -150,27 +199,4 @@ def read_mdg(path, don=None, femnet_laws=True):
                                                        for f in ("ends", "rest_length", "ea_traction", "ea_compression",
                                                                  "diameter", "density", "cable", "cd_normal",
                                                                  "tangential_ratio")})
-    netting_nodes = np.unique(netting.vertices) if netting is not None else np.arange(n_nodes)
-    density = gravity_catch_density(case, env)
-    catch_spec = catch_of(case, position, netting_nodes, planes, env, density)
-    catch = None
-    if catch_spec is not None:
-        volume, cd, copies, center, axis = catch_spec
-        catch = Catch(volume=volume, drag_coefficient=cd, axis=axis, center=center, symmetry=copies, density=density)
-        netting = dataclasses.replace(netting, outward=outward(position, np.asarray(netting.vertices), center,
-                                                               np.asarray(netting.uv), np.asarray(netting.panel)))
-    scene = Scene(nodes=nodes, netting=netting, bars=bars, environment=env, catch=catch,
-                  panel_catches=panel_catches_of(case, planes, len(case.panels)),
-                  panel_names=tuple(f"panel {k + 1}" for k in range(len(case.panels))),
-                  # the mirror planes its .don declares, as on jaxnet's own mesh: the whole net's figures and files
-                  symmetry_planes=tuple((axis, at) for axis, at in sorted(planes.items())),
-                  cable_names=tuple(f"cable {k + 1}" for k in range(len(case.cables))) + twine_names)
-    scene = with_added_masses(case, femnet_panel_catch_sides(scene), node_type, share)
-    validate(scene)
-    out = result(case, scene, None, planes, catch_spec, femnet_laws, label=f"FEMNET case {don} on FEMNET's mesh {path}",
-                  node_type=node_type, warnings=warnings)
-    if gauge is not None:
-        out.info["gauge"] = {"node": gauge[0], "axes": gauge[1]}
-    # FEMNET's global nodes are the first nodes of its .mdg, in order (its text outputs name nodes by them)
-    out.info["global_nodes"] = list(range(scene.n_nodes))
-    return out
+    return bars, twine_names
