@@ -199,6 +199,51 @@ def mesh_twines(corners_uv, corners_xyz, twines: NumericalTwines, divisions=None
         raise panel_error(name, f"period {p:g} twines gives about {estimate:.3g} bars (limit {MAX_BARS}); use a "
                           "larger period")
 
+    border, interior, chains = _twine_lines(uv_c, origin, p, nb, lo, hi, merge, tol)
+    on_side = _border_nodes(border, uv_c, divisions, seg, tol)
+    index, weights, sides, inner_uv = _numbering(uv_c, on_side, interior, origin, h)
+    n = len(weights)
+    uv = weights @ uv_c
+    if len(inner_uv):
+        uv[n - len(inner_uv):] = inner_uv    # exactly on the lattice (the weights reproduce it to rounding)
+
+    bars, fam = [], []
+    for family, keys in chains:
+        ids = [index[key] for key in keys]
+        for i, j in zip(ids[:-1], ids[1:]):
+            if i != j:
+                bars.append((i, j))
+                fam.append(family)
+    if not bars:
+        raise panel_error(name, f"no numerical twine crosses the panel (period {p:g} twines, offsets "
+                          f"{twines.offset_u:g}, {twines.offset_v:g}): use a smaller period")
+    bars = np.array(bars, dtype=np.int64)
+    fam = np.array(fam, dtype=np.int64)
+    # the twines a bar spans along its line: the change of the line's own coordinate (u for family 0)
+    span = np.where(fam == 0, np.abs(uv[bars[:, 1], 0] - uv[bars[:, 0], 0]),
+                    np.abs(uv[bars[:, 1], 1] - uv[bars[:, 0], 1]))
+    if np.any(span <= tol):
+        b = int(np.flatnonzero(span <= tol)[0])
+        raise panel_error(name, f"numerical twines: a bar between nodes at (u, v) = {uv[bars[b, 0]].tolist()} and "
+                          f"{uv[bars[b, 1]].tolist()} spans no twine (accuracy {twines.accuracy:g} merged its ends "
+                          "across the line); use a smaller accuracy")
+    xyz = weights @ xyz_c
+    arrays = dict(uv=uv, xyz=xyz, weights=weights, bars=bars, twines=span, family=fam,
+                  corner_nodes=np.arange(C, dtype=np.int64), triangles=np.zeros((0, 3), dtype=np.int64))
+    for a in arrays.values():
+        a.setflags(write=False)
+    for s in sides:
+        s.setflags(write=False)
+    return TwineMesh(side_nodes=tuple(sides), **arrays)
+
+
+def _twine_lines(uv_c, origin, p, nb, lo, hi, merge, tol):
+    """The numerical twines crossing the polygon ``uv_c``: lines of constant v (family 0, bars along u) and of
+    constant u (family 1) every ``p`` twines from ``origin``, each cut into its intervals inside the polygon and
+    divided every p / ``nb`` twines. Returns (border nodes' (u, v), lattice index (iu, iv) -> interior node key,
+    chains: (family, [node keys along the line])); a node within ``merge`` of a corner or of a border node is
+    that node."""
+    h = p / nb
     corner_uv = [q for q in uv_c]
     border = []          # [uv] of border nodes (projected onto their side)
     interior = {}        # (iu, iv) lattice index -> node key
@@ -240,8 +285,13 @@ def mesh_twines(corners_uv, corners_xyz, twines: NumericalTwines, divisions=None
                     point[across], point[along] = c, t
                     ends.append(border_node(point))
                 chains.append((family, [ends[0], *keys, ends[1]]))
+    return border, interior, chains
 
-    # border nodes: each on its side, at its fraction along it; with the sides' extra divisions
+
+def _border_nodes(border, uv_c, divisions, seg, tol):
+    """The border nodes side by side: per side k, [(fraction along it, node key)] in order, the twines' border
+    nodes and the ``divisions[k]`` - 1 nodes of a cable sewn along it (those not within ``tol`` of a twine's)."""
+    C = len(uv_c)
     divisions = np.zeros(C, dtype=int) if divisions is None else np.asarray(divisions, dtype=int)
     on_side = [[] for _ in range(C)]   # (fraction, key)
     for k, q in enumerate(border):
@@ -255,8 +305,13 @@ def mesh_twines(corners_uv, corners_xyz, twines: NumericalTwines, divisions=None
                 key = ("d", (s, j))
                 on_side[s].append((frac, key))
         on_side[s].sort(key=lambda fk: fk[0])
+    return on_side
 
-    # node numbering: corners, border nodes side by side, interior nodes
+
+def _numbering(uv_c, on_side, interior, origin, h):
+    """The nodes numbered: corners, border nodes side by side, interior nodes. Returns (node key -> index, (n, C)
+    weights of the corners, each side's node indices from its corner to the next, the interior nodes' (u, v))."""
+    C = len(uv_c)
     index = {("c", k): k for k in range(C)}
     rows = [np.eye(C)]
     n = C
@@ -279,39 +334,7 @@ def mesh_twines(corners_uv, corners_xyz, twines: NumericalTwines, divisions=None
     for ij in inner:
         index[("i", interior[ij])] = n
         n += 1
-    weights = np.concatenate(rows, axis=0)
-    uv = weights @ uv_c
-    if len(inner_uv):
-        uv[n - len(inner_uv):] = inner_uv    # exactly on the lattice (the weights reproduce it to rounding)
-
-    bars, fam = [], []
-    for family, keys in chains:
-        ids = [index[key] for key in keys]
-        for i, j in zip(ids[:-1], ids[1:]):
-            if i != j:
-                bars.append((i, j))
-                fam.append(family)
-    if not bars:
-        raise panel_error(name, f"no numerical twine crosses the panel (period {p:g} twines, offsets "
-                          f"{twines.offset_u:g}, {twines.offset_v:g}): use a smaller period")
-    bars = np.array(bars, dtype=np.int64)
-    fam = np.array(fam, dtype=np.int64)
-    # the twines a bar spans along its line: the change of the line's own coordinate (u for family 0)
-    span = np.where(fam == 0, np.abs(uv[bars[:, 1], 0] - uv[bars[:, 0], 0]),
-                    np.abs(uv[bars[:, 1], 1] - uv[bars[:, 0], 1]))
-    if np.any(span <= tol):
-        b = int(np.flatnonzero(span <= tol)[0])
-        raise panel_error(name, f"numerical twines: a bar between nodes at (u, v) = {uv[bars[b, 0]].tolist()} and "
-                          f"{uv[bars[b, 1]].tolist()} spans no twine (accuracy {twines.accuracy:g} merged its ends "
-                          "across the line); use a smaller accuracy")
-    xyz = weights @ xyz_c
-    arrays = dict(uv=uv, xyz=xyz, weights=weights, bars=bars, twines=span, family=fam,
-                  corner_nodes=np.arange(C, dtype=np.int64), triangles=np.zeros((0, 3), dtype=np.int64))
-    for a in arrays.values():
-        a.setflags(write=False)
-    for s in sides:
-        s.setflags(write=False)
-    return TwineMesh(side_nodes=tuple(sides), **arrays)
+    return index, np.concatenate(rows, axis=0), sides, inner_uv
 
 
 def _side_of(point, poly):
