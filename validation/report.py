@@ -167,7 +167,8 @@ class Report:
         self.current = title
         self.sections[title] = []
         stamp = datetime.datetime.now().astimezone().isoformat(timespec="minutes")
-        self._add(f"*Measured {stamp} on {self.header.get('host', '?')}"
+        # each section dated with the commit it measured: sections of other runs keep theirs
+        self._add(f"*Measured {stamp} at `{self.header.get('jaxnet revision', '?')}` on {self.header.get('host', '?')}"
                   + (" (quick sizes: `--quick`)" if self.quick else "") + ".*\n")
 
     def _add(self, markdown: str):

@@ -12,7 +12,7 @@ from validation import report as report_lib
 
 def test_tables_are_written_from_rows_and_sections_survive_a_partial_run(tmp_path):
     path = tmp_path / "REPORT.md"
-    header = {"date": "today", "host": "here"}
+    header = {"date": "today", "host": "here", "jaxnet revision": "abc1234"}
     first = report_lib.Report(path, header=header)
     first.start("Alpha", ["Alpha", "Beta"])
     first.table([{"a": 1, "b": 0.5, "c": None, "d": True, "e": 1.23456e-7, "f": "x|y"}])
@@ -22,14 +22,16 @@ def test_tables_are_written_from_rows_and_sections_survive_a_partial_run(tmp_pat
     assert "| a | b | c | d | e | f |" in text
     assert "| 1 | 0.5 | - | yes | 1.235e-07 | x\\|y |" in text
     assert text.index("## Alpha") < text.index("## Beta")
+    assert text.count("at `abc1234` on here") == 2  # each section dated with the commit it measured
     # a second run that refreshes Beta only keeps Alpha's table as it was
-    second = report_lib.Report(path, header=header)
+    second = report_lib.Report(path, header={**header, "jaxnet revision": "def5678"})
     second.start("Beta", ["Alpha", "Beta"])
     second.text("new beta")
     text = path.read_text()
     assert "| 1 | 0.5 | - | yes | 1.235e-07 | x\\|y |" in text
     assert "new beta" in text and "beta body" not in text
     assert text.count("## Alpha") == 1 and text.count("## Beta") == 1
+    assert text.count("at `abc1234`") == 1 and text.count("at `def5678`") == 1  # Alpha keeps its commit
 
 
 def test_unknown_section_is_refused(capsys):
