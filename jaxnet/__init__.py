@@ -5,10 +5,12 @@ the package: netting tangents span EA/l0 against tiny geometric stiffness, which
 
 The names a user needs first are here: describe a net (:class:`Net`, :class:`Twine`, :class:`Rope`, ...) or
 read one (:func:`read_don`, :func:`read_mdg`, :func:`read_scene`, the built-in :mod:`jaxnet.scenes`), each
-giving a :class:`Case`; solve it (:func:`solve_static`, :func:`simulate`) into an :class:`Equilibrium` or a
-:class:`Trajectory`. The subpackages hold the rest: :mod:`jaxnet.solve` (drivers, kernel, options),
-:mod:`jaxnet.terms` (the physics), :mod:`jaxnet.design` (gradients of equilibria), :mod:`jaxnet.io` (readers
-and writers).
+giving a :class:`Case`; solve it (:func:`solve_static`, :func:`simulate`, the run layer :mod:`jaxnet.run`) into
+an :class:`Equilibrium` or a :class:`Trajectory`. The subpackages hold the rest, layer by layer
+(``docs/architecture.md``): :mod:`jaxnet.water` (current, waves, loads in time), :mod:`jaxnet.scene` (the
+arrays and their checks), :mod:`jaxnet.terms` (the physics), :mod:`jaxnet.model` (active terms, assembly),
+:mod:`jaxnet.linalg` (factorisations), :mod:`jaxnet.solve` (solvers, kernel, options), :mod:`jaxnet.design`
+(gradients of equilibria), :mod:`jaxnet.io` (readers and writers).
 
 Importing the package loads neither JAX nor any of its modules: each public name is imported when it is first
 used (PEP 562), so that ``jaxnet --version``, ``jaxnet --help`` and a run's first line come at once, and a run
