@@ -487,7 +487,10 @@ def record_figures(state: State, scene, loading, model, fixed_nodes):
     fixed = np.asarray(scene.nodes.fixed)
     reaction = np.where(fixed, -force, 0.0)
     figures = {"reaction_N": reaction[fixed_nodes], "reaction_total_N": reaction.sum(axis=0)}
-    figures.update({k: np.asarray(v) for k, v in _totals_jit(state, scene, loading, model=model).items()})
+    # a program of the solver's (kept on disk, JAX's own cache left alone), so that a resumed run loads it as it
+    # loads the steps' programs, whatever its compilation took
+    totals = programs.obtain("record_totals", _totals_jit, (state, scene, loading), {"model": model})
+    figures.update({k: np.asarray(v) for k, v in totals(state, scene, loading).items()})
     figures.update(steps=np.asarray(int(state.steps)), newton_iterations=np.asarray(int(state.iterations)),
                    retries=np.asarray(int(state.retries)), time_step_s=np.asarray(float(state.last_step)))
     return figures
