@@ -24,7 +24,9 @@ from jaxnet.scene import Bars, CableJoints, Netting, Nodes, Scene, SceneError, o
 
 
 def scene_of(net) -> tuple[Scene, Layout]:
-    """Mesh every panel, join panels and cables, and return the :class:`Scene` (validated)."""
+    """Mesh every panel of ``net`` (:class:`~jaxnet.net.Net`), join panels, seams and cables, and lay out what
+    is attached: (the :class:`Scene`, validated; the :class:`~jaxnet.net.Layout` of what was made of the
+    description)."""
     if not net.panels and not net.cables:
         raise SceneError("the net has no panel and no cable")
     divisions = _side_divisions(net)

@@ -564,6 +564,8 @@ class Net:
         return scene
 
     def panel_named(self, name, what):
+        """The description of the panel ``name``, or a SceneError for ``what`` (the call or reference that
+        named it) listing the net's panels."""
         if name not in self.panels:
             raise SceneError(f"{what}: no panel named '{name}' (panels: {sorted(self.panels)})")
         return self.panels[name]
